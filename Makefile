@@ -1,0 +1,33 @@
+# machsurf_cad: two commands do all the set-up: `make demo` and `make test`.
+PY ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+
+.PHONY: demo test bench venv clean np124
+
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[test]'
+	touch $(STAMP)
+
+venv: $(STAMP)
+
+demo: $(STAMP)
+	$(BIN)/machsurf demo -o out
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -n 2 tests machsurf_cad
+
+bench: $(STAMP)
+	$(BIN)/python -m benchmarks
+
+# the numpy core under FreeCAD's numpy/scipy (1.24 / 1.10)
+np124:
+	test -x .venv-np124/bin/python || $(PY) -m venv .venv-np124
+	.venv-np124/bin/python -m pip install --quiet "numpy==1.24.4" "scipy==1.10.1" pytest
+	.venv-np124/bin/python -m pytest -p no:cacheprovider tests/test_core_np124.py
+
+clean:
+	rm -rf out .pytest_cache build *.egg-info

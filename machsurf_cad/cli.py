@@ -1,0 +1,233 @@
+"""The ``machsurf`` command line (also ``python -m machsurf_cad``).
+
+Exit codes: 0 success, 1 bad input (one-line message, no traceback), 2 a tolerance not met.
+Every command writes ``report.json`` with each figure it prints; lengths in mm, angles in
+degrees. Outputs are staged in a hidden folder and moved into place only on success, so a
+failed command never leaves half-written files.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from . import __version__
+from .errors import InputError, MachsurfError
+
+EXIT_OK, EXIT_INPUT, EXIT_TOLERANCE = 0, 1, 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # bad usage is bad input: exit 1 with one line
+        self.print_usage(sys.stderr)
+        print(f"machsurf: error: {message}", file=sys.stderr)
+        raise SystemExit(EXIT_INPUT)
+
+
+class Staging:
+    """Write outputs into a hidden sibling folder, move them into ``out_dir`` on success."""
+
+    def __init__(self, out_dir):
+        self.out_dir = Path(out_dir)
+        self.out_dir.parent.mkdir(parents=True, exist_ok=True)
+        self.dir = Path(tempfile.mkdtemp(prefix=f".{self.out_dir.name}.partial-", dir=str(self.out_dir.parent)))
+        self.files: list[Path] = []
+
+    def path(self, name: str) -> Path:
+        return self.dir / name
+
+    def commit(self) -> list[Path]:
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        moved = []
+        for f in sorted(self.dir.iterdir()):
+            dest = self.out_dir / f.name
+            if dest.exists() and dest.is_dir():
+                shutil.rmtree(dest)
+            shutil.move(str(f), str(dest))
+            moved.append(dest)
+        shutil.rmtree(self.dir, ignore_errors=True)
+        return moved
+
+    def abort(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def _write_json(path: Path, data: dict) -> None:
+    path.write_text(json.dumps(data, indent=2, default=_json_default) + "\n")
+
+
+def _json_default(o):
+    import numpy as np
+
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"not JSON serialisable: {type(o)}")
+
+
+def _say(msg: str = "") -> None:
+    print(msg, flush=True)
+
+
+# ----------------------------------------------------------------------------- commands
+def cmd_info(args) -> int:
+    from .occ import read_step_faces
+
+    t0 = time.perf_counter()
+    faces = read_step_faces(args.part)
+    rows = []
+    _say(f"{args.part}: {len(faces)} face(s)")
+    _say(f"{'idx':>3}  {'name':<16} {'type':<18} {'deg':>5} {'poles':>9} {'trim':>4} {'area mm2':>11}  uv bounds")
+    for f in faces:
+        s = f.surface
+        row = {
+            "index": f.index, "name": f.name, "source_type": f.source_type,
+            "degree_u": s.degree_u, "degree_v": s.degree_v, "poles_u": s.shape[0], "poles_v": s.shape[1],
+            "rational": s.is_rational, "trimmed": f.is_trimmed, "n_loops": len(f.loops),
+            "uv_bounds": list(f.uv_bounds), "area_mm2": f.area, "reversed": f.reversed,
+        }
+        rows.append(row)
+        _say(f"{f.index:>3}  {f.name[:16]:<16} {f.source_type[:18]:<18} {s.degree_u:>2},{s.degree_v:<2} "
+             f"{s.shape[0]:>4}x{s.shape[1]:<4} {'yes' if f.is_trimmed else 'no':>4} {f.area:>11.2f}  "
+             f"[{f.uv_bounds[0]:.4g}, {f.uv_bounds[1]:.4g}] x [{f.uv_bounds[2]:.4g}, {f.uv_bounds[3]:.4g}]")
+    report = {"command": "info", "part": str(args.part), "n_faces": len(faces), "faces": rows,
+              "time_s": time.perf_counter() - t0}
+    st = Staging(args.out)
+    try:
+        _write_json(st.path("report.json"), report)
+        st.commit()
+    except BaseException:
+        st.abort()
+        raise
+    _say(f"report: {Path(args.out) / 'report.json'}")
+    return EXIT_OK
+
+
+def _mesh_candidate(path: Path):
+    from .meshsample import subdivide
+    from .occ import read_stl
+
+    pts, tris = read_stl(path)
+    return subdivide(pts, tris, 2)
+
+
+def cmd_inspect(args) -> int:
+    from .deviation import deviation
+    from .occ import read_step_face, read_step_faces
+
+    t0 = time.perf_counter()
+    if args.tol is not None and not args.tol > 0:
+        raise InputError("--tol must be > 0 mm")
+    nominal = read_step_face(args.nominal, args.face)
+    cand_path = Path(args.candidate)
+    suffix = cand_path.suffix.lower()
+    if suffix == ".stl":
+        pts, tris = _mesh_candidate(cand_path)
+        result = deviation(nominal, pts, tolerance=args.tol, triangles=tris)
+        cand_desc = f"STL mesh {cand_path.name} ({tris.shape[0] // 16} triangles, sampled inside triangles)"
+    elif suffix in (".step", ".stp"):
+        cands = read_step_faces(cand_path)
+        idx = args.candidate_face if args.candidate_face is not None else args.face
+        if not 0 <= idx < len(cands):
+            raise InputError(f"candidate face index {idx} out of range: {cand_path} has {len(cands)} face(s)")
+        result = deviation(nominal, cands[idx], samples=args.samples, tolerance=args.tol)
+        cand_desc = f"STEP face {idx} '{cands[idx].name}' of {cand_path.name}"
+    else:
+        raise InputError(f"candidate must be .step/.stp or .stl, got {cand_path.name}")
+    return _finish_deviation(args, result, nominal, cand_desc, t0)
+
+
+def _finish_deviation(args, result, nominal, cand_desc, t0) -> int:
+    s = result.stats
+    _say(f"nominal: face {nominal.index} '{nominal.name}' of {args.nominal}")
+    _say(f"candidate: {cand_desc}")
+    _say(f"points measured: {s['n_points']}")
+    _say(f"max |deviation| = {s['max_abs']:.6g} mm  (max {s['max']:.6g}, min {s['min']:.6g})")
+    _say(f"mean = {s['mean']:.6g} mm  RMS = {s['rms']:.6g} mm  p95 |dev| = {s['p95_abs']:.6g} mm")
+    _say(f"worst at xyz = ({', '.join(f'{x:.4f}' for x in s['worst_xyz'])}) mm, "
+         f"uv = ({s['worst_uv'][0]:.6f}, {s['worst_uv'][1]:.6f})")
+    if args.tol is not None:
+        _say(f"tolerance {args.tol:g} mm: {'met' if result.within_tolerance else 'NOT met'}")
+    st = Staging(args.out)
+    try:
+        files = {}
+        if not args.no_render:
+            from .viz import render_deviation
+
+            render_deviation(result, st.path("deviation.png"), vtp_path=st.path("deviation.vtp"),
+                             title=f"{Path(args.candidate).name} vs {nominal.name}", tolerance=args.tol)
+            files = {"png": "deviation.png", "vtp": "deviation.vtp"}
+        report = {"command": "inspect", "nominal": str(args.nominal), "face": nominal.index,
+                  "candidate": str(args.candidate), "candidate_desc": cand_desc, "units": "mm",
+                  "deviation": result.report(), "files": files, "time_s": time.perf_counter() - t0}
+        _write_json(st.path("report.json"), report)
+        st.commit()
+    except BaseException:
+        st.abort()
+        raise
+    _say(f"outputs in {args.out}/: {', '.join(list(files.values()) + ['report.json'])}")
+    if args.tol is not None and not result.within_tolerance:
+        return EXIT_TOLERANCE
+    return EXIT_OK
+
+
+def cmd_demo(args) -> int:
+    from .demo import run_demo
+
+    return run_demo(Path(args.out), say=_say)
+
+
+# ----------------------------------------------------------------------------- entry point
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="machsurf", description="Free-form surface machining geometry (mm, degrees).")
+    p.add_argument("--version", action="version", version=f"machsurf_cad {__version__}")
+    sub = p.add_subparsers(dest="command", parser_class=_Parser)
+
+    d = sub.add_parser("demo", help="main job on the embedded example part: STEP, STL, deviation map, report")
+    d.add_argument("-o", "--out", default="out", help="output folder (default: out)")
+    d.set_defaults(func=cmd_demo)
+
+    i = sub.add_parser("info", help="faces of a STEP part: types, degrees, bounds, areas")
+    i.add_argument("part", help="STEP file")
+    i.add_argument("-o", "--out", default="out/info", help="folder for report.json (default: out/info)")
+    i.set_defaults(func=cmd_info)
+
+    n = sub.add_parser("inspect", help="deviation of a candidate (STEP face or STL) from a nominal STEP face")
+    n.add_argument("nominal", help="nominal STEP file")
+    n.add_argument("candidate", help="candidate STEP (.step/.stp) or mesh (.stl)")
+    n.add_argument("--face", type=int, default=0, help="face index in the nominal file (default 0)")
+    n.add_argument("--candidate-face", type=int, default=None, help="face index in a candidate STEP (default: --face)")
+    n.add_argument("--tol", type=float, default=None, help="tolerance, max |deviation| in mm (exit 2 if not met)")
+    n.add_argument("--samples", type=int, default=200, help="grid samples per direction on a STEP candidate")
+    n.add_argument("--no-render", action="store_true", help="skip the PNG/VTP (numbers only)")
+    n.add_argument("-o", "--out", default="out/inspect", help="output folder (default: out/inspect)")
+    n.set_defaults(func=cmd_inspect)
+    return p
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "command", None):
+        parser.print_help()
+        return EXIT_INPUT
+    try:
+        return int(args.func(args))
+    except MachsurfError as exc:
+        print(f"machsurf: error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except KeyboardInterrupt:
+        print("machsurf: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

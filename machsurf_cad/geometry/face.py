@@ -1,0 +1,87 @@
+"""A trimmed face as plain data: a B-spline surface plus parameter-space trimming loops."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .bspline import BSplineCurve, BSplineSurface
+
+
+@dataclass(frozen=True, eq=False)
+class Face:
+    """A face of a part (numpy form).
+
+    Attributes
+    ----------
+    surface : BSplineSurface
+        The underlying (possibly converted) B-spline surface, lengths in mm.
+    loops : tuple of tuple of BSplineCurve
+        Trimming loops in the surface's (u, v) domain; ``loops[0]`` is the outer loop,
+        the rest are holes. Empty for a face bounded by the surface's natural bounds.
+    name : str
+        The face's name (from STEP, or given).
+    index : int
+        Position of the face in its source file (0-based), -1 if built in a script.
+    reversed : bool
+        True when the face's outward normal is opposite to the surface normal ``su x sv``.
+    source_type : str
+        Surface type before NURBS conversion ("BSplineSurface", "Plane", "Cylinder", ...).
+    uv_bounds : tuple
+        Parameter box ``(u0, u1, v0, v1)`` of the trimmed face.
+    area : float
+        Face area in mm^2 (as computed by the kernel), NaN if unknown.
+    """
+
+    surface: BSplineSurface
+    loops: tuple = ()
+    name: str = ""
+    index: int = -1
+    reversed: bool = False
+    source_type: str = "BSplineSurface"
+    uv_bounds: tuple = field(default=())
+    area: float = float("nan")
+
+    def __post_init__(self):
+        loops = tuple(tuple(loop) for loop in self.loops)
+        for loop in loops:
+            for c in loop:
+                if not isinstance(c, BSplineCurve) or c.dim != 2:
+                    raise TypeError("trimming loops must hold 2-D BSplineCurve objects")
+        object.__setattr__(self, "loops", loops)
+        if not self.uv_bounds:
+            object.__setattr__(self, "uv_bounds", self.surface.bounds)
+
+    @property
+    def is_trimmed(self) -> bool:
+        return len(self.loops) > 0
+
+    def with_surface(self, surface: BSplineSurface, name: str | None = None) -> "Face":
+        """Same trimming (same parameter domain), another surface: how S1/S2 keep F's trimming."""
+        return Face(surface, self.loops, self.name if name is None else name, -1, False, "BSplineSurface",
+                    self.uv_bounds, float("nan"))
+
+    def contains_uv(self, u, v, n_per_curve: int = 64) -> np.ndarray:
+        """Boolean mask of parameter points inside the trimmed region (even-odd rule on polygons)."""
+        u, v = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float))
+        if not self.loops:
+            u0, u1, v0, v1 = self.uv_bounds
+            return (u >= u0) & (u <= u1) & (v >= v0) & (v <= v1)
+        inside = np.zeros(u.shape, dtype=bool)
+        for loop in self.loops:
+            poly = np.concatenate([c.evaluate(np.linspace(*c.bounds, n_per_curve))[:-1] for c in loop])
+            inside ^= _points_in_polygon(u, v, poly)
+        return inside
+
+
+def _points_in_polygon(u, v, poly) -> np.ndarray:
+    x0, y0 = poly[:, 0], poly[:, 1]
+    x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
+    uu = u[..., None]
+    vv = v[..., None]
+    cond = (y0 > vv) != (y1 > vv)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xint = x0 + (vv - y0) * (x1 - x0) / (y1 - y0)
+    crossing = cond & (uu < xint)
+    return (np.count_nonzero(crossing, axis=-1) % 2) == 1

@@ -1,0 +1,19 @@
+"""The kernel door: the only subpackage of machsurf_cad that imports OCP/cadquery.
+
+Everything crossing this boundary is plain numpy data (B-spline arrays, :class:`Face`).
+Tested with cadquery 2.8.0 and cadquery-ocp 7.9.3.1.1 (OCP 7.9: static methods end in ``_s``).
+"""
+
+try:
+    import OCP  # noqa: F401
+except ImportError as exc:  # pragma: no cover - exercised only without the kernel
+    from ..errors import InputError
+
+    raise InputError("the OpenCASCADE kernel (cadquery-ocp) is not installed: pip install 'machsurf_cad[occ]'") from exc
+
+from .convert import check_valid, face_from_surface, from_geom_surface, is_valid, to_geom_surface
+from .mesh import read_stl, triangulate_face, write_stl
+from .step import read_step_face, read_step_faces, write_step
+
+__all__ = ["to_geom_surface", "from_geom_surface", "face_from_surface", "check_valid", "is_valid",
+           "read_step_faces", "read_step_face", "write_step", "write_stl", "read_stl", "triangulate_face"]

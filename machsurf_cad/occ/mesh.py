@@ -1,0 +1,90 @@
+"""Triangulation and STL through OCCT (linear deflection in mm, angular deflection in degrees)."""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRepMesh import BRepMesh_IncrementalMesh
+from OCP.RWStl import RWStl
+from OCP.StlAPI import StlAPI_Writer
+from OCP.TopLoc import TopLoc_Location
+from OCP.TopoDS import TopoDS_Compound
+
+from ..errors import InputError
+from ..geometry.face import Face
+from .convert import face_from_surface
+from .quiet import quiet_occt
+
+
+def _compound(faces: list[Face]):
+    b = BRep_Builder()
+    comp = TopoDS_Compound()
+    b.MakeCompound(comp)
+    topo = [face_from_surface(f.surface, [list(lp) for lp in f.loops] or None) for f in faces]
+    for t in topo:
+        b.Add(comp, t)
+    return comp, topo
+
+
+def triangulate_face(face: Face, *, linear_deflection: float = 0.05, angular_deflection: float = 10.0):
+    """Triangulate a trimmed face: returns ``(points (n,3) mm, triangles (m,3) int, uv (n,2))``."""
+    if not linear_deflection > 0:
+        raise InputError("linear deflection must be > 0 mm")
+    tf = face_from_surface(face.surface, [list(lp) for lp in face.loops] or None)
+    BRepMesh_IncrementalMesh(tf, linear_deflection, False, math.radians(angular_deflection), True)
+    loc = TopLoc_Location()
+    tri = BRep_Tool.Triangulation_s(tf, loc)
+    if tri is None:
+        raise InputError(f"OCCT could not triangulate face '{face.name}'")
+    n = tri.NbNodes()
+    pts = np.array([[tri.Node(i).X(), tri.Node(i).Y(), tri.Node(i).Z()] for i in range(1, n + 1)])
+    uv = np.array([[tri.UVNode(i).X(), tri.UVNode(i).Y()] for i in range(1, n + 1)]) if tri.HasUVNodes() else None
+    tris = np.array([tri.Triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)], dtype=np.int64) - 1
+    return pts, tris, uv
+
+
+def write_stl(path, faces: list[Face], *, linear_deflection: float = 0.01, angular_deflection: float = 5.0) -> Path:
+    """Write faces as one binary STL meshed with the stated deflections (mm, degrees)."""
+    if not linear_deflection > 0:
+        raise InputError("linear deflection must be > 0 mm")
+    path = Path(path)
+    comp, _ = _compound(faces)
+    BRepMesh_IncrementalMesh(comp, linear_deflection, False, math.radians(angular_deflection), True)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(suffix=".stl", dir=str(path.parent))
+    os.close(fd)
+    try:
+        w = StlAPI_Writer()
+        w.ASCIIMode = False
+        with quiet_occt():
+            ok = w.Write(comp, tmp)
+        if not ok:
+            raise InputError(f"OCCT failed to write STL file {path}")
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path
+
+
+def read_stl(path):
+    """Read an STL file: ``(points (n,3), triangles (m,3))``; raises :class:`InputError` if unreadable."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"STL file not found: {p}")
+    if p.stat().st_size == 0:
+        raise InputError(f"STL file is empty: {p}")
+    with quiet_occt():
+        tri = RWStl.ReadFile_s(str(p))
+    if tri is None or tri.NbNodes() == 0:
+        raise InputError(f"could not read STL file {p} (corrupt or empty)")
+    n = tri.NbNodes()
+    pts = np.array([[tri.Node(i).X(), tri.Node(i).Y(), tri.Node(i).Z()] for i in range(1, n + 1)])
+    tris = np.array([tri.Triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)], dtype=np.int64) - 1
+    return pts, tris

@@ -1,0 +1,192 @@
+"""STEP import/export and face inspection through OCCT."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+from OCP.BRepGProp import BRepGProp
+from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
+from OCP.GeomAdaptor import GeomAdaptor_Surface
+from OCP.GProp import GProp_GProps
+from OCP.IFSelect import IFSelect_RetDone
+from OCP.Interface import Interface_Static
+from OCP.STEPConstruct import STEPConstruct
+from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader, STEPControl_Writer
+from OCP.TCollection import TCollection_HAsciiString
+from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED, TopAbs_WIRE
+from OCP.TopExp import TopExp_Explorer
+from OCP.TopoDS import TopoDS, TopoDS_Compound
+
+from ..errors import InputError
+from ..geometry.face import Face
+from .convert import face_from_surface, from_geom_surface, pcurve_of_edge
+from .quiet import quiet_occt
+
+_SURFACE_TYPES = {
+    0: "Plane", 1: "Cylinder", 2: "Cone", 3: "Sphere", 4: "Torus", 5: "BezierSurface", 6: "BSplineSurface",
+    7: "SurfaceOfRevolution", 8: "SurfaceOfExtrusion", 9: "OffsetSurface", 10: "OtherSurface",
+}
+
+
+def read_step_shape(path):
+    """Read a STEP file; returns ``(shape, reader)``. Raises :class:`InputError` on any problem."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"STEP file not found: {p}")
+    if p.stat().st_size == 0:
+        raise InputError(f"STEP file is empty: {p}")
+    reader = STEPControl_Reader()
+    with quiet_occt():
+        status = reader.ReadFile(str(p))
+    if status != IFSelect_RetDone:
+        raise InputError(f"could not read STEP file {p} (corrupt or not STEP)")
+    with quiet_occt():
+        n = reader.TransferRoots()
+    if n == 0:
+        raise InputError(f"STEP file {p} holds no transferable shape")
+    shape = reader.OneShape()
+    if shape.IsNull():
+        raise InputError(f"STEP file {p} holds no shape")
+    return shape, reader
+
+
+def iter_faces(shape):
+    exp = TopExp_Explorer(shape, TopAbs_FACE)
+    while exp.More():
+        yield TopoDS.Face_s(exp.Current())
+        exp.Next()
+
+
+def face_record(face, index: int, name: str) -> Face:
+    """Convert one ``TopoDS_Face`` to a numpy :class:`Face` (NURBS-converted, trimming kept)."""
+    surf = BRep_Tool.Surface_s(face)
+    source_type = _SURFACE_TYPES.get(int(GeomAdaptor_Surface(surf).GetType()), "OtherSurface")
+    nurbs = face
+    if source_type != "BSplineSurface":
+        conv = BRepBuilderAPI_NurbsConvert(face, False)
+        nurbs = TopoDS.Face_s(conv.Shape())
+        surf = BRep_Tool.Surface_s(nurbs)
+    surface = from_geom_surface(surf, name=name)
+    u0, u1, v0, v1 = BRepTools.UVBounds_s(nurbs)
+    loops = []
+    outer = BRepTools.OuterWire_s(nurbs)
+    wires = [outer] + [TopoDS.Wire_s(w) for w in _iter(nurbs, TopAbs_WIRE) if not w.IsSame(outer)]
+    for w in wires:
+        loop = []
+        wexp = BRepTools_WireExplorer(w, nurbs)
+        while wexp.More():
+            loop.append(pcurve_of_edge(wexp.Current(), nurbs))
+            wexp.Next()
+        if loop:
+            loops.append(loop)
+    # a face whose only loop runs along its parameter box is untrimmed: keep the plain form
+    sb = surface.bounds
+    natural = len(loops) == 1 and all(abs(a - b) < 1e-9 for a, b in zip((u0, u1, v0, v1), sb)) and \
+        all(_on_box(c, sb) for c in loops[0])
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(face, props)
+    return Face(surface, () if natural else tuple(tuple(lp) for lp in loops), name, index,
+                face.Orientation() == TopAbs_REVERSED, source_type, (u0, u1, v0, v1), float(props.Mass()))
+
+
+def _on_box(curve, box, tol=1e-9) -> bool:
+    import numpy as np
+
+    uv = curve.evaluate(np.linspace(*curve.bounds, 7))
+    u0, u1, v0, v1 = box
+    return bool(np.all(np.isclose(uv[:, 0], u0, atol=tol)) or np.all(np.isclose(uv[:, 0], u1, atol=tol))
+                or np.all(np.isclose(uv[:, 1], v0, atol=tol)) or np.all(np.isclose(uv[:, 1], v1, atol=tol)))
+
+
+def _iter(shape, kind):
+    exp = TopExp_Explorer(shape, kind)
+    while exp.More():
+        yield exp.Current()
+        exp.Next()
+
+
+def read_step_faces(path) -> list[Face]:
+    """Every face of a STEP file as a numpy :class:`Face`, with its index and name.
+
+    Any surface type is converted to NURBS by the kernel (``BRepBuilderAPI_NurbsConvert``);
+    parameter bounds and trimming loops are kept. Unnamed faces are called ``face_<index>``.
+    """
+    shape, reader = read_step_shape(path)
+    tr = reader.WS().TransferReader()
+    faces = []
+    for i, f in enumerate(iter_faces(shape)):
+        ent = tr.EntityFromShapeResult(f, -1)
+        name = ""
+        if ent is not None and hasattr(ent, "Name") and ent.Name() is not None:
+            name = ent.Name().ToCString()
+        faces.append(face_record(f, i, name or f"face_{i}"))
+    if not faces:
+        raise InputError(f"STEP file {path} holds no faces")
+    return faces
+
+
+def read_step_face(path, index: int) -> Face:
+    faces = read_step_faces(path)
+    if not 0 <= index < len(faces):
+        raise InputError(f"face index {index} out of range: {path} has {len(faces)} face(s) (0..{len(faces) - 1})")
+    return faces[index]
+
+
+def write_step(path, faces: list[Face], *, extra_shapes: list | None = None) -> Path:
+    """Write faces (and optional named solids, e.g. cutters) to a STEP AP214 file, each face named.
+
+    Surfaces are written as B_SPLINE_SURFACE_WITH_KNOTS (never OFFSET_SURFACE) so that any CAM
+    system reads them. ``extra_shapes`` holds ``(TopoDS_Shape, name)`` pairs. The file is
+    written under a temporary name and moved into place: a failure leaves no half-written file.
+    """
+    builder = BRep_Builder()
+    comp = TopoDS_Compound()
+    builder.MakeCompound(comp)
+    named = []
+    for f in faces:
+        tf = face_from_surface(f.surface, [list(loop) for loop in f.loops] or None)
+        named.append((tf, f.name or f.surface.name))
+        builder.Add(comp, tf)
+    for shape, name in extra_shapes or []:
+        builder.Add(comp, shape)
+        named.append((shape, name))
+    return write_step_shape(path, comp, named)
+
+
+def write_step_shape(path, shape, named: list | None = None) -> Path:
+    """Write any shape to STEP AP214 (mm), naming the listed sub-shapes ``(TopoDS_Shape, name)``."""
+    path = Path(path)
+    writer = STEPControl_Writer()
+    Interface_Static.SetCVal_s("write.step.schema", "AP214IS")
+    Interface_Static.SetCVal_s("write.step.unit", "MM")
+    with quiet_occt():
+        status = writer.Transfer(shape, STEPControl_AsIs)
+    if status != IFSelect_RetDone:
+        raise InputError(f"OCCT could not translate the shape to STEP for {path}")
+    fp = writer.WS().TransferWriter().FinderProcess()
+    for sub, name in named or []:
+        item = STEPConstruct.FindEntity_s(fp, sub)
+        if item is not None and name:
+            item.SetName(TCollection_HAsciiString(name))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(suffix=".step", dir=str(path.parent))
+    os.close(fd)
+    try:
+        with quiet_occt():
+            ok = writer.Write(tmp) == IFSelect_RetDone
+        if not ok:
+            raise InputError(f"OCCT failed to write STEP file {path}")
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path
+
+
+def shape_faces(shape) -> list:
+    return list(iter_faces(shape))

@@ -1,0 +1,9 @@
+"""Rendering with pyvista: the only subpackage of machsurf_cad that imports pyvista.
+
+Off-screen PNGs and .vtp files for interactive review. Numbers first: every picture here
+is drawn from a result object whose figures are already in the JSON report.
+"""
+
+from .render import deviation_polydata, render_deviation, render_surfaces
+
+__all__ = ["deviation_polydata", "render_deviation", "render_surfaces"]

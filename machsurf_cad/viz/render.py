@@ -1,0 +1,112 @@
+"""Deviation maps and surface pictures (off-screen pyvista; lengths in mm)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+import pyvista as pv
+
+from ..deviation import DeviationResult
+
+try:  # keep VTK's "no X server" chatter off the terminal; rendering falls back off-screen
+    from vtkmodules.vtkCommonCore import vtkLogger
+
+    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
+except Exception:  # pragma: no cover - older VTK
+    pass
+
+pv.OFF_SCREEN = True
+
+
+def grid_polydata(points) -> pv.PolyData:
+    """Quad mesh of a ``(nu, nv, 3)`` point grid; point order is the grid's C order."""
+    pts = np.asarray(points, dtype=float)
+    nu, nv = pts.shape[:2]
+    i, j = np.meshgrid(np.arange(nu - 1), np.arange(nv - 1), indexing="ij")
+    a = (i * nv + j).ravel()
+    quads = np.stack([np.full_like(a, 4), a, a + nv, a + nv + 1, a + 1], axis=1).ravel()
+    return pv.PolyData(pts.reshape(-1, 3), quads)
+
+
+def deviation_polydata(result: DeviationResult) -> pv.PolyData:
+    """Mesh of the candidate with point data ``deviation_mm`` (signed, mm)."""
+    pts = result.points
+    if result.grid_shape is not None:
+        mesh = grid_polydata(pts.reshape(*result.grid_shape, 3))
+        mesh.point_data["deviation_mm"] = result.signed
+        return mesh
+    if result.triangles is not None and result.triangles.size:
+        faces = np.hstack([np.full((result.triangles.shape[0], 1), 3), result.triangles]).ravel()
+        mesh = pv.PolyData(pts, faces)
+    else:
+        mesh = pv.PolyData(pts).delaunay_2d() if pts.shape[0] >= 3 else pv.PolyData(pts)
+    mesh.point_data["deviation_mm"] = result.signed
+    return mesh
+
+
+def render_deviation(result: DeviationResult, png_path, *, title: str = "deviation", vtp_path=None,
+                     tolerance: float | None = None, extra_lines=None, window_size=(1200, 900)) -> Path:
+    """Off-screen PNG of a deviation map.
+
+    Diverging colour map centred on zero (blue below the reference normal, red above), legend
+    in mm, tolerance band drawn as black iso-lines at +/- tolerance and shaded in the legend.
+    Also writes the mesh with its ``deviation_mm`` data as .vtp when ``vtp_path`` is given.
+    """
+    tol = tolerance if tolerance is not None else result.tolerance
+    mesh = deviation_polydata(result)
+    vmax = max(result.max_abs, tol or 0.0, 1e-12)
+    p = pv.Plotter(off_screen=True, window_size=list(window_size))
+    p.set_background("white")
+    sargs = dict(title="deviation [mm]", color="black", fmt="%.3g", n_labels=5, vertical=True,
+                 position_x=0.86, position_y=0.15, height=0.7, width=0.06)
+    annotations = {}
+    if tol:
+        annotations = {tol: f"+tol {tol:g}", -tol: f"-tol {tol:g}"}
+    p.add_mesh(mesh, scalars="deviation_mm", cmap="coolwarm", clim=[-vmax, vmax], scalar_bar_args=sargs,
+               annotations=annotations, smooth_shading=True)
+    if tol and mesh.n_points > 3:
+        try:
+            lines = mesh.contour([-tol, tol], scalars="deviation_mm")
+            if lines.n_points:
+                p.add_mesh(lines, color="black", line_width=3)
+        except Exception:  # contouring is cosmetic; numbers are in the report
+            pass
+    if extra_lines is not None:
+        for pts, color in extra_lines:
+            p.add_mesh(pv.lines_from_points(np.asarray(pts)), color=color, line_width=4)
+    s = result.stats
+    text = (f"{title}\nmax abs deviation = {s['max_abs']:.4g} mm   max = {s['max']:.4g}   min = {s['min']:.4g}\n"
+            f"RMS = {s['rms']:.4g} mm   points = {s['n_points']}"
+            + (f"\ntolerance = {tol:g} mm: {'MET' if s['max_abs'] <= tol else 'NOT MET'}" if tol else ""))
+    p.add_text(text, position="upper_left", font_size=11, color="black")
+    w = np.array(s["worst_xyz"])
+    p.add_mesh(pv.PolyData(w[None, :]), color="magenta", point_size=14, render_points_as_spheres=True)
+    p.show_axes()
+    p.view_isometric()
+    png_path = Path(png_path)
+    png_path.parent.mkdir(parents=True, exist_ok=True)
+    p.screenshot(str(png_path))
+    p.close()
+    if vtp_path is not None:
+        mesh.save(str(vtp_path))
+    return png_path
+
+
+def render_surfaces(meshes, png_path, *, title: str = "", window_size=(1200, 900)) -> Path:
+    """Off-screen PNG of several ``(points (nu, nv, 3), colour)`` grids."""
+    p = pv.Plotter(off_screen=True, window_size=list(window_size))
+    p.set_background("white")
+    for pts, color in meshes:
+        pts = np.asarray(pts)
+        p.add_mesh(grid_polydata(pts), color=color, smooth_shading=True, opacity=0.9)
+    if title:
+        p.add_text(title, position="upper_left", font_size=11, color="black")
+    p.show_axes()
+    p.view_isometric()
+    png_path = Path(png_path)
+    png_path.parent.mkdir(parents=True, exist_ok=True)
+    p.screenshot(str(png_path))
+    p.close()
+    return png_path
