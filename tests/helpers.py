@@ -1,0 +1,28 @@
+"""Test helpers shared by several modules (numpy only)."""
+
+import numpy as np
+
+
+def random_surface(rng, rational=False, degree=(3, 2), n=(7, 5), size=100.0):
+    """A wavy clamped B-spline surface with non-uniform knots (and random weights if rational)."""
+    from machsurf_cad.geometry import BSplineSurface
+
+    p, q = degree
+    nu, nv = n
+    x = np.linspace(0, size, nu)
+    y = np.linspace(0, size * 0.8, nv)
+    X, Y = np.meshgrid(x, y, indexing="ij")
+    Z = 10 * np.sin(X / size * 3) * np.cos(Y / size * 2) + rng.normal(scale=2.0, size=X.shape)
+    poles = np.stack([X + rng.normal(scale=1.0, size=X.shape), Y, Z], axis=-1)
+
+    def knots(nn, d):
+        inner = np.sort(rng.uniform(0.05, 0.95, nn - d - 1))
+        k = np.concatenate([[0.0], inner, [1.0]])
+        m = np.ones(k.size, dtype=int)
+        m[0] = m[-1] = d + 1
+        return k, m
+
+    ku, mu = knots(nu, p)
+    kv, mv = knots(nv, q)
+    w = rng.uniform(0.6, 1.8, size=(nu, nv)) if rational else None
+    return BSplineSurface(p, q, ku, mu, kv, mv, poles, w)
