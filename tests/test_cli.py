@@ -1,0 +1,95 @@
+"""The command line: figures in the JSON report, exit codes 0/1/2, one-line errors, no partial output."""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import ROOT, needs_kernel, needs_pyvista
+
+pytestmark = needs_kernel
+BLOCK = ROOT / "example_parts" / "freeform_block.step"
+
+
+def run(*args, cwd=None):
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    return subprocess.run([sys.executable, "-m", "machsurf_cad", *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd, env=env, stdin=subprocess.DEVNULL, timeout=600)
+
+
+def test_info_reports_every_face(tmp_path):
+    r = run("info", BLOCK, "-o", tmp_path / "info")
+    assert r.returncode == 0, r.stderr
+    rep = json.loads((tmp_path / "info" / "report.json").read_text())
+    assert rep["n_faces"] == 8 and f"{rep['n_faces']} face(s)" in r.stdout
+    top = rep["faces"][0]
+    assert top["name"] == "freeform_top" and top["trimmed"] and top["n_loops"] == 2
+    assert f"{top['area_mm2']:.2f}" in r.stdout
+    assert {f["source_type"] for f in rep["faces"]} == {"BSplineSurface", "Plane", "Cylinder"}
+
+
+@needs_pyvista
+def test_inspect_step_candidate_and_tolerance_exit_code(tmp_path):
+    from machsurf_cad.geometry.face import Face
+    from machsurf_cad.occ import read_step_faces, write_step
+
+    nominal = tmp_path / "nominal.step"
+    top = read_step_faces(BLOCK)[0]
+    write_step(nominal, [top])
+    shifted = tmp_path / "shifted.step"
+    s = top.surface
+    write_step(shifted, [Face(s.with_poles(s.poles + [0, 0, 0.02]), top.loops, name="shifted")])
+    ok = run("inspect", nominal, shifted, "--tol", "0.05", "--samples", "60", "-o", tmp_path / "ok")
+    assert ok.returncode == 0, ok.stderr
+    rep = json.loads((tmp_path / "ok" / "report.json").read_text())
+    dev = rep["deviation"]
+    # translating by 0.02 mm in z: the normal distance is 0.02 * n_z, at most 0.02 mm
+    assert 0.018 < dev["max_abs"] <= 0.02 + 1e-9
+    assert f"{dev['max_abs']:.6g}" in ok.stdout
+    assert (tmp_path / "ok" / "deviation.png").stat().st_size > 10000
+    bad = run("inspect", nominal, shifted, "--tol", "0.01", "--samples", "40", "--no-render", "-o", tmp_path / "bad")
+    assert bad.returncode == 2 and "NOT met" in bad.stdout
+    assert json.loads((tmp_path / "bad" / "report.json").read_text())["deviation"]["within_tolerance"] is False
+
+
+def test_inspect_stl_candidate(tmp_path):
+    from machsurf_cad.occ import read_step_faces, write_stl
+
+    top = read_step_faces(BLOCK)[0]
+    stl = write_stl(tmp_path / "top.stl", [top], linear_deflection=0.05)
+    r = run("inspect", BLOCK, stl, "--no-render", "-o", tmp_path / "o")
+    assert r.returncode == 0, r.stderr
+    dev = json.loads((tmp_path / "o" / "report.json").read_text())["deviation"]
+    assert dev["max_abs"] < 0.05 * 1.2 and dev["n_points"] > 1000
+
+
+@pytest.mark.parametrize("case", ["missing", "empty", "corrupt", "noface", "index", "suffix"])
+def test_bad_input_one_line_exit_1_nothing_written(tmp_path, case):
+    out = tmp_path / "out"
+    (tmp_path / "empty.step").write_text("")
+    (tmp_path / "corrupt.step").write_text("ISO-10303-21;\nHEADER;\ngarbage\n")
+    args = {
+        "missing": ("info", tmp_path / "nope.step"),
+        "empty": ("info", tmp_path / "empty.step"),
+        "corrupt": ("info", tmp_path / "corrupt.step"),
+        "noface": ("inspect", BLOCK, tmp_path / "corrupt.step"),
+        "index": ("inspect", BLOCK, BLOCK, "--face", "42"),
+        "suffix": ("inspect", BLOCK, tmp_path / "cand.iges"),
+    }[case]
+    r = run(*args, "-o", out)
+    assert r.returncode == 1
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("machsurf: error:"), r.stderr
+    assert "Traceback" not in r.stderr
+    assert not out.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.partial")]
+
+
+def test_usage_errors_exit_1():
+    r = run("inspect")
+    assert r.returncode == 1 and "Traceback" not in r.stderr
+    r = run("frobnicate")
+    assert r.returncode == 1
