@@ -15,7 +15,9 @@ Knot conventions (as in OCCT's ``Geom_BSplineCurve``):
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
+from concurrent.futures import ThreadPoolExecutor
 from functools import cached_property
 
 import numpy as np
@@ -23,7 +25,26 @@ import numpy as np
 from ..errors import DegenerateGeometryError, InputError
 from .basis import basis_derivatives, collocation_matrix, find_spans, greville
 
-_CHUNK = 1 << 17
+_CHUNK = 1 << 15
+_THREADS = max(1, min(4, os.cpu_count() or 1))
+_POWER_MAX_DEGREE = 7  # power basis on [0, 1] spans is well conditioned up to here
+
+
+def _power_rows(x: np.ndarray, degree: int, order: int, h: np.ndarray) -> np.ndarray:
+    """Rows ``[x^a]``, ``[d/du x^a]``, ``[d2/du2 x^a]`` (x = (u - t_i)/h) for a = 0..degree."""
+    m = x.shape[0]
+    pw = np.empty((m, degree + 1))
+    pw[:, 0] = 1.0
+    for a in range(1, degree + 1):
+        pw[:, a] = pw[:, a - 1] * x
+    rows = np.zeros((m, order + 1, degree + 1))
+    rows[:, 0] = pw
+    if order >= 1:
+        rows[:, 1, 1:] = pw[:, :-1] * (np.arange(1, degree + 1) / h[:, None])
+    if order >= 2 and degree >= 2:
+        a = np.arange(2, degree + 1)
+        rows[:, 2, 2:] = pw[:, :-2] * (a * (a - 1) / (h * h)[:, None])
+    return rows
 
 
 def _frozen(a, dtype=float) -> np.ndarray:
@@ -365,6 +386,63 @@ class BSplineSurface:
             v = v0 + np.mod(v - v0, v1 - v0)
         return u, v
 
+    @cached_property
+    def _power_data(self):
+        """Per knot-span pair, the patch's Taylor (power-basis) coefficients in local [0, 1] coordinates.
+
+        ``C[i, j, a, b] = d^a/du^a d^b/dv^b H(t_i, t_j) h_i^a h_j^b / (a! b!)`` for the homogeneous
+        map H, exact for a polynomial piece. Evaluating a point is then a gather of one
+        contiguous block and two small contractions, much cheaper than de Boor per point.
+        """
+        from math import factorial
+
+        tu, tv, hp = self._eval_data
+        p, q = self.degree_u, self.degree_v
+        nu, nv, dim = hp.shape
+        su = np.arange(p, nu)
+        su = su[tu[su + 1] > tu[su]]
+        sv = np.arange(q, nv)
+        sv = sv[tv[sv + 1] > tv[sv]]
+        hu = tu[su + 1] - tu[su]
+        hv = tv[sv + 1] - tv[sv]
+        bu = basis_derivatives(tu, p, su, tu[su], p) * (hu[:, None] ** np.arange(p + 1) /
+                                                         np.array([factorial(a) for a in range(p + 1)]))[:, :, None]
+        bv = basis_derivatives(tv, q, sv, tv[sv], q) * (hv[:, None] ** np.arange(q + 1) /
+                                                         np.array([factorial(b) for b in range(q + 1)]))[:, :, None]
+        iu = su[:, None] - p + np.arange(p + 1)
+        iv = sv[:, None] - q + np.arange(q + 1)
+        blocks = hp[iu[:, None, :, None], iv[None, :, None, :]]  # (nsu, nsv, p+1, q+1, dim)
+        coeffs = np.einsum("iak,jbl,ijkld->ijabd", bu, bv, blocks)
+        mapu = np.full(nu, -1)
+        mapu[su] = np.arange(su.size)
+        mapv = np.full(nv, -1)
+        mapv[sv] = np.arange(sv.size)
+        flat = np.ascontiguousarray(coeffs.reshape(su.size * sv.size, -1))
+        return flat, mapu, mapv, hu, hv, sv.size
+
+    def _power_derivs(self, u: np.ndarray, v: np.ndarray, order: int) -> np.ndarray:
+        """Homogeneous derivatives ``H[m, k, l, :]`` from the power-basis patches (order <= 2)."""
+        tu, tv, hp = self._eval_data
+        flat, mapu, mapv, hu, hv, nsv = self._power_data
+        p, q = self.degree_u, self.degree_v
+        dim = hp.shape[2]
+        m = u.shape[0]
+        i = find_spans(tu, p, hp.shape[0], u)
+        j = find_spans(tv, q, hp.shape[1], v)
+        ci, cj = mapu[i], mapv[j]
+        hi, hj = hu[ci], hv[cj]
+        s = (u - tu[i]) / hi
+        t = (v - tv[j]) / hj
+        rows_u = _power_rows(s, p, order, hi)  # (m, order+1, p+1)
+        rows_v = _power_rows(t, q, order, hj)  # (m, order+1, q+1)
+        g = np.take(flat, ci * nsv + cj, axis=0).reshape(m, p + 1, (q + 1) * dim)
+        a = np.matmul(rows_u, g).reshape(m, order + 1, q + 1, dim)  # contract over the u powers
+        h = np.empty((m, order + 1, order + 1, dim))
+        for k in range(order + 1):
+            for l in range(order + 1 - k):
+                h[:, k, l] = np.einsum("mbd,mb->md", a[:, k], rows_v[:, l])
+        return h
+
     def derivatives(self, u, v, order: int = 1) -> SurfaceDerivatives:
         """Exact point and partial derivatives up to ``order`` (1 or 2) at scattered ``(u, v)``.
 
@@ -379,12 +457,28 @@ class BSplineSurface:
         m = uf.shape[0]
         keys = [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2)][: {0: 1, 1: 3, 2: 6}[order]]
         out = {k: np.empty((m, 3)) for k in keys}
-        for start in range(0, m, _CHUNK):
+        use_power = self.degree_u <= _POWER_MAX_DEGREE and self.degree_v <= _POWER_MAX_DEGREE
+        if use_power:
+            self._power_data  # build the cache once, before any worker thread
+
+        def work(start):
             sl = slice(start, min(m, start + _CHUNK))
-            h = self._homogeneous_derivs(uf[sl], vf[sl], order)
+            if use_power:
+                h = self._power_derivs(uf[sl], vf[sl], order)
+            else:
+                h = self._homogeneous_derivs(uf[sl], vf[sl], order)
             d = _rational_surface_derivs(h, order) if self.weights is not None else h
             for k in keys:
                 out[k][sl] = d[:, k[0], k[1]]
+
+        starts = range(0, m, _CHUNK)
+        if m > 4 * _CHUNK and _THREADS > 1:
+            # numpy releases the GIL in these kernels: chunks run on all cores
+            with ThreadPoolExecutor(_THREADS) as pool:
+                list(pool.map(work, starts))
+        else:
+            for start in starts:
+                work(start)
         res = [out[k].reshape(shape + (3,)) for k in keys]
         res += [None] * (6 - len(res))
         if order == 0:
@@ -406,9 +500,13 @@ class BSplineSurface:
         nu, nv, dim = hp.shape
         bu_full = _dense_basis(tu, p, nu, us, order)  # (k, mu, nu)
         bv_full = _dense_basis(tv, q, nv, vs, order)  # (l, mv, nv)
-        # H[k, l] = Bu_k @ P @ Bv_l^T  for each coordinate
-        tmp = np.einsum("kai,ijd->kajd", bu_full, hp)
-        h = np.einsum("kajd,lbj->abkld", tmp, bv_full)
+        # H[k, l] = Bu_k @ P @ Bv_l^T for each coordinate, as dense BLAS products
+        mu, mv = us.size, vs.size
+        h = np.empty((mu, mv, order + 1, order + 1, dim))
+        for k in range(order + 1):
+            tmp = (bu_full[k] @ hp.reshape(nu, nv * dim)).reshape(mu, nv, dim).transpose(0, 2, 1)
+            for l in range(order + 1 - k):
+                h[:, :, k, l] = (tmp.reshape(mu * dim, nv) @ bv_full[l].T).reshape(mu, dim, mv).transpose(0, 2, 1)
         d = _rational_surface_derivs(h.reshape(-1, order + 1, order + 1, dim), order) if self.weights is not None \
             else h.reshape(-1, order + 1, order + 1, dim)
         d = d.reshape(us.size, vs.size, order + 1, order + 1, 3)
@@ -463,8 +561,8 @@ class BSplineSurface:
 
 def unit_normals(su, sv, scale, u=None, v=None, *, check=True) -> np.ndarray:
     """Normalised ``su x sv``; raises on (near) zero normals when ``check``."""
-    n = np.cross(su, sv)
-    norm = np.linalg.norm(n, axis=-1)
+    n = _cross(su, sv)
+    norm = np.sqrt(np.einsum("...i,...i->...", n, n))
     bad = ~(norm > 1e-12 * scale * scale)
     if np.any(bad):
         if check:
@@ -479,6 +577,15 @@ def unit_normals(su, sv, scale, u=None, v=None, *, check=True) -> np.ndarray:
             )
         norm = np.where(bad, np.nan, norm)
     return n / norm[..., None]
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product of (..., 3) arrays; faster than np.cross on large arrays."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
 
 
 def _dense_basis(t, degree, n_poles, x, order) -> np.ndarray:

@@ -242,11 +242,11 @@ def circular_arc(radius: float, start_deg: float, end_deg: float, center=(0.0, 0
 
 
 def sphere_patch(radius: float = 50.0, lat_deg=(-60.0, 60.0), lon_deg: float = 90.0, name: str = "sphere") -> BSplineSurface:
-    """Exact rational patch of a sphere centred at the origin (normal points inwards... see note).
+    """Exact rational patch of a sphere of ``radius`` mm centred at the origin.
 
-    u runs along the meridian from ``lat_deg[0]`` to ``lat_deg[1]``, v along the longitude from
-    0 to ``lon_deg``. With this orientation ``su x sv`` points *into* the sphere... it is
-    tested, not assumed: use :func:`local_properties` for the sign.
+    u runs along the meridian from ``lat_deg[0]`` to ``lat_deg[1]`` (degrees), v along the
+    longitude from 0 to ``lon_deg``. With this parameterisation ``su x sv`` points to the
+    centre, so both principal curvatures are ``+1/radius``.
     """
     prof = circular_arc(radius, lat_deg[0], lat_deg[1])  # (cos, sin) -> (rho, z)
     return revolve_profile(prof, lon_deg, name=name)

@@ -83,11 +83,23 @@ def local_properties(surface: BSplineSurface, u, v, *, check: bool = True) -> Lo
     >>> s = builders.sphere_patch(radius=50.0)
     >>> p = local_properties(s, 0.3, 0.4)
     >>> round(float(p.k1 * 50), 9), round(float(p.k2 * 50), 9)
-    (-1.0, -1.0)
+    (1.0, 1.0)
     """
     u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
     d = surface.derivatives(u, v, 2)
     return properties_from_derivatives(u, v, d, surface.scale, check=check)
+
+
+def local_properties_grid(surface: BSplineSurface, us, vs, *, check: bool = True) -> LocalProperties:
+    """:func:`local_properties` on the tensor grid ``us x vs`` (arrays of shape (len(us), len(vs))).
+
+    Uses the grid evaluator (basis functions once per grid line, dense BLAS products).
+    """
+    us = np.asarray(us, dtype=float).ravel()
+    vs = np.asarray(vs, dtype=float).ravel()
+    U, V = np.meshgrid(us, vs, indexing="ij")
+    d = surface.derivatives_grid(us, vs, 2)
+    return properties_from_derivatives(U, V, d, surface.scale, check=check)
 
 
 def properties_from_derivatives(u, v, d, scale: float, *, check: bool = True) -> LocalProperties:

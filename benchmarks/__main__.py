@@ -1,0 +1,41 @@
+"""Run all benchmarks and print one table (``python -m benchmarks`` or ``make bench``).
+
+Options: ``--quick`` (smaller sizes), ``--json PATH`` (write the rows).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import sys
+
+from . import bench_eval
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m benchmarks")
+    ap.add_argument("--quick", action="store_true", help="10x fewer points")
+    ap.add_argument("--json", default=None, help="write the rows to this JSON file")
+    args = ap.parse_args(argv)
+    rows = []
+    for bench in bench_eval.BENCHMARKS:
+        rows.append(bench(quick=args.quick))
+        _print_row(rows[-1], header=len(rows) == 1)
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({"python": sys.version.split()[0], "machine": platform.machine(), "rows": rows}, fh, indent=2)
+    return 0
+
+
+def _print_row(r, header):
+    if header:
+        print(f"{'benchmark':<46} {'n':>9} {'machsurf s':>11} {'reference s':>12} {'reference':<22} {'speed-up':>9} "
+              f"{'max diff':>10}")
+        print("-" * 126)
+    print(f"{r['name']:<46} {r['n']:>9} {r['ours_s']:>11.3f} {r['ref_s']:>12.3f} {r['ref']:<22} "
+          f"{r['ref_s'] / r['ours_s']:>8.1f}x {r['max_diff']:>10.2e}", flush=True)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
