@@ -179,6 +179,95 @@ def _finish_deviation(args, result, nominal, cand_desc, t0) -> int:
     return EXIT_OK
 
 
+def _face_or_example(args):
+    from .geometry.face import Face
+
+    if args.example:
+        from .examples import EXAMPLES
+
+        if args.example not in EXAMPLES:
+            raise InputError(f"unknown example {args.example!r}; known: {', '.join(sorted(EXAMPLES))}")
+        s = EXAMPLES[args.example]()
+        return Face(s, name=s.name or args.example), f"example {args.example}"
+    if not args.part:
+        raise InputError("give a STEP file or --example NAME")
+    from .occ import read_step_face
+
+    f = read_step_face(args.part, args.face)
+    return f, f"face {f.index} '{f.name}' of {args.part}"
+
+
+def cmd_machining_surface(args) -> int:
+    from .cutters import parse_cutter
+    from .machining import machining_surface
+    from .machining.surfaces import fit_deviation
+
+    t0 = time.perf_counter()
+    cutter = parse_cutter(args.tool)
+    face, desc = _face_or_example(args)
+    if args.axes not in (3, 5):
+        raise InputError("--axes must be 3 or 5")
+    axis = None
+    if args.axis:
+        try:
+            axis = tuple(float(x) for x in args.axis.split(","))
+        except ValueError:
+            raise InputError("--axis must be x,y,z") from None
+    ms = machining_surface(face, cutter, axes=args.axes, strategy=args.strategy, lead=args.lead, tilt=args.tilt,
+                           axis=axis, tolerance=args.tol, loops=args.loops, max_poles=args.max_poles,
+                           tip=args.tip, degree=(args.degree, args.degree))
+    rep = ms.report()
+    _say(f"nominal: {desc}")
+    _say(f"tool: {cutter.spec()} (r = {rep['r_mm']:g} mm, R_t = {rep['R_t_mm']:g} mm), {ms.axes} axes, "
+         f"{rep['strategy']}")
+    for key in ("S1", "S2"):
+        f = rep[key]
+        if f is None:
+            continue
+        _say(f"{f['name']}: degree {f['degrees'][0]}x{f['degrees'][1]}, {f['poles'][0]}x{f['poles'][1]} poles, "
+             f"max error {f['max_error_mm']:.3g} mm (tol {args.tol:g}) on {f['n_check_points']} unseen points")
+    if ms.axes == 5:
+        _say(f"axis orientation: alpha_max = {rep['alpha_max_deg_for_tolerance']:.4g} deg for the tolerance, "
+             f"{rep['alpha_max_deg_for_measured_errors']:.4g} deg for the measured errors; measured axis error "
+             f"{rep['axis_error_deg_measured']:.4g} deg")
+    _say("loops: " + ("none" if not ms.loops.found else "; ".join(r.describe() for r in ms.loops.regions)))
+    st = Staging(args.out)
+    try:
+        from .occ import write_step, write_stl
+        from .viz import render_deviation
+
+        write_step(st.path("machining_surface.step"), ms.faces())
+        for f in ms.faces():
+            write_stl(st.path(f"{f.name}.stl"), [f], linear_deflection=args.stl_deflection)
+        dev = fit_deviation(ms, "S1")
+        loops_pts = [(r.xyz, "magenta", f"{r.kind} loop ({r.surface})") for r in ms.loops.regions]
+        render_deviation(dev, st.path("deviation_S1.png"), vtp_path=st.path("deviation_S1.vtp"),
+                         title=f"S1 fit vs exact offset ({cutter.spec()})", tolerance=args.tol,
+                         extra_points=loops_pts)
+        files = ["machining_surface.step"] + [f"{f.name}.stl" for f in ms.faces()] + ["deviation_S1.png",
+                                                                                     "deviation_S1.vtp"]
+        rep["S1_deviation_map"] = dev.report()
+        if args.toolpath:
+            from .machining.toolpath import tool_paths, write_apt, write_csv
+
+            tp = tool_paths(ms, stepover=args.stepover, chordal_tolerance=args.chordal)
+            write_csv(st.path("toolpath.csv"), tp)
+            write_apt(st.path("toolpath.apt"), tp, ms)
+            files += ["toolpath.csv", "toolpath.apt"]
+            rep["toolpath"] = tp.report()
+            _say(f"tool path: {len(tp.passes)} passes, {tp.n_points} CL points, chordal error "
+                 f"{tp.chordal_error_measured:.3g} mm (tol {args.chordal:g})")
+        rep.update({"command": "machining-surface", "nominal": desc, "files": files + ["report.json"],
+                    "time_s_total": time.perf_counter() - t0})
+        _write_json(st.path("report.json"), rep)
+        st.commit()
+    except BaseException:
+        st.abort()
+        raise
+    _say(f"outputs in {args.out}/: {', '.join(rep['files'])}")
+    return EXIT_OK
+
+
 def cmd_demo(args) -> int:
     from .demo import run_demo
 
@@ -210,6 +299,27 @@ def build_parser() -> argparse.ArgumentParser:
     n.add_argument("--no-render", action="store_true", help="skip the PNG/VTP (numbers only)")
     n.add_argument("-o", "--out", default="out/inspect", help="output folder (default: out/inspect)")
     n.set_defaults(func=cmd_inspect)
+    m = sub.add_parser("machining-surface", help="guiding S1 and orientation S2 surfaces of a face (Table 1)")
+    m.add_argument("part", nargs="?", help="STEP file (or use --example)")
+    m.add_argument("--example", help="example surface instead of a STEP: bezier5, blade, hypar, liu, eq18")
+    m.add_argument("--face", type=int, default=0, help="face index (default 0)")
+    m.add_argument("--tool", required=True, help="ball:D=..|flat:D=..|bull:D=..,r=.. (mm)")
+    m.add_argument("--axes", type=int, default=5, help="3 or 5 (default 5)")
+    m.add_argument("--strategy", default="planes:x", help="planes:x|y|z|a,b,c or iso:u|v (default planes:x)")
+    m.add_argument("--lead", type=float, default=0.0, help="lead angle Omega_t, degrees (5 axes)")
+    m.add_argument("--tilt", type=float, default=0.0, help="tilt angle Omega_n, degrees (5 axes)")
+    m.add_argument("--axis", default=None, help="fixed axis x,y,z for 3 axes / 3+2 (default 0,0,1)")
+    m.add_argument("--tip", action="store_true", help="3 axes: S1 at the tool tip instead of the torus plane")
+    m.add_argument("--tol", type=float, default=1e-3, help="fit tolerance, max-norm mm (default 0.001)")
+    m.add_argument("--degree", type=int, default=3, help="fit degree in u and v (default 3)")
+    m.add_argument("--max-poles", type=int, default=40000, help="pole budget per surface (default 40000)")
+    m.add_argument("--loops", choices=["error", "flag"], default="error", help="on loops: error (default) or flag")
+    m.add_argument("--stl-deflection", type=float, default=0.01, help="STL linear deflection, mm (default 0.01)")
+    m.add_argument("--toolpath", action="store_true", help="also write CL files (CSV, APT CLDATA)")
+    m.add_argument("--stepover", type=float, default=2.0, help="distance between passes, mm (default 2)")
+    m.add_argument("--chordal", type=float, default=0.01, help="chordal tolerance of CL points, mm (default 0.01)")
+    m.add_argument("-o", "--out", default="out/machining_surface", help="output folder")
+    m.set_defaults(func=cmd_machining_surface)
     return p
 
 

@@ -47,7 +47,8 @@ def deviation_polydata(result: DeviationResult) -> pv.PolyData:
 
 
 def render_deviation(result: DeviationResult, png_path, *, title: str = "deviation", vtp_path=None,
-                     tolerance: float | None = None, extra_lines=None, window_size=(1200, 900)) -> Path:
+                     tolerance: float | None = None, extra_lines=None, extra_points=None,
+                     window_size=(1200, 900)) -> Path:
     """Off-screen PNG of a deviation map.
 
     Diverging colour map centred on zero (blue below the reference normal, red above), legend
@@ -76,6 +77,12 @@ def render_deviation(result: DeviationResult, png_path, *, title: str = "deviati
     if extra_lines is not None:
         for pts, color in extra_lines:
             p.add_mesh(pv.lines_from_points(np.asarray(pts)), color=color, line_width=4)
+    for pts, color, label in extra_points or []:
+        pts = np.asarray(pts, dtype=float).reshape(-1, 3)
+        if pts.size:
+            p.add_mesh(pv.PolyData(pts), color=color, point_size=8, render_points_as_spheres=True, label=label)
+    if extra_points and any(len(np.asarray(e[0])) for e in extra_points):
+        p.add_legend(bcolor="white", size=(0.2, 0.08), loc="lower left")
     s = result.stats
     text = (f"{title}\nmax abs deviation = {s['max_abs']:.4g} mm   max = {s['max']:.4g}   min = {s['min']:.4g}\n"
             f"RMS = {s['rms']:.4g} mm   points = {s['n_points']}"

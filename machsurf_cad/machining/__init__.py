@@ -1,0 +1,9 @@
+"""Machining surfaces (guiding S1, orientation S2), loop detection and tool paths (numpy only)."""
+
+from .loops import LoopError, LoopRegion, LoopReport
+from .strategies import AxisField, FixedAxis, IsoFeed, LeadTilt, PlanesFeed, parse_strategy
+from .surfaces import MachiningMaps, MachiningSurface, detect_loops, machining_surface, recover_axis, tool_radii
+
+__all__ = ["machining_surface", "MachiningSurface", "MachiningMaps", "recover_axis", "detect_loops", "tool_radii",
+           "LoopError", "LoopRegion", "LoopReport", "AxisField", "FixedAxis", "IsoFeed", "LeadTilt", "PlanesFeed",
+           "parse_strategy"]

@@ -1,0 +1,430 @@
+"""Guiding surface S1 and orientation surface S2 (Tournier, Duc, Lartigue, Contri, Table 1).
+
+Lengths in mm, angles in degrees. ``n`` is the face's outward normal (into the tool), ``u``
+the unit tool axis from a strategy, ``v = ((u x n)/|u x n|) x u`` the unit vector from the
+torus centre-circle point K towards the tool axis (in the plane of u and n).
+
+============  ============================  ===================================================
+cutter        3-axis (u = fixed axis)       5-axis
+============  ============================  ===================================================
+ball, r=D/2   S1 = F + r n                  S1 = F + r n;        S2 = F + r n + L u
+flat, R=D/2   S1 = F + R v                  S1 = F;              S2 = F + R v
+bull (r,R_t)  S1 = F + r n + R_t v          S1 = F + r n;        S2 = F + r n + R_t v
+============  ============================  ===================================================
+
+For 5 axes a point of S1 and the point of S2 at the same (u, v) are the K and C_L of one
+tool position; the axis is recovered as ``u = w x ((n x w)/|n x w|)`` with ``w = C_L - K``
+(``(S2 - S1)/L`` for the ball). The 3-axis filleted point ``F + r n + R_t v`` is on the axis
+in the plane of the torus centre circle, **r above the usual tool-tip cutter location**
+``F + r n + R_t v - r u`` (ask for it with ``tip=True``); it is singular where the face normal
+is parallel to the axis (the torus then touches along a circle).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..approx import SurfaceFit, fit_surface
+from ..cutters import BallEndMill, BullNoseEndMill, Cutter, FlatEndMill, parse_cutter
+from ..errors import DegenerateGeometryError, InputError
+from ..geometry.bspline import BSplineSurface, unit_normals
+from ..geometry.differential import local_properties_grid
+from ..geometry.face import Face
+from .loops import LoopError, LoopReport, fold_mask, region_from_mask
+from .strategies import AxisField, FixedAxis, IsoFeed, LeadTilt, LocalFrame, PlanesFeed, parse_strategy
+
+_SIN_MIN_AXIS_TO_NORMAL = 1e-6  # |u x n| below this: v undefined (axis along the normal)
+_MIN_AXIS_ELEVATION_DEG = 1.0   # the axis must stay this far above the tangent plane
+
+
+def tool_radii(cutter: Cutter) -> tuple[str, float, float]:
+    """``(kind, r, R_t)`` of a Table-1 cutter: corner radius and torus major radius (mm)."""
+    if isinstance(cutter, BallEndMill):
+        return "ball", cutter.D / 2, 0.0
+    if isinstance(cutter, FlatEndMill):
+        return "flat", 0.0, cutter.D / 2
+    if isinstance(cutter, BullNoseEndMill):
+        return "bull", cutter.r, cutter.R_t
+    raise InputError(f"machining surfaces are defined for ball, flat and bull-nose end mills (Table 1), "
+                     f"not {cutter.spec()}")
+
+
+def _as_face(face) -> Face:
+    if isinstance(face, Face):
+        return face
+    if isinstance(face, BSplineSurface):
+        return Face(face, name=face.name or "F")
+    raise InputError("the nominal must be a Face or a BSplineSurface")
+
+
+@dataclass(frozen=True)
+class MachiningMaps:
+    """The exact maps of Table 1 for one face, cutter, axis count and strategy (grid functions)."""
+
+    face: Face
+    cutter: Cutter
+    axes: int
+    strategy: object
+    axis_length: float
+    tip: bool = False
+
+    def __post_init__(self):
+        if self.axes not in (3, 5):
+            raise InputError("axes must be 3 or 5")
+        tool_radii(self.cutter)
+
+    # ------------------------------------------------------------------ exact local data
+    def frame(self, us, vs) -> LocalFrame:
+        us = np.asarray(us, dtype=float).ravel()
+        vs = np.asarray(vs, dtype=float).ravel()
+        U, V = np.meshgrid(us, vs, indexing="ij")
+        d = self.face.surface.derivatives_grid(us, vs, 1)
+        n = unit_normals(d.su, d.sv, self.face.surface.scale, U, V)
+        if self.face.reversed:
+            n = -n
+        return LocalFrame(d.point, d.su, d.sv, n, U, V)
+
+    def axis(self, frame: LocalFrame) -> np.ndarray:
+        u = self.strategy.axis(frame)
+        elev = np.einsum("...i,...i->...", u, frame.normal)
+        low = elev < math.sin(math.radians(_MIN_AXIS_ELEVATION_DEG))
+        if np.any(low):
+            raise DegenerateGeometryError(
+                f"the tool axis is within {_MIN_AXIS_ELEVATION_DEG:g} deg of the tangent plane (or below it) at "
+                f"{int(low.sum())} point(s), e.g. xyz {np.round(frame.point[low][0], 3).tolist()}: the "
+                f"{'fixed axis cannot reach this face' if self.axes == 3 else 'lead/tilt lays the tool on the surface'}",
+                {"uv": np.stack([frame.U[low], frame.V[low]], 1)[:20].tolist()})
+        return u
+
+    def v_direction(self, u: np.ndarray, frame: LocalFrame) -> np.ndarray:
+        c = np.cross(u, frame.normal)
+        s = np.linalg.norm(c, axis=-1)
+        bad = s < _SIN_MIN_AXIS_TO_NORMAL
+        if np.any(bad):
+            where = np.round(frame.point[bad][0], 3).tolist()
+            raise DegenerateGeometryError(
+                f"v = ((u x n)/|u x n|) x u is undefined where the tool axis is parallel to the face normal "
+                f"({int(bad.sum())} sample(s), e.g. xyz {where}): the flat/torus end touches along a circle there"
+                + ("; use a lead angle" if self.axes == 5 else "; the 3-axis point is singular at horizontal spots"),
+                {"uv": np.stack([frame.U[bad], frame.V[bad]], 1)[:20].tolist()})
+        return np.cross(c / s[..., None], u)
+
+    # ------------------------------------------------------------------ Table 1
+    def s1(self, us, vs) -> np.ndarray:
+        """Guiding surface map on the grid ``us x vs`` (mm)."""
+        kind, r, Rt = tool_radii(self.cutter)
+        fr = self.frame(us, vs)
+        if self.axes == 5:
+            return fr.point + r * fr.normal
+        u = self.axis(fr)
+        if kind == "ball":
+            x = fr.point + r * fr.normal
+        else:
+            x = fr.point + r * fr.normal + Rt * self.v_direction(u, fr)
+        return x - r * u if self.tip else x
+
+    def s2(self, us, vs) -> np.ndarray:
+        """Orientation surface map on the grid (5-axis only), mm."""
+        if self.axes != 5:
+            raise InputError("3-axis machining has no orientation surface (the axis is fixed)")
+        kind, r, Rt = tool_radii(self.cutter)
+        fr = self.frame(us, vs)
+        u = self.axis(fr)
+        if kind == "ball":
+            return fr.point + r * fr.normal + self.axis_length * u
+        return fr.point + r * fr.normal + Rt * self.v_direction(u, fr)
+
+    def tool_axis(self, us, vs) -> np.ndarray:
+        """Exact unit tool axis on the grid."""
+        return self.axis(self.frame(us, vs))
+
+    def cutter_location(self, us, vs) -> np.ndarray:
+        """Point on the axis in the torus centre-circle plane (C_L) on the grid, mm."""
+        kind, r, Rt = tool_radii(self.cutter)
+        fr = self.frame(us, vs)
+        u = self.axis(fr)
+        if kind == "ball":
+            return fr.point + r * fr.normal
+        return fr.point + r * fr.normal + Rt * self.v_direction(u, fr)
+
+
+def recover_axis(k: np.ndarray, cl: np.ndarray, n: np.ndarray, *, ball_length: float | None = None) -> np.ndarray:
+    """Tool axis from K (on S1), C_L (on S2) and the face normal: ``u = w x ((n x w)/|n x w|)``, ``w = C_L - K``.
+
+    For the ball end mill (``ball_length`` given) the axis is ``(C_L - K) / |C_L - K|``. Raises
+    :class:`DegenerateGeometryError` where the formula is undefined: ``w`` parallel to ``n``,
+    i.e. the tool axis tangent to the surface.
+    """
+    w = np.asarray(cl, float) - np.asarray(k, float)
+    if ball_length is not None:
+        return w / np.linalg.norm(w, axis=-1, keepdims=True)
+    c = np.cross(n, w)
+    s = np.linalg.norm(c, axis=-1)
+    wn = np.linalg.norm(w, axis=-1)
+    bad = ~(s > 1e-9 * np.maximum(wn, 1e-300))
+    if np.any(bad):
+        raise DegenerateGeometryError(
+            f"tool axis undefined at {int(bad.sum())} point(s): K->C_L is parallel to the face normal "
+            "(axis tangent to the surface) or zero")
+    u = np.cross(w, c / s[..., None])
+    return u / np.linalg.norm(u, axis=-1, keepdims=True)
+
+
+@dataclass(frozen=True)
+class MachiningSurface:
+    """S1 (and S2 for 5 axes) as certified B-spline faces, trimmed like the nominal face.
+
+    Attributes hold the fitted faces, their fits (with measured errors), the loop report and
+    the measured tool-axis error. Lengths in mm, angles in degrees.
+    """
+
+    nominal: Face
+    cutter: Cutter
+    axes: int
+    strategy: object
+    tolerance: float
+    s1: Face
+    s1_fit: SurfaceFit
+    s2: Face | None
+    s2_fit: SurfaceFit | None
+    loops: LoopReport
+    axis_length: float
+    tip: bool
+    axis_error_deg: float | None = None
+    alpha_max_deg_tolerance: float | None = None
+    alpha_max_deg_measured: float | None = None
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def maps(self) -> MachiningMaps:
+        return MachiningMaps(self.nominal, self.cutter, self.axes, self.strategy, self.axis_length, self.tip)
+
+    def faces(self) -> list[Face]:
+        return [self.s1] + ([self.s2] if self.s2 is not None else [])
+
+    def report(self) -> dict:
+        kind, r, Rt = tool_radii(self.cutter)
+        out = {
+            "tool": self.cutter.to_dict(), "tool_kind": kind, "r_mm": r, "R_t_mm": Rt,
+            "axes": self.axes, "strategy": self.strategy.describe(), "tolerance_mm": self.tolerance,
+            "tip_location": self.tip, "axis_length_mm": self.axis_length if kind == "ball" else None,
+            "S1": {"name": self.s1.name, **self.s1_fit.report()},
+            "S2": None if self.s2 is None else {"name": self.s2.name, **self.s2_fit.report()},
+            "loops": self.loops.report(),
+            "alpha_max_deg_for_tolerance": self.alpha_max_deg_tolerance,
+            "alpha_max_deg_for_measured_errors": self.alpha_max_deg_measured,
+            "axis_error_deg_measured": self.axis_error_deg,
+            "time_s": self.timings,
+        }
+        return out
+
+
+def _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field):
+    if axis_field is not None:
+        if axes != 5:
+            raise InputError("an axis field needs axes=5")
+        feed = parse_strategy(strategy) if isinstance(strategy, str) else strategy
+        return axis_field if isinstance(axis_field, AxisField) else AxisField(axis_field, feed)
+    feed = parse_strategy(strategy) if isinstance(strategy, str) else strategy
+    if axes == 3:
+        return FixedAxis(axis if axis is not None else (0.0, 0.0, 1.0), feed)
+    if axis is not None:
+        raise InputError("a fixed axis with axes=5 is 3+2 machining: use axes=3 with axis=...")
+    return LeadTilt(lead, tilt, feed)
+
+
+def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: float = 0.0, tilt: float = 0.0,
+                      axis=None, axis_field=None, tolerance: float = 1e-3, degree=(3, 3), max_poles: int = 40000,
+                      loops: str = "error", axis_length: float | None = None, tip: bool = False,
+                      loop_grid: int = 121) -> MachiningSurface:
+    """Guiding surface S1 and orientation surface S2 of a face, as certified B-spline faces.
+
+    Parameters
+    ----------
+    face : Face or BSplineSurface
+        Nominal face F; its outward normal points into the tool. S1/S2 keep its (u, v)
+        parameterisation and trimming.
+    tool : Cutter or str
+        Ball, flat or bull-nose end mill (e.g. ``"bull:D=28,r=4"``), mm.
+    axes : 3 or 5
+        3: fixed axis ``axis`` (default z; any direction for 3+2); 5: lead/tilt or axis field.
+    strategy : str or feed object
+        Feed direction: ``"planes:x"`` (planes parallel to yOz), ``"planes:a,b,c"``, ``"iso:u"``.
+    lead, tilt : float
+        Lead ``Omega_t`` and tilt ``Omega_n`` in degrees (5 axes); conventions in
+        :mod:`machsurf_cad.machining.strategies`.
+    axis_field : callable or AxisField, optional
+        Tool axis ``func(u, v) -> (..., 3)`` given by the caller (5 axes).
+    tolerance : float
+        Max-norm fit tolerance in mm, for S1 and S2 each (measured on unseen points).
+    loops : {"error", "flag"}
+        What to do when loops are found: raise :class:`LoopError` naming the regions
+        (default), or return the surfaces with the regions in the report.
+    axis_length : float, optional
+        ``L`` of the 5-axis ball orientation surface ``S2 = F + r n + L u`` (default D), mm.
+    tip : bool
+        3 axes only: S1 at the tool tip (``... - r u``) instead of the torus-centre plane.
+
+    Examples
+    --------
+    >>> from machsurf_cad import examples
+    >>> ms = machining_surface(examples.bezier5_patch(), "bull:D=28,r=4", lead=20, tolerance=1e-3)
+    >>> ms.s1_fit.max_error <= 1e-3 and ms.s2_fit.max_error <= 1e-3, ms.loops.found
+    (True, False)
+    """
+    import time
+
+    if loops not in ("error", "flag"):
+        raise InputError("loops must be 'error' or 'flag'")
+    if tip and axes != 3:
+        raise InputError("tip=True is for 3-axis machining (5-axis S1 is the offset F + r n)")
+    cutter = parse_cutter(tool) if isinstance(tool, str) else tool
+    kind, r, Rt = tool_radii(cutter)
+    face = _as_face(face)
+    strat = _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field)
+    L = float(axis_length) if axis_length is not None else cutter.D
+    if not L > 0:
+        raise InputError("axis length must be > 0 mm")
+    maps = MachiningMaps(face, cutter, axes, strat, L, tip)
+    bounds = face.uv_bounds
+    t0 = time.perf_counter()
+    timings = {}
+    s1_fit = fit_surface(maps.s1, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles, name="S1_guiding")
+    timings["fit_S1"] = time.perf_counter() - t0
+    s2_fit = None
+    if axes == 5:
+        t1 = time.perf_counter()
+        s2_fit = fit_surface(maps.s2, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles,
+                             name="S2_orientation")
+        timings["fit_S2"] = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    report = detect_loops(maps, loop_grid)
+    timings["loops"] = time.perf_counter() - t2
+    if report.found and loops == "error":
+        raise LoopError("machining surface has loops (the tool would gouge): "
+                        + "; ".join(r_.describe() for r_ in report.regions)
+                        + ". Use a smaller corner radius, another strategy, or loops='flag' to export anyway",
+                        report)
+    s1 = face.with_surface(s1_fit.surface, "S1_guiding")
+    s2 = face.with_surface(s2_fit.surface, "S2_orientation") if s2_fit is not None else None
+    axis_err = a_tol = a_meas = None
+    if axes == 5:
+        axis_err = _measured_axis_error(maps, s1_fit.surface, s2_fit.surface, kind, L)
+        lever = L if kind == "ball" else Rt
+        a_tol = math.degrees(math.atan(2 * tolerance / lever))
+        a_meas = math.degrees(math.atan((s1_fit.max_error + s2_fit.max_error) / lever))
+    timings["total"] = time.perf_counter() - t0
+    return MachiningSurface(face, cutter, axes, strat, float(tolerance), s1, s1_fit, s2, s2_fit, report, L, tip,
+                            axis_err, a_tol, a_meas, timings)
+
+
+def fit_deviation(ms: MachiningSurface, which: str = "S1", samples: int = 150):
+    """Deviation map of a fitted machining surface against its exact map (mm).
+
+    Sampled on a grid shifted off the fit's samples, inside the trimmed face; signed along
+    the face's outward normal. Returns a :class:`~machsurf_cad.deviation.DeviationResult`.
+    """
+    from ..deviation import DeviationResult, deviation_stats
+
+    maps = ms.maps
+    fit = ms.s1_fit if which == "S1" else ms.s2_fit
+    if fit is None:
+        raise InputError(f"{which} was not built")
+    u0, u1, v0, v1 = ms.nominal.uv_bounds
+    shift = (np.arange(samples) + 0.3819660112501051) / samples
+    us, vs = u0 + (u1 - u0) * shift, v0 + (v1 - v0) * shift
+    exact = maps.s1(us, vs) if which == "S1" else maps.s2(us, vs)
+    got = fit.surface.evaluate_grid(us, vs)
+    n = maps.frame(us, vs).normal
+    diff = got - exact
+    signed = np.linalg.norm(diff, axis=-1) * np.where(np.einsum("...i,...i->...", diff, n) < 0, -1.0, 1.0)
+    U, V = np.meshgrid(us, vs, indexing="ij")
+    inside = ms.nominal.contains_uv(U, V)
+    pts, ref = got.reshape(-1, 3), exact.reshape(-1, 3)
+    sg = signed.ravel()
+    uv = np.stack([U.ravel(), V.ravel()], 1)
+    shape = (samples, samples)
+    if ms.nominal.is_trimmed:
+        keep = inside.ravel()
+        pts, ref, sg, uv = pts[keep], ref[keep], sg[keep], uv[keep]
+        shape = None
+    stats = deviation_stats(sg, pts, uv)
+    return DeviationResult(pts, sg, uv, ref, np.zeros(len(sg), bool), shape, None, ms.tolerance, stats)
+
+
+def _measured_axis_error(maps: MachiningMaps, s1: BSplineSurface, s2: BSplineSurface, kind: str, L: float) -> float:
+    """Largest angle (deg) between the axis recovered from the fitted S1/S2 and the exact axis."""
+    u0, u1, v0, v1 = maps.face.uv_bounds
+    fr_u = np.linspace(u0, u1, 41)[:-1] + (u1 - u0) / 82
+    fr_v = np.linspace(v0, v1, 41)[:-1] + (v1 - v0) / 82
+    fr = maps.frame(fr_u, fr_v)
+    exact = maps.axis(fr)
+    k = s1.evaluate_grid(fr_u, fr_v)
+    cl = s2.evaluate_grid(fr_u, fr_v)
+    got = recover_axis(k, cl, fr.normal, ball_length=L if kind == "ball" else None)
+    cosang = np.clip(np.einsum("...i,...i->...", got, exact), -1, 1)
+    return float(np.degrees(np.arccos(cosang)).max())
+
+
+def detect_loops(maps: MachiningMaps, n: int = 121) -> LoopReport:
+    """Local, fold and global loops of S1 (and S2) on an n x n grid inside the trimmed face."""
+    face = maps.face
+    kind, r, Rt = tool_radii(maps.cutter)
+    u0, u1, v0, v1 = face.uv_bounds
+    us, vs = np.linspace(u0, u1, n), np.linspace(v0, v1, n)
+    U, V = np.meshgrid(us, vs, indexing="ij")
+    inside = face.contains_uv(U, V)
+    fr = maps.frame(us, vs)
+    regions = []
+    # local: r * kappa >= 1 with kappa the concave principal curvature (outward normal)
+    if r > 0:
+        props = local_properties_grid(face.surface, us, vs)
+        sign = -1.0 if face.reversed else 1.0
+        kappa = np.maximum(sign * props.k1, sign * props.k2)
+        mask = inside & (r * kappa >= 1.0)
+        reg = region_from_mask("local", "S1", mask, U, V, fr.point, r * kappa)
+        if reg is not None:
+            regions.append(reg)
+    # fold of each exact map
+    x1 = maps.s1(us, vs)
+    m1, val1 = fold_mask(x1, us, vs, fr.normal)
+    reg = region_from_mask("fold", "S1", inside & m1 & ~_near_edge(n), U, V, x1, val1)
+    if reg is not None and not any(rg.kind == "local" for rg in regions):
+        regions.append(reg)
+    if maps.axes == 5:
+        x2 = maps.s2(us, vs)
+        m2, val2 = fold_mask(x2, us, vs, fr.normal)
+        reg = region_from_mask("fold", "S2", inside & m2 & ~_near_edge(n), U, V, x2, val2)
+        if reg is not None:
+            regions.append(reg)
+    # global: offset points closer to F than r (S1 = F + r n only)
+    if r > 0 and (maps.axes == 5 or kind == "ball"):
+        from ..deviation import project_points
+
+        offs = fr.point + r * fr.normal
+        proj = project_points(face.surface, offs[inside])
+        dist = np.full(U.shape, np.inf)
+        d_in = np.linalg.norm(offs[inside] - proj.foot, axis=1)
+        foot_in_face = face.contains_uv(proj.uv[:, 0], proj.uv[:, 1]) if face.is_trimmed else np.ones(d_in.size, bool)
+        d_in = np.where(foot_in_face, d_in, np.inf)
+        dist[inside] = d_in
+        slack = max(1e-6 * r, 1e-9)
+        mask = dist < r - slack
+        reg = region_from_mask("global", "S1", mask, U, V, offs, r - np.where(np.isfinite(dist), dist, r))
+        if reg is not None:
+            regions.append(reg)
+    return LoopReport(tuple(regions), (n, n))
+
+
+def _near_edge(n: int) -> np.ndarray:
+    """One-sample border where one-sided differences make the fold test unreliable."""
+    m = np.zeros((n, n), bool)
+    m[0, :] = m[-1, :] = m[:, 0] = m[:, -1] = True
+    return m
+
+
+__all__ = ["machining_surface", "MachiningSurface", "MachiningMaps", "recover_axis", "detect_loops", "tool_radii",
+           "LoopError", "FixedAxis", "LeadTilt", "AxisField", "PlanesFeed", "IsoFeed"]
