@@ -137,6 +137,41 @@ class MachiningMaps:
             return fr.point + r * fr.normal + self.axis_length * u
         return fr.point + r * fr.normal + Rt * self.v_direction(u, fr)
 
+    def check_axis_normal_singularities(self, n: int = 161) -> None:
+        """Raise where the axis is parallel to the normal *between* samples (flat/bull maps need v).
+
+        The direction of ``u x n`` in the plane normal to ``u`` winds once around such a point;
+        a non-zero winding number around a grid cell finds it even when no sample hits it.
+        """
+        kind, r, Rt = tool_radii(self.cutter)
+        if kind == "ball" or (self.axes == 5 and isinstance(self.strategy, LeadTilt) and self.strategy.lead_deg != 0):
+            return
+        u0, u1, v0, v1 = self.face.uv_bounds
+        us, vs = np.linspace(u0, u1, n), np.linspace(v0, v1, n)
+        fr = self.frame(us, vs)
+        u = self.strategy.axis(fr)
+        w = np.cross(u, fr.normal)
+        ref = np.array([1.0, 0.0, 0.0]) if abs(np.mean(u[..., 0])) < 0.9 else np.array([0.0, 1.0, 0.0])
+        e1 = np.cross(u, ref)
+        e1 /= np.linalg.norm(e1, axis=-1, keepdims=True)
+        e2 = np.cross(u, e1)
+        ang = np.arctan2(np.einsum("...i,...i->...", w, e2), np.einsum("...i,...i->...", w, e1))
+
+        def wrap(a):
+            return (a + np.pi) % (2 * np.pi) - np.pi
+
+        wind = (wrap(ang[1:, :-1] - ang[:-1, :-1]) + wrap(ang[1:, 1:] - ang[1:, :-1])
+                + wrap(ang[:-1, 1:] - ang[1:, 1:]) + wrap(ang[:-1, :-1] - ang[:-1, 1:]))
+        cells = np.argwhere(np.abs(wind) > np.pi)
+        if cells.size:
+            i, j = cells[0]
+            where = np.round(fr.point[i, j], 3).tolist()
+            raise DegenerateGeometryError(
+                f"the tool axis is parallel to the face normal near xyz {where} (u ~ {us[i]:.4g}, v ~ {vs[j]:.4g}; "
+                f"{len(cells)} cell(s)): v = ((u x n)/|u x n|) x u is undefined there, the flat/torus end touches "
+                "along a circle" + ("; the 3-axis point is singular at horizontal spots" if self.axes == 3 else ""),
+                {"uv": [[float(us[a]), float(vs[b])] for a, b in cells[:20]]})
+
     def tool_axis(self, us, vs) -> np.ndarray:
         """Exact unit tool axis on the grid."""
         return self.axis(self.frame(us, vs))
@@ -289,6 +324,7 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
     if not L > 0:
         raise InputError("axis length must be > 0 mm")
     maps = MachiningMaps(face, cutter, axes, strat, L, tip)
+    maps.check_axis_normal_singularities()
     bounds = face.uv_bounds
     t0 = time.perf_counter()
     timings = {}
@@ -389,14 +425,15 @@ def detect_loops(maps: MachiningMaps, n: int = 121) -> LoopReport:
         if reg is not None:
             regions.append(reg)
     # fold of each exact map
+    n_param = -fr.normal if face.reversed else fr.normal  # orientation of su x sv, the maps' own
     x1 = maps.s1(us, vs)
-    m1, val1 = fold_mask(x1, us, vs, fr.normal)
+    m1, val1 = fold_mask(x1, us, vs, n_param)
     reg = region_from_mask("fold", "S1", inside & m1 & ~_near_edge(n), U, V, x1, val1)
     if reg is not None and not any(rg.kind == "local" for rg in regions):
         regions.append(reg)
     if maps.axes == 5:
         x2 = maps.s2(us, vs)
-        m2, val2 = fold_mask(x2, us, vs, fr.normal)
+        m2, val2 = fold_mask(x2, us, vs, n_param)
         reg = region_from_mask("fold", "S2", inside & m2 & ~_near_edge(n), U, V, x2, val2)
         if reg is not None:
             regions.append(reg)

@@ -190,7 +190,9 @@ def _densify(uv: np.ndarray, ms: MachiningSurface, level: float, kind: str, N) -
         dense[:, 1] = np.clip(dense[:, 1] - step * gv, v0, v1)
         if np.abs(r).max() < 1e-11:
             break
-    return dense
+    d = s1.derivatives(dense[:, 0], dense[:, 1], 0)
+    on_plane = np.abs(d.point @ N - level) < 1e-9 * max(1.0, abs(level))
+    return dense[on_plane]  # points clipped at the domain edge could not reach the plane
 
 
 def _positions(ms: MachiningSurface, uv: np.ndarray) -> dict:

@@ -1,0 +1,54 @@
+"""cadquery entry points: from a face to its machining surfaces in one call.
+
+Examples
+--------
+>>> import cadquery as cq
+>>> from machsurf_cad.occ.cq_ops import machining_surface_faces, machining_surface_op
+>>> from machsurf_cad.occ import face_from_surface
+>>> from machsurf_cad import examples
+>>> face = cq.Face(face_from_surface(examples.bezier5_patch()))
+>>> s1, s2, ms = machining_surface_faces(face, "bull:D=28,r=4", lead=20)
+>>> s1.isValid() and s2.isValid() and ms.s1_fit.max_error <= 1e-3
+True
+>>> wp = cq.Workplane().add(face).invoke(machining_surface_op("ball:D=10", lead=10))
+>>> len(wp.vals())
+2
+"""
+
+from __future__ import annotations
+
+import cadquery as cq
+
+from ..machining import machining_surface
+from .convert import face_from_surface
+from .step import face_record
+
+
+def machining_surface_faces(face: "cq.Face", tool, **kwargs):
+    """S1 and S2 of a cadquery Face as cadquery Faces (trimmed like the input), plus the result.
+
+    Keyword arguments are those of :func:`machsurf_cad.machining.machining_surface`
+    (mm, degrees). ``S2`` is None for 3 axes.
+    """
+    rec = face_record(face.wrapped, -1, "F")
+    ms = machining_surface(rec, tool, **kwargs)
+    out = [cq.Face(face_from_surface(f.surface, [list(lp) for lp in f.loops] or None)) for f in ms.faces()]
+    return out[0], (out[1] if len(out) > 1 else None), ms
+
+
+def machining_surface_op(tool, **kwargs):
+    """A function for ``Workplane.invoke``: replaces the selected faces by their S1 (and S2) faces."""
+
+    def op(wp: "cq.Workplane") -> "cq.Workplane":
+        faces = [v for v in wp.vals() if isinstance(v, cq.Face)]
+        if not faces:
+            from ..errors import InputError
+
+            raise InputError("select at least one face before invoking machining_surface_op")
+        result = []
+        for f in faces:
+            s1, s2, _ = machining_surface_faces(f, tool, **kwargs)
+            result += [s1] + ([s2] if s2 is not None else [])
+        return wp.newObject(result)
+
+    return op
