@@ -10,7 +10,7 @@ import json
 import platform
 import sys
 
-from . import bench_eval
+from . import bench_eval, bench_offset
 
 
 def main(argv=None) -> int:
@@ -22,9 +22,12 @@ def main(argv=None) -> int:
     for bench in bench_eval.BENCHMARKS:
         rows.append(bench(quick=args.quick))
         _print_row(rows[-1], header=len(rows) == 1)
+    offset_rows = bench_offset.offset_fit_rows(quick=args.quick)
+    bench_offset.print_rows(offset_rows)
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump({"python": sys.version.split()[0], "machine": platform.machine(), "rows": rows}, fh, indent=2)
+            json.dump({"python": sys.version.split()[0], "machine": platform.machine(), "rows": rows, "offset_fit": offset_rows}, fh,
+                      indent=2)
     return 0
 
 

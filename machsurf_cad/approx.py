@@ -71,8 +71,11 @@ def _params(breaks: np.ndarray, fracs: np.ndarray, include_end: bool) -> np.ndar
     return x
 
 
-def _knot_vectors(breaks: np.ndarray, degree: int):
+def _knot_vectors(breaks: np.ndarray, degree: int, fixed: dict | None = None):
     mults = np.ones(breaks.size, dtype=int)
+    if fixed:
+        for i, b in enumerate(breaks):
+            mults[i] = max(1, min(degree, fixed.get(float(b), 1)))
     mults[0] = mults[-1] = degree + 1
     return breaks, mults, np.repeat(breaks, mults)
 
@@ -84,7 +87,7 @@ def _lstsq(b: np.ndarray, rhs: np.ndarray) -> np.ndarray:
 
 def fit_surface(f: GridMap, bounds, *, tolerance: float, degree=(3, 3), max_poles: int = 40000,
                 initial_spans=(4, 4), max_iter: int = 40, check_grid: int = 101, name: str = "",
-                progress=None) -> SurfaceFit:
+                breaks=None, progress=None) -> SurfaceFit:
     """Fit ``f`` over ``bounds = (u0, u1, v0, v1)`` within ``tolerance`` (max-norm distance, mm).
 
     Parameters
@@ -97,6 +100,9 @@ def fit_surface(f: GridMap, bounds, *, tolerance: float, degree=(3, 3), max_pole
         Degrees along u and v (default bicubic; interior knots are simple, so C^(degree-1)).
     max_poles : int
         Pole budget; reaching it before the tolerance raises :class:`ToleranceError`.
+    breaks : ((knots_u, mults_u), (knots_v, mults_v)), optional
+        Knots where the map is less smooth (e.g. the knots of the surface it is derived
+        from), kept in the fit with these multiplicities (C^(degree - mult) there).
     progress : callable, optional
         Called as ``progress(iteration, n_poles, max_error)`` after each refinement.
 
@@ -120,6 +126,17 @@ def fit_surface(f: GridMap, bounds, *, tolerance: float, degree=(3, 3), max_pole
         raise InputError("empty parameter domain")
     bu = np.linspace(u0, u1, max(1, initial_spans[0]) + 1)
     bv = np.linspace(v0, v1, max(1, initial_spans[1]) + 1)
+    fixed_u, fixed_v = {}, {}
+    if breaks is not None:
+        (ku_, mu_), (kv_, mv_) = breaks
+        for k, m in zip(np.asarray(ku_, float), np.asarray(mu_, int)):
+            if u0 < k < u1:
+                fixed_u[float(k)] = int(m)
+        for k, m in zip(np.asarray(kv_, float), np.asarray(mv_, int)):
+            if v0 < k < v1:
+                fixed_v[float(k)] = int(m)
+        bu = _merge_breaks(bu, np.array(sorted(fixed_u)))
+        bv = _merge_breaks(bv, np.array(sorted(fixed_v)))
     fu, cu = _fractions(p)
     fv, cv = _fractions(q)
     # an independent uniform grid shifted by an irrational fraction of its step, so that it never
@@ -131,8 +148,8 @@ def fit_surface(f: GridMap, bounds, *, tolerance: float, degree=(3, 3), max_pole
     _check_map_values(f_grid, "the map")
     history = []
     for it in range(max_iter):
-        ku, mu, tu = _knot_vectors(bu, p)
-        kv, mv, tv = _knot_vectors(bv, q)
+        ku, mu, tu = _knot_vectors(bu, p, fixed_u)
+        kv, mv, tv = _knot_vectors(bv, q, fixed_v)
         nu, nv = tu.size - p - 1, tv.size - q - 1
         us, vs = _params(bu, fu, True), _params(bv, fv, True)
         vals = np.asarray(f(us, vs), dtype=float)
@@ -173,8 +190,8 @@ def fit_surface(f: GridMap, bounds, *, tolerance: float, degree=(3, 3), max_pole
         bad_u[iu[gi]] = True
         bad_v[iv[gj]] = True
         bad_u, bad_v = _directional(bad_u, bad_v, e4, tolerance)
-        new_u = bu.size - 1 + int(bad_u.sum()) + p
-        new_v = bv.size - 1 + int(bad_v.sum()) + q
+        new_u = int(mu.sum()) - p - 1 + int(bad_u.sum())
+        new_v = int(mv.sum()) - q - 1 + int(bad_v.sum())
         if new_u * new_v > max_poles:
             raise ToleranceError(
                 f"surface fit did not reach {tolerance:g} mm within {max_poles} poles "
@@ -202,6 +219,15 @@ def _directional(bad_u, bad_v, e4, tol):
     if spread_v > 4 * spread_u:
         return np.zeros_like(bad_u), bad_v
     return bad_u, bad_v
+
+
+def _merge_breaks(base: np.ndarray, extra: np.ndarray) -> np.ndarray:
+    """Union of break points, dropping uniform breaks that nearly coincide with given ones."""
+    if extra.size == 0:
+        return base
+    span = base[-1] - base[0]
+    keep = [b for b in base[1:-1] if np.min(np.abs(extra - b)) > 1e-3 * span]
+    return np.unique(np.concatenate([[base[0]], keep, extra, [base[-1]]]))
 
 
 def _split(breaks: np.ndarray, bad: np.ndarray) -> np.ndarray:

@@ -3,7 +3,9 @@
 Reads the free-form block (a real STEP part with a trimmed B-spline face), evaluates the
 free-form face, exports it as STEP and STL, reads both back and measures them against the
 exact nominal face: the STEP round trip and the STL's chordal deviation, drawn as a
-deviation map. Everything printed is in ``report.json``.
+deviation map. Then builds the 5-axis machining surfaces S1/S2 of a filleted end mill on
+the face (trimmed like it), their deviation map against the exact offset, and a tool path
+(CSV and APT CLDATA). Everything printed is in ``report.json``.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from .errors import InputError
 DEFAULT_PART = Path(__file__).resolve().parent.parent / "example_parts" / "freeform_block.step"
 STL_DEFLECTION_MM = 0.01
 STL_ANGLE_DEG = 5.0
+MS_TOL_MM = 1e-3
 
 
 def default_part_path(work_dir: Path) -> Path:
@@ -91,6 +94,29 @@ def run_demo(out: Path, say=print) -> int:
             f"{s['max_abs']:.4g} mm, RMS {s['rms']:.3g} mm over {s['n_points']} points inside the triangles")
         render_deviation(mesh_dev, st.path("deviation_stl.png"), vtp_path=st.path("deviation_stl.vtp"),
                          title="STL mesh vs exact free-form face", tolerance=STL_DEFLECTION_MM)
+
+        # machining surfaces: 5-axis filleted end mill, lead 10 deg along planes parallel to yOz
+        from .machining import machining_surface
+        from .machining.surfaces import fit_deviation
+        from .machining.toolpath import tool_paths, write_apt, write_csv
+
+        ms = machining_surface(nominal, "bull:D=16,r=3", axes=5, strategy="planes:x", lead=10.0, tilt=0.0,
+                               tolerance=MS_TOL_MM)
+        write_step(st.path("machining_surface.step"), ms.faces())
+        ms_dev = fit_deviation(ms, "S1")
+        tp = tool_paths(ms, stepover=4.0, chordal_tolerance=0.01)
+        render_deviation(ms_dev, st.path("deviation_S1.png"), vtp_path=st.path("deviation_S1.vtp"),
+                         title="S1 (bull D16 r3, lead 10 deg) fit vs exact offset; paths of K on S1",
+                         tolerance=MS_TOL_MM, extra_lines=[(p.k, "darkgreen") for p in tp.passes if len(p.k) > 1])
+        write_csv(st.path("toolpath.csv"), tp)
+        write_apt(st.path("toolpath.apt"), tp, ms)
+        say(f"machining surfaces (bull:D=16,r=3, 5 axes, lead 10 deg): S1 {ms.s1_fit.surface.shape[0]}x"
+            f"{ms.s1_fit.surface.shape[1]} poles, max error {ms.s1_fit.max_error:.3g} mm; S2 "
+            f"{ms.s2_fit.surface.shape[0]}x{ms.s2_fit.surface.shape[1]} poles, max error {ms.s2_fit.max_error:.3g} mm "
+            f"(tol {MS_TOL_MM} mm); loops: {'none' if not ms.loops.found else len(ms.loops.regions)}; "
+            f"axis error {ms.axis_error_deg:.3g} deg")
+        say(f"tool path: {len(tp.passes)} passes, {tp.n_points} CL points, chordal error "
+            f"{tp.chordal_error_measured:.3g} mm")
         report = {
             "command": "demo", "units": {"length": "mm", "angle": "deg"},
             "part": str(part), "n_faces": len(faces),
@@ -102,8 +128,12 @@ def run_demo(out: Path, say=print) -> int:
             "stl": {"triangles": int(tris.shape[0]), "linear_deflection_mm": STL_DEFLECTION_MM,
                     "angular_deflection_deg": STL_ANGLE_DEG, "deviation": mesh_dev.report()},
             "cutter": cutter.to_dict(),
+            "machining_surface": ms.report(),
+            "S1_deviation_map": ms_dev.report(),
+            "toolpath": tp.report(),
             "files": ["freeform_top.step", "freeform_top.stl", "cutter_ball_D10.step", "deviation_stl.png",
-                      "deviation_stl.vtp", "report.json"],
+                      "deviation_stl.vtp", "machining_surface.step", "deviation_S1.png", "deviation_S1.vtp",
+                      "toolpath.csv", "toolpath.apt", "report.json"],
             "time_s": time.perf_counter() - t0,
         }
         _write_json(st.path("report.json"), report)

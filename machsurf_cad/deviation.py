@@ -45,7 +45,9 @@ class DeviationResult:
 
     ``signed[i]`` is the distance of ``points[i]`` to the reference, positive on the side of
     the reference normal. ``grid_shape`` is set when the points come from a surface grid
-    (rows along u); ``triangles`` when they come from a mesh.
+    (rows along u); ``triangles`` when they come from a mesh. For a trimmed surface the
+    measured points are the grid points inside the face: ``grid_points`` holds the whole
+    grid and ``grid_index`` the positions of ``points`` in it (for drawing).
     """
 
     points: np.ndarray
@@ -57,6 +59,8 @@ class DeviationResult:
     triangles: np.ndarray | None = None
     tolerance: float | None = None
     stats: dict = field(default_factory=dict)
+    grid_points: np.ndarray | None = None
+    grid_index: np.ndarray | None = None
 
     @property
     def max_abs(self) -> float:
@@ -183,6 +187,7 @@ def deviation(reference, candidate, *, samples: int = 200, tolerance: float | No
     if not isinstance(ref_surface, BSplineSurface):
         raise InputError("reference must be a BSplineSurface or Face")
     grid_shape = None
+    grid_points = grid_index = None
     if isinstance(candidate, (BSplineSurface, Face)):
         cs = candidate.surface if isinstance(candidate, Face) else candidate
         u0, u1, v0, v1 = candidate.uv_bounds if isinstance(candidate, Face) else cs.bounds
@@ -192,8 +197,8 @@ def deviation(reference, candidate, *, samples: int = 200, tolerance: float | No
         if isinstance(candidate, Face) and candidate.is_trimmed:
             uu, vv = np.meshgrid(us, vs, indexing="ij")
             keep = candidate.contains_uv(uu.ravel(), vv.ravel())
+            grid_points, grid_index = pts, np.nonzero(keep)[0]
             pts = pts[keep]
-            grid_shape = None
     else:
         pts = np.asarray(candidate, dtype=float).reshape(-1, 3)
     if pts.shape[0] == 0:
@@ -202,7 +207,8 @@ def deviation(reference, candidate, *, samples: int = 200, tolerance: float | No
     signed = signed_distances(pts, proj, flip)
     stats = deviation_stats(signed, pts, proj.uv, proj.on_boundary, proj.converged)
     return DeviationResult(pts, signed, proj.uv, proj.foot, proj.on_boundary, grid_shape,
-                           None if triangles is None else np.asarray(triangles), tolerance, stats)
+                           None if triangles is None else np.asarray(triangles), tolerance, stats, grid_points,
+                           grid_index)
 
 
 def signed_distances(pts: np.ndarray, proj: Projection, flip: float = 1.0) -> np.ndarray:

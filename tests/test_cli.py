@@ -93,3 +93,43 @@ def test_usage_errors_exit_1():
     assert r.returncode == 1 and "Traceback" not in r.stderr
     r = run("frobnicate")
     assert r.returncode == 1
+
+
+@needs_pyvista
+def test_machining_surface_command_with_toolpath(tmp_path):
+    from machsurf_cad.occ import read_step_faces
+
+    out = tmp_path / "ms"
+    r = run("machining-surface", "--example", "bezier5", "--tool", "bull:D=28,r=4", "--axes", "5", "--strategy",
+            "planes:x", "--lead", "20", "--tilt", "0", "--tol", "0.001", "--toolpath", "--stepover", "5", "-o", out)
+    assert r.returncode == 0, r.stderr
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["S1"]["max_error_mm"] <= 0.001 and rep["S2"]["max_error_mm"] <= 0.001
+    assert f"{rep['S1']['max_error_mm']:.3g}" in r.stdout
+    assert rep["loops"]["found"] is False
+    assert rep["alpha_max_deg_for_tolerance"] == pytest.approx(np.degrees(np.arctan(0.002 / 10)))
+    assert rep["S1_deviation_map"]["max_abs"] <= 0.001
+    faces = read_step_faces(out / "machining_surface.step")
+    assert [f.name for f in faces] == ["S1_guiding", "S2_orientation"]
+    assert rep["toolpath"]["chordal_error_measured_mm"] <= 0.01
+    apt = (out / "toolpath.apt").read_text()
+    assert "CUTTER/28.0000,4.0000,10.0000,4.0000" in apt and "MULTAX/ON" in apt
+    for name in ("S1_guiding.stl", "S2_orientation.stl", "deviation_S1.png", "toolpath.csv"):
+        assert (out / name).is_file()
+
+
+def test_machining_surface_command_errors(tmp_path):
+    # loops: a ball bigger than the bowl -> one line, exit 1, nothing written
+    out = tmp_path / "loop"
+    r = run("machining-surface", BLOCK, "--face", "0", "--tool", "ball:D=600", "--lead", "10", "-o", out)
+    assert r.returncode == 1 and "loop" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not out.exists()
+    # unreachable tolerance -> exit 2
+    out = tmp_path / "tol"
+    r = run("machining-surface", "--example", "bezier5", "--tool", "bull:D=28,r=4", "--lead", "20", "--tol", "1e-9",
+            "--max-poles", "300", "-o", out)
+    assert r.returncode == 2 and "reached" in r.stderr
+    assert not out.exists()
+    # a cone is not a Table-1 cutter
+    r = run("machining-surface", "--example", "bezier5", "--tool", "cone:D=10,angle=5", "--lead", "20", "-o", out)
+    assert r.returncode == 1 and "Table 1" in r.stderr

@@ -165,6 +165,17 @@ def test_trimmed_face_gives_trimmed_s1_s2():
     ms = machining_surface(top, "ball:D=10", axes=5, lead=10, tolerance=TOL)
     assert len(ms.s1.loops) == len(top.loops) == 2 and ms.s1.loops == top.loops
     assert ms.s1.uv_bounds == top.uv_bounds
+    # tool paths stay on the trimmed face: no contact point inside the D = 24 mm hole at (70, 45)
+    from machsurf_cad.machining.toolpath import tool_paths
+
+    tp = tool_paths(ms, stepover=4.0, chordal_tolerance=0.01)
+    cc = np.concatenate([p.cc for p in tp.passes])
+    assert np.hypot(cc[:, 0] - 70, cc[:, 1] - 45).min() >= 12.0 - 1e-6
+    uv = np.concatenate([p.uv for p in tp.passes])
+    assert top.contains_uv(uv[:, 0], uv[:, 1]).all()
+    # some plane crosses the hole: it is split in two passes on the same level
+    levels = [round(p.level, 9) for p in tp.passes]
+    assert len(levels) > len(set(levels))
 
 
 def _hourglass_slot():

@@ -328,22 +328,25 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
     bounds = face.uv_bounds
     t0 = time.perf_counter()
     timings = {}
-    s1_fit = fit_surface(maps.s1, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles, name="S1_guiding")
-    timings["fit_S1"] = time.perf_counter() - t0
-    s2_fit = None
-    if axes == 5:
-        t1 = time.perf_counter()
-        s2_fit = fit_surface(maps.s2, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles,
-                             name="S2_orientation")
-        timings["fit_S2"] = time.perf_counter() - t1
-    t2 = time.perf_counter()
+    # loops first: they are cheap to find, and a looped map is also hard to fit
     report = detect_loops(maps, loop_grid)
-    timings["loops"] = time.perf_counter() - t2
+    timings["loops"] = time.perf_counter() - t0
     if report.found and loops == "error":
         raise LoopError("machining surface has loops (the tool would gouge): "
                         + "; ".join(r_.describe() for r_ in report.regions)
                         + ". Use a smaller corner radius, another strategy, or loops='flag' to export anyway",
                         report)
+    t1 = time.perf_counter()
+    brk = derived_breaks(face.surface, degree, derivative_loss=1)
+    s1_fit = fit_surface(maps.s1, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles, name="S1_guiding",
+                         breaks=brk)
+    timings["fit_S1"] = time.perf_counter() - t1
+    s2_fit = None
+    if axes == 5:
+        t2 = time.perf_counter()
+        s2_fit = fit_surface(maps.s2, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles,
+                             name="S2_orientation", breaks=brk)
+        timings["fit_S2"] = time.perf_counter() - t2
     s1 = face.with_surface(s1_fit.surface, "S1_guiding")
     s2 = face.with_surface(s2_fit.surface, "S2_orientation") if s2_fit is not None else None
     axis_err = a_tol = a_meas = None
@@ -355,6 +358,20 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
     timings["total"] = time.perf_counter() - t0
     return MachiningSurface(face, cutter, axes, strat, float(tolerance), s1, s1_fit, s2, s2_fit, report, L, tip,
                             axis_err, a_tol, a_meas, timings)
+
+
+def derived_breaks(surface: BSplineSurface, degree=(3, 3), derivative_loss: int = 1):
+    """Interior knots of ``surface`` with the multiplicities a fit of a map built from its
+    ``derivative_loss``-th derivatives needs: the map is C^(k - loss) where the surface is C^k,
+    so a fit of degree p gets multiplicity ``p - (k - loss)`` there (at least 1)."""
+    out = []
+    for knots, mults, deg, p in ((surface.knots_u, surface.mults_u, surface.degree_u, degree[0]),
+                                 (surface.knots_v, surface.mults_v, surface.degree_v, degree[1])):
+        k_in = knots[1:-1]
+        cont = deg - mults[1:-1] - derivative_loss
+        m = np.clip(p - cont, 1, p)
+        out.append((k_in, m))
+    return tuple(out)
 
 
 def fit_deviation(ms: MachiningSurface, which: str = "S1", samples: int = 150):
@@ -382,13 +399,14 @@ def fit_deviation(ms: MachiningSurface, which: str = "S1", samples: int = 150):
     pts, ref = got.reshape(-1, 3), exact.reshape(-1, 3)
     sg = signed.ravel()
     uv = np.stack([U.ravel(), V.ravel()], 1)
-    shape = (samples, samples)
+    grid_points = grid_index = None
     if ms.nominal.is_trimmed:
         keep = inside.ravel()
+        grid_points, grid_index = pts, np.nonzero(keep)[0]
         pts, ref, sg, uv = pts[keep], ref[keep], sg[keep], uv[keep]
-        shape = None
     stats = deviation_stats(sg, pts, uv)
-    return DeviationResult(pts, sg, uv, ref, np.zeros(len(sg), bool), shape, None, ms.tolerance, stats)
+    return DeviationResult(pts, sg, uv, ref, np.zeros(len(sg), bool), (samples, samples), None, ms.tolerance, stats,
+                           grid_points, grid_index)
 
 
 def _measured_axis_error(maps: MachiningMaps, s1: BSplineSurface, s2: BSplineSurface, kind: str, L: float) -> float:

@@ -33,6 +33,17 @@ def grid_polydata(points) -> pv.PolyData:
 def deviation_polydata(result: DeviationResult) -> pv.PolyData:
     """Mesh of the candidate with point data ``deviation_mm`` (signed, mm)."""
     pts = result.points
+    if result.grid_shape is not None and result.grid_index is not None:
+        # trimmed: whole grid, then drop the cells that touch a point outside the face
+        mesh = grid_polydata(result.grid_points.reshape(*result.grid_shape, 3))
+        full = np.full(result.grid_points.shape[0], np.nan)
+        full[result.grid_index] = result.signed
+        mesh.point_data["deviation_mm"] = full
+        inside = np.zeros(mesh.n_points, bool)
+        inside[result.grid_index] = True
+        faces = mesh.faces.reshape(-1, 5)[:, 1:]
+        keep_cells = inside[faces].all(axis=1)
+        return mesh.extract_cells(np.nonzero(keep_cells)[0]).extract_geometry()
     if result.grid_shape is not None:
         mesh = grid_polydata(pts.reshape(*result.grid_shape, 3))
         mesh.point_data["deviation_mm"] = result.signed
