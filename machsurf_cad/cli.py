@@ -129,16 +129,21 @@ def cmd_inspect(args) -> int:
     nominal = read_step_face(args.nominal, args.face)
     cand_path = Path(args.candidate)
     suffix = cand_path.suffix.lower()
+    from .progress import Bar
+
+    bar = Bar("measuring deviation")
     if suffix == ".stl":
         pts, tris = _mesh_candidate(cand_path)
-        result = deviation(nominal, pts, tolerance=args.tol, triangles=tris)
+        with bar:
+            result = deviation(nominal, pts, tolerance=args.tol, triangles=tris, progress=bar.update)
         cand_desc = f"STL mesh {cand_path.name} ({tris.shape[0] // 16} triangles, sampled inside triangles)"
     elif suffix in (".step", ".stp"):
         cands = read_step_faces(cand_path)
         idx = args.candidate_face if args.candidate_face is not None else args.face
         if not 0 <= idx < len(cands):
             raise InputError(f"candidate face index {idx} out of range: {cand_path} has {len(cands)} face(s)")
-        result = deviation(nominal, cands[idx], samples=args.samples, tolerance=args.tol)
+        with bar:
+            result = deviation(nominal, cands[idx], samples=args.samples, tolerance=args.tol, progress=bar.update)
         cand_desc = f"STEP face {idx} '{cands[idx].name}' of {cand_path.name}"
     else:
         raise InputError(f"candidate must be .step/.stp or .stl, got {cand_path.name}")
@@ -213,9 +218,15 @@ def cmd_machining_surface(args) -> int:
             axis = tuple(float(x) for x in args.axis.split(","))
         except ValueError:
             raise InputError("--axis must be x,y,z") from None
-    ms = machining_surface(face, cutter, axes=args.axes, strategy=args.strategy, lead=args.lead, tilt=args.tilt,
-                           axis=axis, tolerance=args.tol, loops=args.loops, max_poles=args.max_poles,
-                           tip=args.tip, degree=(args.degree, args.degree))
+    from .progress import fit_progress
+
+    cb = fit_progress("fitting S1/S2")
+    try:
+        ms = machining_surface(face, cutter, axes=args.axes, strategy=args.strategy, lead=args.lead, tilt=args.tilt,
+                               axis=axis, tolerance=args.tol, loops=args.loops, max_poles=args.max_poles,
+                               tip=args.tip, degree=(args.degree, args.degree), progress=cb)
+    finally:
+        cb.close()
     rep = ms.report()
     _say(f"nominal: {desc}")
     _say(f"tool: {cutter.spec()} (r = {rep['r_mm']:g} mm, R_t = {rep['R_t_mm']:g} mm), {ms.axes} axes, "

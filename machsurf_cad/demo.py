@@ -88,7 +88,10 @@ def run_demo(out: Path, say=print) -> int:
             f"(name '{back.name}', {len(back.loops)} loop(s))")
         pts, tris = read_stl(stl_path)
         spts, stris = subdivide(pts, tris, 2)
-        mesh_dev = deviation(nominal, spts, tolerance=STL_DEFLECTION_MM, triangles=stris)
+        from .progress import Bar
+
+        with Bar("measuring the STL") as bar:
+            mesh_dev = deviation(nominal, spts, tolerance=STL_DEFLECTION_MM, triangles=stris, progress=bar.update)
         s = mesh_dev.stats
         say(f"STL ({tris.shape[0]} triangles, deflection {STL_DEFLECTION_MM} mm): max |deviation| = "
             f"{s['max_abs']:.4g} mm, RMS {s['rms']:.3g} mm over {s['n_points']} points inside the triangles")

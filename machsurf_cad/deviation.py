@@ -86,12 +86,13 @@ class DeviationResult:
 
 
 def project_points(surface: BSplineSurface, points, *, seed_samples: int | None = None, max_iter: int = 50,
-                   uv_tol: float = 1e-14) -> Projection:
+                   uv_tol: float = 1e-14, progress=None) -> Projection:
     """Closest points on ``surface`` (inside its parameter box) of many 3-D points.
 
     Newton's method on ``|S(u, v) - p|^2`` from the nearest of ``seed_samples^2`` reference
     samples (default: 6 per knot span, at least 64 per direction), with an active set for
-    the box bounds so feet on the boundary are exact too.
+    the box bounds so feet on the boundary are exact too. ``progress(done, total)`` is
+    called after each chunk of points.
     """
     p = np.asarray(points, dtype=float).reshape(-1, 3)
     if not np.all(np.isfinite(p)):
@@ -106,6 +107,24 @@ def project_points(surface: BSplineSurface, points, *, seed_samples: int | None 
     grid = surface.evaluate_grid(us, vs).reshape(-1, 3)
     _, idx = cKDTree(grid).query(p)
     uv = np.stack([us[idx // nv], vs[idx % nv]], axis=1)
+    chunk = 1 << 16
+    if p.shape[0] > chunk:
+        parts = []
+        for a in range(0, p.shape[0], chunk):
+            parts.append(_newton(surface, p[a:a + chunk], uv[a:a + chunk].copy(), max_iter, uv_tol))
+            if progress is not None:
+                progress(min(p.shape[0], a + chunk), p.shape[0])
+        return Projection(*(np.concatenate([getattr(q, k) for q in parts]) for k in
+                            ("uv", "foot", "normal", "on_boundary", "converged")))
+    res = _newton(surface, p, uv, max_iter, uv_tol)
+    if progress is not None:
+        progress(p.shape[0], p.shape[0])
+    return res
+
+
+def _newton(surface: BSplineSurface, p: np.ndarray, uv: np.ndarray, max_iter: int, uv_tol: float) -> Projection:
+    """Box-constrained Newton iterations from the seeds ``uv`` (see :func:`project_points`)."""
+    u0, u1, v0, v1 = surface.bounds
     lo = np.array([u0, v0])
     hi = np.array([u1, v1])
     span = hi - lo
@@ -163,7 +182,7 @@ def project_points(surface: BSplineSurface, points, *, seed_samples: int | None 
 
 
 def deviation(reference, candidate, *, samples: int = 200, tolerance: float | None = None,
-              triangles=None) -> DeviationResult:
+              triangles=None, progress=None) -> DeviationResult:
     """Signed deviation of ``candidate`` from ``reference`` (mm).
 
     Parameters
@@ -181,6 +200,8 @@ def deviation(reference, candidate, *, samples: int = 200, tolerance: float | No
         Max-norm tolerance in mm; reported as within/outside and drawn as a band on maps.
     triangles : array_like, optional
         Mesh connectivity of candidate points (kept for rendering).
+    progress : callable, optional
+        ``progress(done, total)`` after each chunk of projected points.
     """
     ref_surface = reference.surface if isinstance(reference, Face) else reference
     flip = -1.0 if isinstance(reference, Face) and reference.reversed else 1.0
@@ -203,7 +224,7 @@ def deviation(reference, candidate, *, samples: int = 200, tolerance: float | No
         pts = np.asarray(candidate, dtype=float).reshape(-1, 3)
     if pts.shape[0] == 0:
         raise InputError("candidate has no points to measure")
-    proj = project_points(ref_surface, pts)
+    proj = project_points(ref_surface, pts, progress=progress)
     signed = signed_distances(pts, proj, flip)
     stats = deviation_stats(signed, pts, proj.uv, proj.on_boundary, proj.converged)
     return DeviationResult(pts, signed, proj.uv, proj.foot, proj.on_boundary, grid_shape,

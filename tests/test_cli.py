@@ -133,3 +133,22 @@ def test_machining_surface_command_errors(tmp_path):
     # a cone is not a Table-1 cutter
     r = run("machining-surface", "--example", "bezier5", "--tool", "cone:D=10,angle=5", "--lead", "20", "-o", out)
     assert r.returncode == 1 and "Table 1" in r.stderr
+
+
+def test_degenerate_surface_is_a_one_line_error(tmp_path):
+    from machsurf_cad.geometry import builders
+    from machsurf_cad.geometry.face import Face
+    from machsurf_cad.occ import write_step
+
+    # a patch with its v = 1 edge collapsed to a point: normals undefined there
+    tri = builders.bezier_surface([[[0, 0, 0], [50, 50, 5], [50, 90, 0]], [[100, 0, 0], [60, 50, 8], [50, 90, 0]]])
+    try:
+        path = write_step(tmp_path / "tri.step", [Face(tri, name="tri")])
+    except Exception as exc:  # the kernel may refuse the degenerate face already: that is a clear error too
+        assert "not valid" in str(exc)
+        return
+    out = tmp_path / "o"
+    r = run("machining-surface", path, "--tool", "ball:D=10", "--lead", "10", "-o", out)
+    assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "normal undefined" in r.stderr or "not valid" in r.stderr
+    assert not out.exists()

@@ -202,3 +202,15 @@ def test_cutter_solids_volumes_match_closed_forms():
     R1 = 5 + 30 * math.tan(math.radians(6))
     ref = math.pi * 30 / 3 * (25 + 5 * R1 + R1 * R1)
     assert abs(solid_volume(cutter_solid(cone)) - ref) < 1e-6
+
+
+def test_cadquery_face_round_trip(rng):
+    from machsurf_cad.occ import from_cq_face, read_step_faces, to_cq_face
+
+    top = read_step_faces(ROOT / "example_parts" / "freeform_block.step")[0]
+    cqf = to_cq_face(top)
+    assert cqf.isValid() and abs(cqf.Area() - top.area) < 1e-6 * top.area
+    back = from_cq_face(cqf, "top")
+    u, v = rng.uniform(0, 1, (2, 500))
+    assert np.abs(back.surface.evaluate(u, v) - top.surface.evaluate(u, v)).max() < 1e-12
+    assert len(back.loops) == 2

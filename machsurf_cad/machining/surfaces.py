@@ -274,7 +274,7 @@ def _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field):
 def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: float = 0.0, tilt: float = 0.0,
                       axis=None, axis_field=None, tolerance: float = 1e-3, degree=(3, 3), max_poles: int = 40000,
                       loops: str = "error", axis_length: float | None = None, tip: bool = False,
-                      loop_grid: int = 121) -> MachiningSurface:
+                      loop_grid: int = 121, progress=None) -> MachiningSurface:
     """Guiding surface S1 and orientation surface S2 of a face, as certified B-spline faces.
 
     Parameters
@@ -302,6 +302,8 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
         ``L`` of the 5-axis ball orientation surface ``S2 = F + r n + L u`` (default D), mm.
     tip : bool
         3 axes only: S1 at the tool tip (``... - r u``) instead of the torus-centre plane.
+    progress : callable, optional
+        Passed to :func:`~machsurf_cad.approx.fit_surface` (``progress(it, n_poles, err)``).
 
     Examples
     --------
@@ -339,13 +341,13 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
     t1 = time.perf_counter()
     brk = derived_breaks(face.surface, degree, derivative_loss=1)
     s1_fit = fit_surface(maps.s1, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles, name="S1_guiding",
-                         breaks=brk)
+                         breaks=brk, progress=progress)
     timings["fit_S1"] = time.perf_counter() - t1
     s2_fit = None
     if axes == 5:
         t2 = time.perf_counter()
         s2_fit = fit_surface(maps.s2, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles,
-                             name="S2_orientation", breaks=brk)
+                             name="S2_orientation", breaks=brk, progress=progress)
         timings["fit_S2"] = time.perf_counter() - t2
     s1 = face.with_surface(s1_fit.surface, "S1_guiding")
     s2 = face.with_surface(s2_fit.surface, "S2_orientation") if s2_fit is not None else None

@@ -4,9 +4,10 @@ Examples
 --------
 >>> import cadquery as cq
 >>> from machsurf_cad.occ.cq_ops import machining_surface_faces, machining_surface_op
->>> from machsurf_cad.occ import face_from_surface
+>>> from machsurf_cad.occ import to_cq_face
+>>> from machsurf_cad.geometry.face import Face
 >>> from machsurf_cad import examples
->>> face = cq.Face(face_from_surface(examples.bezier5_patch()))
+>>> face = to_cq_face(Face(examples.bezier5_patch()))
 >>> s1, s2, ms = machining_surface_faces(face, "bull:D=28,r=4", lead=20)
 >>> s1.isValid() and s2.isValid() and ms.s1_fit.max_error <= 1e-3
 True
@@ -20,8 +21,7 @@ from __future__ import annotations
 import cadquery as cq
 
 from ..machining import machining_surface
-from .convert import face_from_surface
-from .step import face_record
+from .convert import from_cq_face, to_cq_face
 
 
 def machining_surface_faces(face: "cq.Face", tool, **kwargs):
@@ -30,9 +30,8 @@ def machining_surface_faces(face: "cq.Face", tool, **kwargs):
     Keyword arguments are those of :func:`machsurf_cad.machining.machining_surface`
     (mm, degrees). ``S2`` is None for 3 axes.
     """
-    rec = face_record(face.wrapped, -1, "F")
-    ms = machining_surface(rec, tool, **kwargs)
-    out = [cq.Face(face_from_surface(f.surface, [list(lp) for lp in f.loops] or None)) for f in ms.faces()]
+    ms = machining_surface(from_cq_face(face, "F"), tool, **kwargs)
+    out = [to_cq_face(f) for f in ms.faces()]
     return out[0], (out[1] if len(out) > 1 else None), ms
 
 
