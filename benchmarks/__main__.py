@@ -10,7 +10,7 @@ import json
 import platform
 import sys
 
-from . import bench_eval, bench_offset
+from . import bench_eval, bench_offset, bench_reff
 
 
 def main(argv=None) -> int:
@@ -22,6 +22,10 @@ def main(argv=None) -> int:
     for bench in bench_eval.BENCHMARKS:
         rows.append(bench(quick=args.quick))
         _print_row(rows[-1], header=len(rows) == 1)
+    for row in bench_reff.reff_rows(quick=args.quick):
+        rows.append(row)
+        _print_row(row, header=False)
+    print("* per-point OCCT time measured on a 256^2 sub-grid and scaled to the full grid")
     offset_rows = bench_offset.offset_fit_rows(quick=args.quick)
     bench_offset.print_rows(offset_rows)
     if args.json:

@@ -279,6 +279,74 @@ def cmd_machining_surface(args) -> int:
     return EXIT_OK
 
 
+def cmd_reff(args) -> int:
+    import numpy as np
+
+    from .cutters import parse_cutter
+    from .reff import parse_directions, reff_maps
+
+    t0 = time.perf_counter()
+    cutter = parse_cutter(args.tool)
+    face, desc = _face_or_example(args)
+    dirs = parse_directions(args.direction)
+    compare = None if args.compare == "none" else args.compare
+    maps = reff_maps(face, cutter, directions=dirs, grid=args.grid, compare=compare, scallop=args.scallop,
+                     axes=args.axes, lead=args.lead, tilt=args.tilt)
+    rep = maps.report()
+    R = cutter.D / 2
+    _say(f"face: {desc}; tool {cutter.spec()} (R = {R:g} mm, r = {rep['r_mm']:g} mm) vs "
+         f"{maps.compare.spec() if maps.compare else 'nothing'}; {maps.axes} axes"
+         + (f", lead {args.lead:g} deg, tilt {args.tilt:g} deg" if maps.axes == 5 else "")
+         + f"; grid {args.grid}x{args.grid}; computed in {maps.time_s:.3f} s")
+    for d in rep["directions"]:
+        line = (f"theta {d['theta_deg']:>6g} deg: R_eff min {d['r_eff_min_mm']:.4g} / mean {d['r_eff_mean_mm']:.4g} / "
+                f"max {d['r_eff_max_mm']:.4g} mm; torus beats ball on {100 * d['area_fraction_torus_beats_ball']:.1f} % "
+                f"of the area")
+        if d.get("n_infinite_r_eff"):
+            line += f"; {d['n_infinite_r_eff']} flat-spot sample(s) with infinite R_eff"
+        _say(line)
+        if args.scallop:
+            _say(f"    step-over for scallop {args.scallop:g} mm: torus {d['stepover_mean_mm']:.4g} mm, ball "
+                 f"{d['stepover_ball_mean_mm']:.4g} mm (ratio {d['stepover_ratio_mean']:.3f}); unreachable "
+                 f"{d['n_unreachable']} sample(s)")
+    st = Staging(args.out)
+    try:
+        files = []
+        if not args.no_render:
+            from .viz import render_scalar_map
+
+            n = maps.us.size
+            mask = maps.inside if maps.face.is_trimmed else None
+            for d in maps.directions:
+                tag = f"{d.theta_deg:g}".replace("-", "m")
+                extra = {"slope_deg": d.slope_deg, "alpha_deg": d.alpha_deg}
+                if d.stepover is not None:
+                    extra.update({"stepover_mm": np.nan_to_num(d.stepover, nan=-1, posinf=1e300),
+                                  "stepover_ball_mm": np.nan_to_num(d.stepover_ball, nan=-1, posinf=1e300)})
+                render_scalar_map(maps.points, d.r_eff, st.path(f"reff_theta{tag}.png"),
+                                  title=f"effective radius, {cutter.spec()}, theta = {d.theta_deg:g} deg\n"
+                                        f"white line: R_eff = {maps.R_ball:g} mm (ball)",
+                                  label="R_eff [mm]", clim=(rep["r_mm"] or 0.0, 2 * R), contour_level=maps.R_ball,
+                                  mask=mask, vtp_path=st.path(f"reff_theta{tag}.vtp"), extra_arrays=extra,
+                                  view="xy")
+                files += [f"reff_theta{tag}.png", f"reff_theta{tag}.vtp"]
+            if maps.best_theta_deg is not None:
+                render_scalar_map(maps.points, maps.best_theta_deg, st.path("best_direction.png"),
+                                  title=f"best machining direction ({'step-over' if args.scallop else 'R_eff'}), deg",
+                                  label="theta [deg]", clim=(min(dirs), max(dirs)), cmap="hsv", mask=mask,
+                                  vtp_path=st.path("best_direction.vtp"), view="xy")
+                files += ["best_direction.png", "best_direction.vtp"]
+        rep.update({"command": "reff", "face": desc, "files": files + ["report.json"],
+                    "time_s_total": time.perf_counter() - t0})
+        _write_json(st.path("report.json"), rep)
+        st.commit()
+    except BaseException:
+        st.abort()
+        raise
+    _say(f"outputs in {args.out}/: {', '.join(rep['files'])}")
+    return EXIT_OK
+
+
 def cmd_demo(args) -> int:
     from .demo import run_demo
 
@@ -331,6 +399,22 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--chordal", type=float, default=0.01, help="chordal tolerance of CL points, mm (default 0.01)")
     m.add_argument("-o", "--out", default="out/machining_surface", help="output folder")
     m.set_defaults(func=cmd_machining_surface)
+
+    e = sub.add_parser("reff", help="effective cutter radius and step-over maps over a face")
+    e.add_argument("part", nargs="?", help="STEP file (or use --example)")
+    e.add_argument("--example", help="example surface instead of a STEP: blade, bezier5, ...")
+    e.add_argument("--face", type=int, default=0, help="face index (default 0)")
+    e.add_argument("--tool", required=True, help="bull:D=..,r=.. | flat:D=.. | ball:D=.. (mm)")
+    e.add_argument("--compare", default="ball", help="reference cutter: ball (same D, default), a cutter string, none")
+    e.add_argument("--direction", default="0", help="machining direction(s) theta in degrees: 45 | -45,0,45,90 | all")
+    e.add_argument("--grid", type=int, default=256, help="samples per parameter direction (default 256)")
+    e.add_argument("--scallop", type=float, default=None, help="scallop height, mm: adds step-over maps")
+    e.add_argument("--axes", type=int, default=3, help="3 (axis z, default) or 5 (lead/tilt)")
+    e.add_argument("--lead", type=float, default=0.0, help="lead angle, degrees (5 axes)")
+    e.add_argument("--tilt", type=float, default=0.0, help="tilt angle, degrees (5 axes)")
+    e.add_argument("--no-render", action="store_true", help="numbers only")
+    e.add_argument("-o", "--out", default="out/reff", help="output folder")
+    e.set_defaults(func=cmd_reff)
     return p
 
 

@@ -152,3 +152,29 @@ def test_degenerate_surface_is_a_one_line_error(tmp_path):
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "normal undefined" in r.stderr or "not valid" in r.stderr
     assert not out.exists()
+
+
+@needs_pyvista
+def test_reff_command_report_and_maps(tmp_path):
+    out = tmp_path / "reff"
+    r = run("reff", "--example", "blade", "--tool", "bull:D=10,r=2", "--compare", "ball", "--direction=-45,0,45,90",
+            "--grid", "64", "--scallop", "0.01", "-o", out)
+    assert r.returncode == 0, r.stderr
+    rep = json.loads((out / "report.json").read_text())
+    assert [d["theta_deg"] for d in rep["directions"]] == [-45, 0, 45, 90]
+    for d in rep["directions"]:
+        assert 2.0 - 1e-9 <= d["r_eff_min_mm"] <= d["r_eff_mean_mm"] <= d["r_eff_max_mm"]
+        assert 0.0 <= d["area_fraction_torus_beats_ball"] <= 1.0
+        assert d["stepover_ratio_mean"] == pytest.approx(d["stepover_mean_mm"] / d["stepover_ball_mean_mm"])
+        assert f"{d['r_eff_mean_mm']:.4g}" in r.stdout
+    assert sum(rep["best_direction"]["histogram_deg"].values()) == 64 * 64
+    for name in ("reff_thetam45.png", "reff_theta90.vtp", "best_direction.png"):
+        assert (out / name).is_file()
+
+
+def test_reff_command_bad_input(tmp_path):
+    r = run("reff", "--example", "blade", "--tool", "bull:D=10,r=2", "--direction", "0.785,1.571", "-o", tmp_path / "a")
+    assert r.returncode == 1 and "radians" in r.stderr and "Traceback" not in r.stderr
+    r = run("reff", "--example", "blade", "--tool", "bull:D=10,r=2", "--scallop", "7", "-o", tmp_path / "b")
+    assert r.returncode == 1 and "scallop" in r.stderr
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()

@@ -128,3 +128,50 @@ def render_surfaces(meshes, png_path, *, title: str = "", window_size=(1200, 900
     p.screenshot(str(png_path))
     p.close()
     return png_path
+
+
+def render_scalar_map(points, values, png_path, *, title: str = "", label: str = "value [mm]", clim=None,
+                      cmap: str = "jet", contour_level: float | None = None, contour_color: str = "white",
+                      mask=None, vtp_path=None, extra_arrays: dict | None = None, annotations: dict | None = None,
+                      background: str = "dimgray", view: str = "iso", window_size=(1200, 900)) -> Path:
+    """Off-screen PNG of a scalar field on a ``(nu, nv, 3)`` grid (e.g. effective radius, mm).
+
+    ``clim`` fixes the colour scale (values beyond it saturate; ``inf`` shows at the top),
+    ``contour_level`` draws iso-lines (e.g. the zone boundary R_eff = R), ``mask`` hides grid
+    points outside a trimmed face. All arrays are saved in the .vtp.
+    """
+    pts = np.asarray(points, dtype=float)
+    mesh = grid_polydata(pts)
+    vals = np.asarray(values, dtype=float).ravel()
+    shown = np.where(np.isinf(vals), np.sign(vals) * 1e300, vals)
+    mesh.point_data[label] = shown if clim is None else np.clip(shown, clim[0], clim[1])
+    for k, v in (extra_arrays or {}).items():
+        mesh.point_data[k] = np.asarray(v, dtype=float).ravel()
+    if mask is not None:
+        m = np.asarray(mask, bool).ravel()
+        faces = mesh.faces.reshape(-1, 5)[:, 1:]
+        mesh = mesh.extract_cells(np.nonzero(m[faces].all(axis=1))[0]).extract_geometry()
+    p = pv.Plotter(off_screen=True, window_size=list(window_size))
+    p.set_background(background)
+    sargs = dict(title=label, color="white", fmt="%.3g", n_labels=6, vertical=True, position_x=0.86,
+                 position_y=0.15, height=0.7, width=0.06)
+    p.add_mesh(mesh, scalars=label, cmap=cmap, clim=clim, scalar_bar_args=sargs, annotations=annotations or {},
+               lighting=False)  # a map: colours must read true against the legend
+    if contour_level is not None and mesh.n_points > 3:
+        lines = mesh.contour([contour_level], scalars=label)
+        if lines.n_points:
+            p.add_mesh(lines, color=contour_color, line_width=3)
+    if title:
+        p.add_text(title, position="upper_left", font_size=11, color="white")
+    p.show_axes()
+    if view == "xy":
+        p.view_xy()  # along the 3-axis tool axis
+    else:
+        p.view_isometric()
+    png_path = Path(png_path)
+    png_path.parent.mkdir(parents=True, exist_ok=True)
+    p.screenshot(str(png_path))
+    p.close()
+    if vtp_path is not None:
+        mesh.save(str(vtp_path))
+    return png_path
