@@ -319,7 +319,8 @@ def cmd_reff(args) -> int:
             mask = maps.inside if maps.face.is_trimmed else None
             for d in maps.directions:
                 tag = f"{d.theta_deg:g}".replace("-", "m")
-                extra = {"slope_deg": d.slope_deg, "alpha_deg": d.alpha_deg}
+                extra = {"slope_deg": d.slope_deg, "alpha_deg": d.alpha_deg,
+                         "ratio_to_ball": np.nan_to_num(d.r_eff / maps.R_ball, posinf=1e300)}
                 if d.stepover is not None:
                     extra.update({"stepover_mm": np.nan_to_num(d.stepover, nan=-1, posinf=1e300),
                                   "stepover_ball_mm": np.nan_to_num(d.stepover_ball, nan=-1, posinf=1e300)})

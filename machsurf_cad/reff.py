@@ -446,4 +446,7 @@ def _reff_from(kind, R, r, S_deg, alpha_deg):
     return effective_radius(c, S_deg, alpha_deg)
 
 
-__all__ = ["effective_radius", "stepover", "reff_maps", "ReffMaps", "DirectionMap", "parse_directions"]
+reff = reff_maps
+"""Alias of :func:`reff_maps`, named like the ``machsurf reff`` command."""
+
+__all__ = ["effective_radius", "stepover", "reff_maps", "reff", "ReffMaps", "DirectionMap", "parse_directions"]
