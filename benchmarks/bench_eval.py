@@ -122,7 +122,7 @@ def curvatures(quick=False):
     m = 300 if quick else 1000
     us, vs = s.sample_grid(m, m)
     U, V = np.meshgrid(us, vs, indexing="ij")
-    t_ours, p = _time(lambda: local_properties_grid(s, us, vs), 2)
+    t_ours, p = _time(lambda: local_properties_grid(s, us, vs), 3)
     g = to_geom_surface(s)
     props = GeomLProp_SLProps(g, 2, 1e-12)
     uf, vf = U.ravel(), V.ravel()

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .bspline import BSplineSurface, unit_normals
+from .bspline import BSplineSurface, _cross, unit_normals
 
 
 @dataclass(frozen=True)
@@ -107,7 +107,7 @@ def properties_from_derivatives(u, v, d, scale: float, *, check: bool = True) ->
     n = unit_normals(d.su, d.sv, scale, u, v, check=check)
 
     def dot(a, b):
-        return np.einsum("...i,...i->...", a, b)
+        return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
 
     E, F, G = dot(d.su, d.su), dot(d.su, d.sv), dot(d.sv, d.sv)
     L, M, N = dot(d.suu, n), dot(d.suv, n), dot(d.svv, n)
@@ -118,10 +118,10 @@ def properties_from_derivatives(u, v, d, scale: float, *, check: bool = True) ->
     # eigen-decomposition stays accurate at (near-)umbilic points where H^2 - K cancels.
     su_len = np.sqrt(E)
     e1 = d.su / su_len[..., None]
-    e2 = np.cross(n, e1)
+    e2 = _cross(n, e1)
     x1u = 1.0 / su_len
-    b_ = np.einsum("...i,...i->...", e2, d.su)
-    c_ = np.einsum("...i,...i->...", e2, d.sv)
+    b_ = dot(e2, d.su)
+    c_ = dot(e2, d.sv)
     x2u = (G * b_ - F * c_) / det
     x2v = (E * c_ - F * b_) / det
     a = L * x1u * x1u
@@ -132,6 +132,6 @@ def properties_from_derivatives(u, v, d, scale: float, *, check: bool = True) ->
     k1, k2 = half + rad, half - rad
     theta = 0.5 * np.arctan2(2 * b, a - c)
     dir1 = np.cos(theta)[..., None] * e1 + np.sin(theta)[..., None] * e2
-    dir2 = np.cross(n, dir1)
+    dir2 = _cross(n, dir1)
     return LocalProperties(u, v, d.point, d.su, d.sv, d.suu, d.suv, d.svv, n, E, F, G, L, M, N, K, H, k1, k2,
                            dir1, dir2)
