@@ -1,0 +1,205 @@
+"""Ruled surfaces ``S(u, v) = (1 - v) C0(u) + v C1(u)`` with exact directrices (mm).
+
+A :class:`RuledSurface` holds two vectorised directrix maps returning points and
+derivatives, either analytic (the papers' test surfaces, evaluated exactly) or B-spline
+curves (from a STEP face or a script). The surface normal is ``S_u x S_v``; at the rule
+ends it is along the paper's ``N0 = T0 x P0P1`` and ``N1 = T1 x P0P1``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ..errors import InputError
+from ..geometry.bspline import BSplineCurve, BSplineSurface
+
+# a directrix: f(u, order) -> array (..., order + 1, 3): point, first and second derivative
+Directrix = Callable[[np.ndarray, int], np.ndarray]
+
+
+def _curve_directrix(c: BSplineCurve) -> Directrix:
+    def f(u, order=2):
+        return c.derivatives(np.asarray(u, dtype=float), order)
+
+    return f
+
+
+@dataclass(frozen=True)
+class RuledSurface:
+    """Ruled surface from two directrices over ``u`` in ``[u0, u1]``, ``v`` in [0, 1] (mm)."""
+
+    c0: Directrix
+    c1: Directrix
+    u_range: tuple = (0.0, 1.0)
+    name: str = "ruled"
+
+    # ------------------------------------------------------------------ builders
+    @classmethod
+    def from_curves(cls, c0: BSplineCurve, c1: BSplineCurve, name: str = "ruled") -> "RuledSurface":
+        if c0.dim != 3 or c1.dim != 3:
+            raise InputError("directrices must be 3-D curves")
+        a, b = c0.bounds, c1.bounds
+        if not (np.isclose(a[0], b[0]) and np.isclose(a[1], b[1])):
+            raise InputError("directrices must share their parameter range")
+        return cls(_curve_directrix(c0), _curve_directrix(c1), a, name)
+
+    @classmethod
+    def from_surface(cls, s: BSplineSurface, *, tolerance: float = 1e-6, name: str | None = None) -> "RuledSurface":
+        """The ruled surface of a B-spline face, rules along v (or u, swapped).
+
+        A surface of degree 1 in one direction is ruled exactly. Otherwise the ruled surface
+        through its two boundary curves is measured against it; when they differ by more
+        than ``tolerance`` (mm) this raises :class:`InputError` with the largest deviation.
+        """
+        from ..geometry.builders import ruled_surface
+
+        for direction in ("v", "u"):
+            surf = s if direction == "v" else _swap_uv(s)
+            u0, u1, v0, v1 = surf.bounds
+            c0 = _iso_curve(surf, v0)
+            c1 = _iso_curve(surf, v1)
+            rs = ruled_surface(c0, c1)
+            uu = np.linspace(u0, u1, 61)
+            vv = np.linspace(v0, v1, 21)
+            pts = surf.evaluate_grid(uu, vv)
+            # the ruled surface's v runs over [0, 1]; map the face's v range onto it
+            ref = rs.evaluate_grid(uu, (vv - v0) / (v1 - v0))
+            dev = float(np.linalg.norm(pts - ref, axis=-1).max())
+            if dev <= tolerance:
+                return cls.from_curves(c0, c1, name or s.name or "ruled")
+        raise InputError(f"face is not a ruled surface: it deviates by {dev:.4g} mm from the ruled surface through "
+                         f"its boundary curves (tolerance {tolerance:g} mm)")
+
+    # ------------------------------------------------------------------ evaluation
+    def rule(self, u: float):
+        """End points ``P0 = C0(u)``, ``P1 = C1(u)`` of the rule at ``u``."""
+        return self.c0(np.array([u]), 0)[0, 0], self.c1(np.array([u]), 0)[0, 0]
+
+    def derivatives(self, u, v):
+        """Point, S_u, S_v, S_uu, S_uv at (u, v) (broadcast); S_vv is zero."""
+        u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
+        a = self.c0(u, 2)
+        b = self.c1(u, 2)
+        vv = v[..., None]
+        p = (1 - vv) * a[..., 0, :] + vv * b[..., 0, :]
+        su = (1 - vv) * a[..., 1, :] + vv * b[..., 1, :]
+        sv = b[..., 0, :] - a[..., 0, :]
+        suu = (1 - vv) * a[..., 2, :] + vv * b[..., 2, :]
+        suv = b[..., 1, :] - a[..., 1, :]
+        return p, su, sv, suu, suv
+
+    def evaluate(self, u, v) -> np.ndarray:
+        return self.derivatives(u, v)[0]
+
+    def normal(self, u, v) -> np.ndarray:
+        _, su, sv, _, _ = self.derivatives(u, v)
+        n = np.cross(su, sv)
+        return n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+    def grid_map(self, us, vs) -> np.ndarray:
+        """Points on the grid ``us x vs`` (for the approximation engine)."""
+        U, V = np.meshgrid(np.asarray(us, float), np.asarray(vs, float), indexing="ij")
+        return self.evaluate(U, V)
+
+    def check_rule(self, u: float) -> None:
+        lo, hi = self.u_range
+        if not lo <= u <= hi:
+            raise InputError(f"rule parameter {u:g} is outside [{lo:g}, {hi:g}]")
+        p0, p1 = self.rule(u)
+        if np.linalg.norm(p1 - p0) < 1e-9:
+            raise InputError(f"the rule at u = {u:g} has zero length: the directrices cross there")
+
+    def to_bspline(self, tolerance: float = 1e-4):
+        """B-spline approximation within ``tolerance`` (mm), by the certified engine; returns a SurfaceFit."""
+        from ..approx import fit_surface
+
+        lo, hi = self.u_range
+        return fit_surface(self.grid_map, (lo, hi, 0.0, 1.0), tolerance=tolerance, degree=(3, 1),
+                           initial_spans=(8, 1), name=self.name)
+
+
+def _iso_curve(s: BSplineSurface, v: float) -> BSplineCurve:
+    """The iso-curve v = const of a B-spline surface, exactly (blossom via evaluation of poles rows)."""
+    from ..geometry.basis import basis_derivatives, find_spans
+
+    tv, hp = s._eval_data[1], s._eval_data[2]
+    q = s.degree_v
+    nv = hp.shape[1]
+    span = find_spans(tv, q, nv, np.array([v]))
+    b = basis_derivatives(tv, q, span, np.array([v]), 0)[0, 0]
+    cols = span[0] - q + np.arange(q + 1)
+    rows = np.einsum("j,ijd->id", b, hp[:, cols, :])
+    if s.periodic_u:
+        raise InputError("periodic ruled faces are not supported")
+    if s.weights is None:
+        return BSplineCurve(s.degree_u, s.knots_u, s.mults_u, rows)
+    return BSplineCurve(s.degree_u, s.knots_u, s.mults_u, rows[:, :3] / rows[:, 3:], rows[:, 3])
+
+
+def _swap_uv(s: BSplineSurface) -> BSplineSurface:
+    return BSplineSurface(s.degree_v, s.degree_u, s.knots_v, s.mults_v, s.knots_u, s.mults_u,
+                          s.poles.transpose(1, 0, 2), None if s.weights is None else s.weights.T,
+                          s.periodic_v, s.periodic_u, s.name)
+
+
+# ----------------------------------------------------------------------------- the paper's surfaces
+def _poly_directrix(coeffs):
+    """Directrix from per-coordinate callables (value, d1, d2) of u."""
+
+    def f(u, order=2):
+        u = np.asarray(u, dtype=float)
+        out = np.empty(u.shape + (order + 1, 3))
+        for k in range(order + 1):
+            for i in range(3):
+                out[..., k, i] = coeffs[i][k](u)
+        return out
+
+    return f
+
+
+def eq18() -> RuledSurface:
+    """Redonnet et al. eq. (18), exact: C0 = (30u^2 + 10u + 30, 100 sqrt(u) - 50, 70 - 30u^2),
+    C1 = (50u^2 + 20, 40 - 60 sin(pi u / 2), -60 + 20u^2), u in [0, 1]."""
+    z = np.zeros_like
+    c0 = _poly_directrix([
+        (lambda u: 30 * u ** 2 + 10 * u + 30, lambda u: 60 * u + 10, lambda u: 60 + z(u)),
+        # sqrt(u): derivatives are infinite at u = 0; clamp to u >= 1e-12 so they stay finite
+        (lambda u: 100 * np.sqrt(u) - 50, lambda u: 50 / np.sqrt(np.maximum(u, 1e-12)),
+         lambda u: -25 * np.maximum(u, 1e-12) ** -1.5),
+        (lambda u: 70 - 30 * u ** 2, lambda u: -60 * u, lambda u: -60 + z(u)),
+    ])
+    k = 0.5 * np.pi
+    c1 = _poly_directrix([
+        (lambda u: 50 * u ** 2 + 20, lambda u: 100 * u, lambda u: 100 + z(u)),
+        (lambda u: 40 - 60 * np.sin(k * u), lambda u: -60 * k * np.cos(k * u), lambda u: 60 * k * k * np.sin(k * u)),
+        (lambda u: -60 + 20 * u ** 2, lambda u: 40 * u, lambda u: 40 + z(u)),
+    ])
+    return RuledSurface(c0, c1, (0.0, 1.0), "eq18")
+
+
+def hyperbolic_paraboloid(alpha0_deg: float = 30.0, h_p: float = 80.0, k: float | None = None) -> RuledSurface:
+    """Section 3.2's hyperbolic paraboloid (k = h_p by default), exact."""
+    k = h_p if k is None else k
+    t = k * np.tan(np.radians(alpha0_deg))
+    z = np.zeros_like
+    c0 = _poly_directrix([(lambda u: k * u, lambda u: k + z(u), z), (lambda u: t * (u - 0.5), lambda u: t + z(u), z),
+                          (lambda u: h_p / 2 + z(u), z, z)])
+    c1 = _poly_directrix([(lambda u: k * u, lambda u: k + z(u), z), (lambda u: -t * (u - 0.5), lambda u: -t + z(u), z),
+                          (lambda u: -h_p / 2 + z(u), z, z)])
+    return RuledSurface(c0, c1, (0.0, 1.0), f"hypar_a{alpha0_deg:g}_h{h_p:g}")
+
+
+def liu() -> RuledSurface:
+    """Liu's surface: C0 = (u, 20.429, 0), C1 = (u, 0.0382 u^2, 33.995), 0 <= u <= 23.014, exact."""
+    z = np.zeros_like
+    c0 = _poly_directrix([(lambda u: u, lambda u: 1 + z(u), z), (lambda u: 20.429 + z(u), z, z), (z, z, z)])
+    c1 = _poly_directrix([(lambda u: u, lambda u: 1 + z(u), z),
+                          (lambda u: 0.0382 * u ** 2, lambda u: 0.0764 * u, lambda u: 0.0764 + z(u)),
+                          (lambda u: 33.995 + z(u), z, z)])
+    return RuledSurface(c0, c1, (0.0, 23.014), "liu")
+
+
+EXAMPLES = {"eq18": eq18, "hypar": hyperbolic_paraboloid, "liu": liu}

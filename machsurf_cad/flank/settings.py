@@ -1,0 +1,351 @@
+"""Flank-milling settings of a cylindrical cutter on a rule, and their interference (mm, degrees).
+
+After Redonnet, Rubio, Dessein (1998), rewritten in vector form:
+
+* Frame at the rule ``u = u_p``: ``z1`` along the rule ``P0 -> P1`` (length ``h_p``), ``n0``,
+  ``n1`` the unit surface normals ``S_u x S_v`` at the rule's ends (the paper's ``N0 = T0 x P0P1``,
+  ``N1``), both normal to the rule; ``side = +1`` puts the tool on the side of the normal,
+  ``-1`` on the other. ``y1`` is the bisector of ``side*n0`` and ``side*n1`` (the paper's
+  reference R1), ``x1 = y1 x z1``; ``alpha0`` is half the angle between ``n0`` and ``n1``.
+* A setting is the axis line ``Q + t a`` of the cylinder of radius ``R``. The tool touches the
+  rule at ``M2 = P0 + h0 z1``: ``Q = M2 + R y``, ``a = cos(gamma) z1 + sin(gamma) x``, with ``y = y1``
+  (``x = x1``) unless rotated about the rule by ``phi`` (minimax only). The rule lies in the
+  cylinder's tangent plane at M2, so it touches the tool there.
+
+Settings: **standard tangent** (axis along the rule, tool tangent to C0 at P0, or C1 at P1),
+**standard distributed** (axis along the rule, offset along ``y1``: the error is shared by both
+ends), **optimum** (the paper's: also tangent to C0 at M0 and C1 at M1, solved for ``h0`` and
+``gamma``), **minimax** (beyond the paper: minimises the largest |error| over ``h0, gamma, phi``).
+
+Interference convention: along the rule, for each ``v``, ``e(v) = min_u dist(S(u, v), axis) - R``
+over a band of the surface around the rule (``band_mm`` of surface length each side).
+``e < 0`` is a **gouge** (the tool is inside the material by ``-e``), ``e > 0`` an **undercut**
+(material left, ``e`` thick).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputError, MachsurfError
+from .ruled import RuledSurface
+
+
+class NoAdmissibleSetting(MachsurfError):
+    """The tangency system has no solution on this side (e.g. R too large for the twist)."""
+
+    exit_code = 1
+
+
+@dataclass(frozen=True)
+class RuleFrame:
+    """The rule at ``u_p`` and its frame (paper's reference R1), unit vectors; mm."""
+
+    u_p: float
+    p0: np.ndarray
+    p1: np.ndarray
+    h_p: float
+    z1: np.ndarray
+    y1: np.ndarray
+    x1: np.ndarray
+    n0: np.ndarray
+    n1: np.ndarray
+    alpha0_deg: float
+    side: int
+
+
+def rule_frame(surface: RuledSurface, u_p: float, side: int = 1) -> RuleFrame:
+    surface.check_rule(u_p)
+    if side not in (1, -1):
+        raise InputError("side must be +1 or -1")
+    p0, p1 = surface.rule(u_p)
+    h_p = float(np.linalg.norm(p1 - p0))
+    z1 = (p1 - p0) / h_p
+    n = surface.normal(np.array([u_p, u_p]), np.array([0.0, 1.0]))
+    n0, n1 = side * n[0], side * n[1]
+    # remove any round-off along the rule
+    n0 = n0 - (n0 @ z1) * z1
+    n1 = n1 - (n1 @ z1) * z1
+    n0 /= np.linalg.norm(n0)
+    n1 /= np.linalg.norm(n1)
+    bis = n0 + n1
+    if np.linalg.norm(bis) < 1e-9:
+        raise InputError(f"the surface turns by 180 deg along the rule at u = {u_p:g}: no bisector")
+    y1 = bis / np.linalg.norm(bis)
+    x1 = np.cross(y1, z1)
+    alpha0 = 0.5 * math.degrees(math.acos(float(np.clip(n0 @ n1, -1, 1))))
+    return RuleFrame(float(u_p), p0, p1, h_p, z1, y1, x1, n0, n1, alpha0, side)
+
+
+@dataclass(frozen=True)
+class Setting:
+    """A cylinder position: axis point ``q`` and unit direction ``a``, radius ``R`` (mm, degrees)."""
+
+    kind: str
+    frame: RuleFrame
+    R: float
+    q: np.ndarray
+    a: np.ndarray
+    h0: float
+    gamma_deg: float
+    phi_deg: float = 0.0
+    contacts: dict = field(default_factory=dict)
+
+    @property
+    def h1(self) -> float:
+        return self.frame.h_p - self.h0
+
+    def report(self) -> dict:
+        return {
+            "kind": self.kind, "R_mm": self.R, "u_p": self.frame.u_p, "side": self.frame.side,
+            "h_p_mm": self.frame.h_p, "alpha0_deg": self.frame.alpha0_deg,
+            "h0_mm": self.h0, "h1_mm": self.h1, "gamma_deg": self.gamma_deg, "phi_deg": self.phi_deg,
+            "axis_point_mm": self.q.tolist(), "axis_direction": self.a.tolist(),
+            "contacts": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in self.contacts.items()},
+        }
+
+
+def axis_of(frame: RuleFrame, R: float, h0: float, gamma: float, phi: float = 0.0):
+    """Axis point and direction for parameters ``h0`` (mm), ``gamma``, ``phi`` (radians)."""
+    y = math.cos(phi) * frame.y1 + math.sin(phi) * frame.x1
+    x = np.cross(y, frame.z1)
+    m2 = frame.p0 + h0 * frame.z1
+    return m2 + R * y, math.cos(gamma) * frame.z1 + math.sin(gamma) * x
+
+
+def _dist_axis(p, q, a):
+    w = p - q
+    w = w - (w @ a)[..., None] * a if w.ndim > 1 else w - (w @ a) * a
+    return np.linalg.norm(w, axis=-1)
+
+
+def _curve_min(directrix, q, a, u_start, u_range, iters=40):
+    """Local minimum over u of the distance from a directrix to the axis (Newton, from u_start)."""
+    lo, hi = u_range
+    u = float(u_start)
+    scale = max(1.0, abs(hi - lo))
+    for _ in range(iters):
+        c = directrix(np.array([u]), 2)[0]
+        w = c[0] - q
+        w = w - (w @ a) * a
+        d1 = c[1] - (c[1] @ a) * a
+        g = 2 * (w @ c[1])
+        h = 2 * (d1 @ d1 + w @ c[2])
+        if h <= 0:
+            return None
+        step = g / h
+        u_new = min(max(u - step, lo), hi)
+        done = abs(u_new - u) < 1e-13 * scale
+        u = u_new
+        if done:
+            break
+    c = directrix(np.array([u]), 2)[0]
+    w = c[0] - q
+    w = w - (w @ a) * a
+    return u, float(np.linalg.norm(w)), c[0], float(2 * (w @ c[1]))
+
+
+def standard_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 1, distributed: bool = True,
+                     end: int = 0) -> Setting:
+    """Standard setting, axis collinear with the rule: distributed error (b) or tangent to one directrix (a)."""
+    _check_R(R)
+    fr = rule_frame(surface, u_p, side)
+    if distributed:
+        y, kind = fr.y1, "standard-distributed"
+    else:
+        y, kind = (fr.n0 if end == 0 else fr.n1), "standard-tangent"
+    q = fr.p0 + R * y
+    return Setting(kind, fr, float(R), q, fr.z1.copy(), fr.h_p / 2, 0.0, 0.0,
+                   {"P0": fr.p0, "P1": fr.p1, "tangent_end": None if distributed else end})
+
+
+def _check_R(R):
+    if not (isinstance(R, (int, float)) and math.isfinite(R) and R > 0):
+        raise InputError(f"tool radius must be a positive number of mm, got {R!r}")
+
+
+def optimum_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 1) -> Setting:
+    """The paper's optimum: tangent to the rule at M2 and to C0 at M0 and C1 at M1.
+
+    Solved for ``h0`` and ``gamma`` with the tangency points found by Newton from the rule;
+    starts from the standard setting, then from a spread of fallbacks. Raises
+    :class:`NoAdmissibleSetting` when no solution has M2 on the rule, |gamma| < 80 deg and
+    true tangencies (minima of the distance) on this side.
+    """
+    from scipy.optimize import root
+
+    _check_R(R)
+    fr = rule_frame(surface, u_p, side)
+    lo, hi = surface.u_range
+    span = hi - lo
+
+    warm = [u_p, u_p]  # the tangency points move little between solver steps: start from the last ones
+
+    def contacts(h0, gamma):
+        q, a = axis_of(fr, R, h0, gamma)
+        r0 = _curve_min(surface.c0, q, a, warm[0], (lo, hi))
+        r1 = _curve_min(surface.c1, q, a, warm[1], (lo, hi))
+        if r0 is None or r1 is None:  # retry from the rule itself
+            r0 = _curve_min(surface.c0, q, a, u_p, (lo, hi))
+            r1 = _curve_min(surface.c1, q, a, u_p, (lo, hi))
+        if r0 is not None and r1 is not None and abs(r0[0] - u_p) < 0.5 * span and abs(r1[0] - u_p) < 0.5 * span:
+            warm[0], warm[1] = r0[0], r1[0]
+        return q, a, r0, r1
+
+    def residual(x):
+        h0, gamma = x[0] * fr.h_p, x[1]
+        _, _, r0, r1 = contacts(h0, gamma)
+        if r0 is None or r1 is None:
+            return np.array([1e3, 1e3])
+        return np.array([(r0[1] - R) / R, (r1[1] - R) / R])
+
+    starts = [(0.5, 0.0), (0.5, 0.05), (0.5, -0.05), (0.25, 0.1), (0.75, -0.1), (0.25, -0.1), (0.75, 0.1),
+              (0.5, 0.3), (0.5, -0.3)]
+    best = None
+    for x0 in starts:
+        sol = root(residual, np.array(x0), method="hybr", options={"xtol": 1e-14})
+        h0, gamma = sol.x[0] * fr.h_p, sol.x[1]
+        if not np.all(np.abs(residual(sol.x)) < 1e-11):
+            continue
+        q, a, r0, r1 = contacts(h0, gamma)
+        # a true tangency: the distance is stationary there (not a minimum clipped at the domain's edge)
+        tangent = all(abs(r_[3]) <= 1e-7 * R * max(1.0, float(np.linalg.norm(d(np.array([r_[0]]), 1)[0, 1])))
+                      for r_, d in ((r0, surface.c0), (r1, surface.c1)))
+        ok = (-1e-9 <= h0 <= fr.h_p + 1e-9 and abs(gamma) < math.radians(80) and tangent
+              and abs(r0[0] - u_p) < 0.5 * span and abs(r1[0] - u_p) < 0.5 * span)
+        if ok:
+            best = (h0, gamma, q, a, r0, r1)
+            break
+    if best is None:
+        raise NoAdmissibleSetting(
+            f"no admissible optimum setting for R = {R:g} mm on side {side:+d} at u = {u_p:g}: the three-tangency "
+            f"system has no solution with M2 on the rule and both tangency points on the surface (alpha0 = "
+            f"{fr.alpha0_deg:.3g} deg, h_p = {fr.h_p:.4g} mm)")
+    h0, gamma, q, a, r0, r1 = best
+    return Setting("optimum", fr, float(R), q, a, float(h0), math.degrees(gamma), 0.0,
+                   {"u0": r0[0], "u1": r1[0], "M0": r0[2], "M1": r1[2], "M2": fr.p0 + h0 * fr.z1,
+                    "tangency_residual_mm": max(abs(r0[1] - R), abs(r1[1] - R)),
+                    "tangency_slope_residual": max(abs(r0[3]), abs(r1[3]))})
+
+
+@dataclass(frozen=True)
+class Interference:
+    """Error profile along the rule (mm): ``e[i]`` at ``v[i]``, negative = gouge, positive = undercut."""
+
+    v: np.ndarray
+    u: np.ndarray
+    e: np.ndarray
+    points: np.ndarray
+    band_mm: float
+
+    @property
+    def max_gouge(self) -> float:
+        return float(max(0.0, -self.e.min()))
+
+    @property
+    def max_undercut(self) -> float:
+        return float(max(0.0, self.e.max()))
+
+    @property
+    def max_abs(self) -> float:
+        return float(np.abs(self.e).max())
+
+    def worst(self) -> dict:
+        i = int(np.argmax(np.abs(self.e)))
+        return {"v": float(self.v[i]), "u": float(self.u[i]), "xyz": self.points[i].tolist(), "e_mm": float(self.e[i])}
+
+    def report(self) -> dict:
+        return {"max_gouge_mm": self.max_gouge, "max_undercut_mm": self.max_undercut, "max_abs_mm": self.max_abs,
+                "worst": self.worst(), "band_mm": self.band_mm, "n_samples": int(self.v.size)}
+
+
+def interference(surface: RuledSurface, setting: Setting, *, n_v: int = 201, band_mm: float | None = None,
+                 n_u: int = 41) -> Interference:
+    """Signed distance between the cylinder and the surface along the rule (see module docstring)."""
+    fr, R = setting.frame, setting.R
+    band = float(band_mm) if band_mm is not None else R
+    lo, hi = surface.u_range
+    v = np.linspace(0.0, 1.0, n_v)
+    su = np.linalg.norm(surface.derivatives(np.full(n_v, fr.u_p), v)[1], axis=1)
+    du = band / np.maximum(su, 1e-12)
+    # dense start, then Newton per v on u (vectorised)
+    t = np.linspace(-1.0, 1.0, n_u)
+    U = np.clip(fr.u_p + du[:, None] * t[None, :], lo, hi)
+    P = surface.evaluate(U, np.broadcast_to(v[:, None], U.shape))
+    d = _dist_axis(P, setting.q, setting.a)
+    j = np.argmin(d, axis=1)
+    u = U[np.arange(n_v), j]
+    ulo = np.clip(fr.u_p - du, lo, hi)
+    uhi = np.clip(fr.u_p + du, lo, hi)
+    q, a = setting.q, setting.a
+    for _ in range(30):
+        p, s_u, _, s_uu, _ = surface.derivatives(u, v)
+        w = p - q
+        w = w - (w @ a)[:, None] * a
+        s1 = s_u - (s_u @ a)[:, None] * a
+        g = np.einsum("ij,ij->i", w, s_u)
+        h = np.einsum("ij,ij->i", s1, s1) + np.einsum("ij,ij->i", w, s_uu)
+        step = np.where(h > 0, g / np.where(h > 0, h, 1.0), 0.0)
+        u_new = np.clip(u - step, ulo, uhi)
+        if np.abs(u_new - u).max() < 1e-15:
+            u = u_new
+            break
+        u = u_new
+    p = surface.evaluate(u, v)
+    e = _dist_axis(p, q, a) - R
+    return Interference(v, u, e, p, band)
+
+
+def minimax_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 1, start: Setting | None = None,
+                    n_v: int = 81) -> Setting:
+    """Beyond the paper: the setting minimising the largest |error| along the rule over (h0, gamma, phi).
+
+    Starts from the optimum setting when it exists, else from the distributed standard one.
+    """
+    from scipy.optimize import minimize
+
+    _check_R(R)
+    fr = rule_frame(surface, u_p, side)
+    if start is None:
+        try:
+            start = optimum_setting(surface, u_p, R, side=side)
+        except NoAdmissibleSetting:
+            start = standard_setting(surface, u_p, R, side=side)
+    x0 = np.array([start.h0 / fr.h_p, math.radians(start.gamma_deg), math.radians(start.phi_deg)])
+
+    def make(x):
+        q, a = axis_of(fr, R, x[0] * fr.h_p, x[1], x[2])
+        return Setting("minimax", fr, float(R), q, a, float(x[0] * fr.h_p), math.degrees(x[1]), math.degrees(x[2]))
+
+    def cost(x):
+        return interference(surface, make(x), n_v=n_v).max_abs
+
+    res = minimize(cost, x0, method="Nelder-Mead",
+                   options={"xatol": 1e-9, "fatol": 1e-9, "maxiter": 2000, "initial_simplex": _simplex(x0)})
+    best = make(res.x)
+    return Setting("minimax", fr, float(R), best.q, best.a, best.h0, best.gamma_deg, best.phi_deg,
+                   {"M2": fr.p0 + best.h0 * fr.z1, "iterations": int(res.nit)})
+
+
+def _simplex(x0):
+    steps = np.array([0.05, 0.01, 0.01])
+    return np.vstack([x0] + [x0 + np.eye(3)[i] * steps[i] for i in range(3)])
+
+
+SETTINGS = ("standard-tangent", "standard-distributed", "optimum", "minimax")
+
+
+def tool_setting(surface: RuledSurface, u_p: float, R: float, kind: str, *, side: int = 1) -> Setting:
+    """Setting by name: standard-tangent, standard-distributed, optimum, minimax."""
+    if kind == "standard-tangent":
+        return standard_setting(surface, u_p, R, side=side, distributed=False)
+    if kind == "standard-distributed":
+        return standard_setting(surface, u_p, R, side=side, distributed=True)
+    if kind == "optimum":
+        return optimum_setting(surface, u_p, R, side=side)
+    if kind == "minimax":
+        return minimax_setting(surface, u_p, R, side=side)
+    raise InputError(f"unknown setting {kind!r}; use one of {', '.join(SETTINGS)}")
