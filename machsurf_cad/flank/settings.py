@@ -134,7 +134,7 @@ def _curve_min(directrix, q, a, u_start, u_range, iters=40):
         d1 = c[1] - (c[1] @ a) * a
         g = 2 * (w @ c[1])
         h = 2 * (d1 @ d1 + w @ c[2])
-        if h <= 0:
+        if not (h > 0) or not np.isfinite(g):
             return None
         step = g / h
         u_new = min(max(u - step, lo), hi)
@@ -167,7 +167,8 @@ def _check_R(R):
         raise InputError(f"tool radius must be a positive number of mm, got {R!r}")
 
 
-def optimum_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 1) -> Setting:
+def optimum_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 1,
+                    start: Setting | None = None) -> Setting:
     """The paper's optimum: tangent to the rule at M2 and to C0 at M0 and C1 at M1.
 
     Solved for ``h0`` and ``gamma`` with the tangency points found by Newton from the rule;
@@ -179,10 +180,14 @@ def optimum_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 
 
     _check_R(R)
     fr = rule_frame(surface, u_p, side)
-    lo, hi = surface.u_range
-    span = hi - lo
+    lo0, hi0 = surface.u_range
+    span = hi0 - lo0
+    # tangency is sought on the directrices' natural extension too (end rules touch it there)
+    lo, hi = lo0 - 0.5 * span, hi0 + 0.5 * span
 
     warm = [u_p, u_p]  # the tangency points move little between solver steps: start from the last ones
+    if start is not None and start.kind == "optimum":
+        warm = [start.contacts["u0"] + (u_p - start.frame.u_p), start.contacts["u1"] + (u_p - start.frame.u_p)]
 
     def contacts(h0, gamma):
         q, a = axis_of(fr, R, h0, gamma)
@@ -202,32 +207,77 @@ def optimum_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 
             return np.array([1e3, 1e3])
         return np.array([(r0[1] - R) / R, (r1[1] - R) / R])
 
-    starts = [(0.5, 0.0), (0.5, 0.05), (0.5, -0.05), (0.25, 0.1), (0.75, -0.1), (0.25, -0.1), (0.75, 0.1),
+    # gamma = 0 (the standard setting) makes the Jacobian singular: start just off it
+    starts = [(0.5, -0.05), (0.5, 0.05), (0.25, 0.1), (0.75, -0.1), (0.25, -0.1), (0.75, 0.1),
               (0.5, 0.3), (0.5, -0.3)]
+    if start is not None:  # continuation from a neighbouring rule
+        starts.insert(0, (start.h0 / start.frame.h_p, math.radians(start.gamma_deg)))
+    def newton(x0, iters=30):
+        """Newton on (h0, gamma) with the analytic Jacobian: at a tangency the distance is stationary
+        in u, so its derivatives in h0 and gamma are those at fixed contact points."""
+        h0, gamma = x0[0] * fr.h_p, x0[1]
+        for _ in range(iters):
+            q, a, r0, r1 = contacts(h0, gamma)
+            if r0 is None or r1 is None:
+                return None
+            x = fr.x1  # phi = 0
+            da = -math.sin(gamma) * fr.z1 + math.cos(gamma) * x
+            F = np.array([r0[1] - R, r1[1] - R])
+            if np.abs(F).max() < 1e-12 * R:
+                return np.array([h0 / fr.h_p, gamma])
+            J = np.empty((2, 2))
+            for k, r_ in enumerate((r0, r1)):
+                w = r_[2] - q
+                wa = float(w @ a)
+                wp = w - wa * a
+                nh = wp / np.linalg.norm(wp)
+                J[k, 0] = -float(nh @ fr.z1)
+                J[k, 1] = -wa * float(nh @ da)
+            try:
+                step = np.linalg.solve(J, F)
+            except np.linalg.LinAlgError:
+                return None
+            if abs(step[0]) > fr.h_p or abs(step[1]) > 1.0:
+                return None  # far off: leave it to another start
+            h0 -= step[0]
+            gamma -= step[1]
+            if not (np.isfinite(h0) and np.isfinite(gamma)) or abs(gamma) > 1.5:
+                return None
+        return None
+
+    def candidates():
+        for x0 in starts:  # fast Newton first, from every start ...
+            xs = newton(np.array(x0))
+            if xs is not None:
+                yield xs
+        for x0 in starts:  # ... then the robust (slower) hybrid solver
+            yield root(residual, np.array(x0), method="hybr", options={"xtol": 1e-14}).x
+
     best = None
-    for x0 in starts:
-        sol = root(residual, np.array(x0), method="hybr", options={"xtol": 1e-14})
-        h0, gamma = sol.x[0] * fr.h_p, sol.x[1]
-        if not np.all(np.abs(residual(sol.x)) < 1e-11):
+    for xs in candidates():
+        h0, gamma = xs[0] * fr.h_p, xs[1]
+        if not np.all(np.abs(residual(xs)) < 1e-11):
             continue
         q, a, r0, r1 = contacts(h0, gamma)
         # a true tangency: the distance is stationary there (not a minimum clipped at the domain's edge)
         tangent = all(abs(r_[3]) <= 1e-7 * R * max(1.0, float(np.linalg.norm(d(np.array([r_[0]]), 1)[0, 1])))
                       for r_, d in ((r0, surface.c0), (r1, surface.c1)))
         ok = (-1e-9 <= h0 <= fr.h_p + 1e-9 and abs(gamma) < math.radians(80) and tangent
-              and abs(r0[0] - u_p) < 0.5 * span and abs(r1[0] - u_p) < 0.5 * span)
+              and abs(r0[0] - u_p) < 0.5 * span and abs(r1[0] - u_p) < 0.5 * span
+              and np.all(np.isfinite(r0[2])) and np.all(np.isfinite(r1[2])))
         if ok:
             best = (h0, gamma, q, a, r0, r1)
             break
     if best is None:
         raise NoAdmissibleSetting(
             f"no admissible optimum setting for R = {R:g} mm on side {side:+d} at u = {u_p:g}: the three-tangency "
-            f"system has no solution with M2 on the rule and both tangency points on the surface (alpha0 = "
+            f"system has no solution with M2 on the rule and true tangencies with both directrices (alpha0 = "
             f"{fr.alpha0_deg:.3g} deg, h_p = {fr.h_p:.4g} mm)")
     h0, gamma, q, a, r0, r1 = best
     return Setting("optimum", fr, float(R), q, a, float(h0), math.degrees(gamma), 0.0,
                    {"u0": r0[0], "u1": r1[0], "M0": r0[2], "M1": r1[2], "M2": fr.p0 + h0 * fr.z1,
                     "tangency_residual_mm": max(abs(r0[1] - R), abs(r1[1] - R)),
+                    "contact_outside_surface": bool(not (lo0 <= r0[0] <= hi0 and lo0 <= r1[0] <= hi0)),
                     "tangency_slope_residual": max(abs(r0[3]), abs(r1[3]))})
 
 
@@ -290,10 +340,10 @@ def interference(surface: RuledSurface, setting: Setting, *, n_v: int = 201, ban
         h = np.einsum("ij,ij->i", s1, s1) + np.einsum("ij,ij->i", w, s_uu)
         step = np.where(h > 0, g / np.where(h > 0, h, 1.0), 0.0)
         u_new = np.clip(u - step, ulo, uhi)
-        if np.abs(u_new - u).max() < 1e-15:
-            u = u_new
-            break
+        done = np.abs(u_new - u).max() < 1e-13 * (hi - lo)
         u = u_new
+        if done:
+            break
     p = surface.evaluate(u, v)
     e = _dist_axis(p, q, a) - R
     return Interference(v, u, e, p, band)
@@ -338,14 +388,16 @@ def _simplex(x0):
 SETTINGS = ("standard-tangent", "standard-distributed", "optimum", "minimax")
 
 
-def tool_setting(surface: RuledSurface, u_p: float, R: float, kind: str, *, side: int = 1) -> Setting:
-    """Setting by name: standard-tangent, standard-distributed, optimum, minimax."""
+def tool_setting(surface: RuledSurface, u_p: float, R: float, kind: str, *, side: int = 1,
+                 start: Setting | None = None) -> Setting:
+    """Setting by name: standard-tangent, standard-distributed, optimum, minimax (``start``: a
+    neighbouring rule's setting to continue from)."""
     if kind == "standard-tangent":
         return standard_setting(surface, u_p, R, side=side, distributed=False)
     if kind == "standard-distributed":
         return standard_setting(surface, u_p, R, side=side, distributed=True)
     if kind == "optimum":
-        return optimum_setting(surface, u_p, R, side=side)
+        return optimum_setting(surface, u_p, R, side=side, start=start)
     if kind == "minimax":
-        return minimax_setting(surface, u_p, R, side=side)
+        return minimax_setting(surface, u_p, R, side=side, start=start)
     raise InputError(f"unknown setting {kind!r}; use one of {', '.join(SETTINGS)}")

@@ -1,0 +1,246 @@
+"""Whole-surface flank milling: settings on every rule, CL data, swept envelope, radius search (mm, deg).
+
+The rules are chosen adaptively along u: a span is split until the axis interpolated linearly
+between its two settings stays within ``tolerance`` of the exact setting at its middle (over
+the tool's working length). The tool motion is ``S(a, t) = P(t) + a A(t)``, ``P`` the tool-tip
+point (the axis point level with the C0 end of the rule, minus ``overhang``), ``A`` the axis
+towards C1, both interpolated by cubic splines through the settings. For a cylinder the
+envelope is ``X = S + R n`` with ``n`` the unit normal of S pointing towards the surface (the
+envelope paper's eq. (21) with r' = 0); it is fitted by the certified engine.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from .ruled import RuledSurface
+from .settings import NoAdmissibleSetting, Setting, interference, tool_setting
+
+
+@dataclass(frozen=True)
+class FlankPath:
+    """Settings along the surface and the CL data derived from them."""
+
+    surface: RuledSurface
+    R: float
+    kind: str
+    side: int
+    settings: tuple
+    u: np.ndarray
+    tip: np.ndarray
+    axis: np.ndarray
+    length: float
+    max_gouge: float
+    max_undercut: float
+    worst: dict
+    step_tolerance: float
+    discontinuities: tuple = ()
+
+    def report(self) -> dict:
+        return {"setting": self.kind, "R_mm": self.R, "side": self.side, "n_rules": len(self.settings),
+                "u": self.u.tolist(), "tool_length_mm": self.length, "step_tolerance_mm": self.step_tolerance,
+                "max_gouge_mm": self.max_gouge, "max_undercut_mm": self.max_undercut, "worst": self.worst,
+                "discontinuities": list(self.discontinuities)}
+
+
+def _tip_and_length(s: Setting, overhang: float):
+    fr = s.frame
+    t0 = float((fr.p0 - s.q) @ s.a)
+    t1 = float((fr.p1 - s.q) @ s.a)
+    lo, hi = min(t0, t1), max(t0, t1)
+    sign = 1.0 if t1 >= t0 else -1.0  # axis oriented from the C0 end towards C1
+    a = sign * s.a
+    start = t0 - sign * overhang
+    return s.q + start * s.a, a, (hi - lo) + 2 * overhang
+
+
+def flank_path(surface: RuledSurface, R: float, kind: str = "optimum", *, side: int = 1, tolerance: float = 0.01,
+               overhang: float = 1.0, max_rules: int = 2000, min_rules: int = 9, n_rules: int | None = None,
+               progress=None) -> FlankPath:
+    """Settings on rules along u and their CL points and axes.
+
+    With ``n_rules`` the rules are uniform; otherwise the step follows ``tolerance`` (mm): a span
+    is halved until the axis interpolated between its ends is within the tolerance of the exact
+    setting at its middle, down to 1e-5 of the range (a jump of the setting there is reported
+    in ``discontinuities``). Each setting starts from its neighbour's (continuation).
+    """
+    if not tolerance > 0:
+        raise InputError("tolerance must be > 0 mm")
+    lo, hi = surface.u_range
+    eps = 1e-6 * (hi - lo)  # sqrt-type directrices can be singular exactly at the ends
+    cache: dict[float, Setting] = {}
+
+    def setting(u, near=None):
+        key = float(u)
+        if key not in cache:
+            cache[key] = tool_setting(surface, key, R, kind, side=side, start=near)
+        return cache[key]
+
+    us = list(np.linspace(lo + eps, hi - eps, n_rules or min_rules))
+    prev = None
+    for u in us:  # sweep once in order so each rule continues from the previous one
+        prev = setting(u, prev)
+    jumps = []
+    if n_rules is None:
+        min_span = 1e-5 * (hi - lo)
+        i = 0
+        while i < len(us) - 1:
+            a, b = us[i], us[i + 1]
+            m = 0.5 * (a + b)
+            sa, sb = setting(a), setting(b)
+            sm = setting(m, sa)
+            (ta, aa, La), (tb, ab, Lb), (tm, am, Lm) = (_tip_and_length(x, overhang) for x in (sa, sb, sm))
+            L = max(La, Lb, Lm)
+            ti, ai = 0.5 * (ta + tb), (aa + ab) / np.linalg.norm(aa + ab)
+            err = max(np.linalg.norm((ti + s_ * ai) - (tm + s_ * am)) for s_ in (0.0, 0.5 * L, L))
+            if err > tolerance and len(us) < max_rules and (b - a) > min_span:
+                us.insert(i + 1, m)
+                continue
+            if err > tolerance:
+                jumps.append({"u": float(m), "axis_jump_mm": float(err)})
+            if progress is not None:
+                progress(i, len(us))
+            i += 1
+    sets = tuple(setting(u) for u in us)
+    tips, axes, lengths = zip(*(_tip_and_length(s, overhang) for s in sets))
+    worst, g, uc = {}, 0.0, 0.0
+    for s in sets:
+        e = interference(surface, s, n_v=101)
+        g = max(g, e.max_gouge)
+        uc = max(uc, e.max_undercut)
+        if not worst or e.max_abs > abs(worst["e_mm"]):
+            worst = {**e.worst(), "rule_u": s.frame.u_p}
+    return FlankPath(surface, float(R), kind, side, sets, np.array(us), np.array(tips), np.array(axes),
+                     float(max(lengths)), g, uc, worst, float(tolerance), tuple(jumps))
+
+
+# ----------------------------------------------------------------------------- envelope
+def envelope_map(path: FlankPath):
+    """The exact envelope map ``X(a, t)`` of the cylinder along the (spline-interpolated) motion.
+
+    Returns ``(f, bounds)`` with ``f(as_, ts) -> (len(as_), len(ts), 3)``: ``a`` along the axis
+    from the tip (mm), ``t`` the rule parameter u.
+    """
+    from scipy.interpolate import CubicSpline
+
+    if len(path.settings) < 4:
+        raise InputError("the envelope needs at least 4 rules")
+    P = CubicSpline(path.u, path.tip, axis=0)
+    A = CubicSpline(path.u, path.axis, axis=0)
+    R = path.R
+    surf = path.surface
+
+    def f(as_, ts):
+        as_ = np.asarray(as_, float)
+        ts = np.asarray(ts, float)
+        p, dp = P(ts), P(ts, 1)
+        a_raw, da_raw = A(ts), A(ts, 1)
+        na = np.linalg.norm(a_raw, axis=-1, keepdims=True)
+        a = a_raw / na
+        da = da_raw / na - a * np.einsum("ij,ij->i", a, da_raw / na)[:, None]
+        S = p[None, :, :] + as_[:, None, None] * a[None, :, :]
+        S_a = np.broadcast_to(a[None, :, :], S.shape)
+        S_t = dp[None, :, :] + as_[:, None, None] * da[None, :, :]
+        n = np.cross(S_a, S_t)
+        n /= np.linalg.norm(n, axis=-1, keepdims=True)
+        # orient towards the surface: the rule at t lies on the -side*normal side of the tool
+        mid = surf.evaluate(ts, np.full(ts.shape, 0.5))
+        to_surf = mid[None, :, :] - S
+        sgn = np.sign(np.einsum("...i,...i->...", n, to_surf))
+        sgn = np.where(sgn == 0, 1.0, sgn)
+        return S + R * sgn[..., None] * n
+
+    return f, (0.0, path.length, float(path.u[0]), float(path.u[-1]))
+
+
+def envelope_surface(path: FlankPath, tolerance: float = 1e-3, max_poles: int = 40000):
+    """The envelope as a certified B-spline surface (u along the axis, v along the motion)."""
+    from ..approx import fit_surface
+
+    f, bounds = envelope_map(path)
+    knots = path.u[1:-1]
+    breaks = ((np.array([]), np.array([], int)), (knots, np.full(knots.size, 1)))
+    return fit_surface(f, bounds, tolerance=tolerance, max_poles=max_poles, name="flank_envelope", breaks=breaks)
+
+
+def position_deviation(path: FlankPath, n_u: int = 121, n_v: int = 61, refine: int = 4):
+    """Signed deviation of the nominal from the tool positions, brute force (mm): for every
+    nominal sample, min over densely interpolated positions of (distance to the axis - R).
+    Negative = gouge, positive = undercut. Returns (points (n_u, n_v, 3), e (n_u, n_v))."""
+    from scipy.interpolate import CubicSpline
+
+    surf = path.surface
+    us = np.linspace(path.u[0], path.u[-1], n_u)
+    vs = np.linspace(0, 1, n_v)
+    pts = surf.grid_map(us, vs)
+    tt = np.linspace(path.u[0], path.u[-1], refine * len(path.u))
+    P = CubicSpline(path.u, path.tip, axis=0)(tt)
+    A = CubicSpline(path.u, path.axis, axis=0)(tt)
+    A /= np.linalg.norm(A, axis=1, keepdims=True)
+    best = np.full(pts.shape[:2], np.inf)
+    for p, a in zip(P, A):
+        w = pts - p
+        w = w - np.einsum("ijk,k->ij", w, a)[..., None] * a
+        best = np.minimum(best, np.linalg.norm(w, axis=-1) - path.R)
+    return pts, best
+
+
+# ----------------------------------------------------------------------------- radius search
+def whole_surface_error(surface: RuledSurface, R: float, kind: str, side: int, n_rules: int = 21) -> float:
+    """Largest |interference| over ``n_rules`` rules (mm); inf where no admissible setting exists."""
+    lo, hi = surface.u_range
+    eps = 1e-6 * (hi - lo)
+    worst = 0.0
+    for u in np.linspace(lo + eps, hi - eps, n_rules):
+        try:
+            s = tool_setting(surface, float(u), R, kind, side=side)
+        except NoAdmissibleSetting:
+            return math.inf
+        worst = max(worst, interference(surface, s, n_v=81).max_abs)
+    return worst
+
+
+def radius_range(surface: RuledSurface, tolerance: float, *, kind: str = "optimum", side: int = 1,
+                 r_min: float = 1.0, r_max: float = 200.0, n_scan: int = 24, n_rules: int = 21,
+                 rel_precision: float = 1e-3) -> dict:
+    """Smallest and largest tool radius (mm) keeping the whole surface within ``tolerance`` (mm).
+
+    Scans R on a log grid, then bisects each boundary of the feasible set. Returns the range,
+    and every iteration ``(R, error)`` in order.
+    """
+    if not tolerance > 0 or not 0 < r_min < r_max:
+        raise InputError("need tolerance > 0 and 0 < r_min < r_max (mm)")
+    its = []
+
+    def err(R):
+        e = whole_surface_error(surface, R, kind, side, n_rules)
+        its.append({"R_mm": float(R), "max_error_mm": e})
+        return e
+
+    grid = np.geomspace(r_min, r_max, n_scan)
+    ok = [err(R) <= tolerance for R in grid]
+    if not any(ok):
+        return {"feasible": False, "R_min_mm": None, "R_max_mm": None, "iterations": its,
+                "message": f"no radius in [{r_min:g}, {r_max:g}] mm keeps the surface within {tolerance:g} mm"}
+    first = ok.index(True)
+    last = len(ok) - 1 - ok[::-1].index(True)
+
+    def bisect(a, b, want_low):
+        # a infeasible, b feasible (or vice versa); converge on the boundary
+        while abs(b - a) > rel_precision * b:
+            m = math.sqrt(a * b)
+            if (err(m) <= tolerance) == want_low:
+                b = m
+            else:
+                a = m
+        return b
+
+    R_lo = grid[first] if first == 0 else bisect(grid[first - 1], grid[first], True)
+    R_hi = grid[last] if last == len(grid) - 1 else bisect(grid[last + 1], grid[last], True)
+    return {"feasible": True, "R_min_mm": float(R_lo), "R_max_mm": float(R_hi), "scan": [float(x) for x in grid],
+            "iterations": its, "note": ("bounded by the scan range" if first == 0 or last == len(grid) - 1 else ""),
+            "contiguous": all(ok[first:last + 1])}
