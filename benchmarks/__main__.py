@@ -10,7 +10,7 @@ import json
 import platform
 import sys
 
-from . import bench_eval, bench_offset, bench_reff
+from . import bench_eval, bench_flank, bench_offset, bench_reff
 
 
 def main(argv=None) -> int:
@@ -26,6 +26,9 @@ def main(argv=None) -> int:
         rows.append(row)
         _print_row(row, header=False)
     print("* per-point OCCT time measured on a 256^2 sub-grid and scaled to the full grid")
+    for row in bench_flank.flank_rows(quick=args.quick):
+        rows.append(row)
+        _print_row(row, header=False)
     offset_rows = bench_offset.offset_fit_rows(quick=args.quick)
     bench_offset.print_rows(offset_rows)
     if args.json:

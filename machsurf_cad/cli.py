@@ -348,6 +348,138 @@ def cmd_reff(args) -> int:
     return EXIT_OK
 
 
+def _ruled_input(args):
+    from .flank.ruled import EXAMPLES, RuledSurface
+
+    if args.example:
+        if args.example not in EXAMPLES:
+            raise InputError(f"unknown ruled example {args.example!r}; known: {', '.join(sorted(EXAMPLES))}")
+        s = EXAMPLES[args.example]()
+        return s, f"example {args.example}"
+    if not args.part:
+        raise InputError("give a STEP file with a ruled face or --example eq18|hypar|liu")
+    from .occ import read_step_face
+
+    f = read_step_face(args.part, args.face)
+    tol = args.fit_ruled if args.fit_ruled is not None else 1e-6
+    s = RuledSurface.from_surface(f.surface, tolerance=tol, name=f.name)
+    return s, f"face {f.index} '{f.name}' of {args.part} (deviation from ruled: {s.source_deviation:.3g} mm)"
+
+
+def cmd_flank(args) -> int:
+    import numpy as np
+
+    from .cutters import FlatEndMill, parse_cutter
+    from .flank import interference, tool_setting
+
+    t0 = time.perf_counter()
+    cutter = parse_cutter(args.tool)
+    if not isinstance(cutter, FlatEndMill):
+        raise InputError("flank milling needs a cylindrical cutter: cyl:D=.. (or flat:D=..)")
+    R = cutter.D / 2
+    surf, desc = _ruled_input(args)
+    if not 0.0 <= args.rule <= 1.0:
+        raise InputError(f"--rule {args.rule:g} is outside [0, 1] (fraction of the u range)")
+    if args.side not in (1, -1):
+        raise InputError("--side must be +1 or -1")
+    lo, hi = surf.u_range
+    u_p = lo + args.rule * (hi - lo)
+    st_ = tool_setting(surf, u_p, R, args.setting, side=args.side)
+    t_set = time.perf_counter() - t0
+    e = interference(surf, st_)
+    rep = {"command": "flank", "surface": desc, "tool": cutter.to_dict(), "R_mm": R, "rule": args.rule, "u_p": u_p,
+           "setting": st_.report(), "interference": e.report(), "time_setting_s": t_set}
+    _say(f"surface: {desc}; rule u = {u_p:.6g} (fraction {args.rule:g}), h_p = {st_.frame.h_p:.4f} mm, "
+         f"alpha0 = {st_.frame.alpha0_deg:.4f} deg; tool {cutter.spec()} (R = {R:g} mm), side {args.side:+d}")
+    _say(f"{args.setting}: gamma = {st_.gamma_deg:.6f} deg, h0 = {st_.h0:.6f} mm, h1 = {st_.h1:.6f} mm"
+         + (f", phi = {st_.phi_deg:.6f} deg" if st_.phi_deg else ""))
+    for k in ("M0", "M1", "M2"):
+        if k in st_.contacts:
+            _say(f"  {k} = ({', '.join(f'{x:.5f}' for x in st_.contacts[k])}) mm")
+    w = e.worst()
+    _say(f"interference: max gouge {e.max_gouge:.6g} mm, max undercut {e.max_undercut:.6g} mm, worst at v = "
+         f"{w['v']:.4f}, xyz ({', '.join(f'{x:.4f}' for x in w['xyz'])}) mm")
+    st = Staging(args.out)
+    try:
+        files = []
+        if args.whole:
+            from .flank.path import envelope_deviation, envelope_surface, flank_path
+            from .geometry.face import Face
+            from .occ import write_step, write_stl
+            from .progress import Bar
+
+            with Bar("settings along the surface") as bar:
+                path = flank_path(surf, R, args.setting, side=args.side, tolerance=args.tol,
+                                  progress=lambda i, n: bar.update(i, n))
+            _write_flank_cl(st, path, cutter)
+            env = envelope_surface(path, tolerance=args.envelope_tol)
+            env_face = Face(env.surface, name="flank_envelope")
+            write_step(st.path("envelope.step"), [env_face])
+            write_stl(st.path("envelope.stl"), [env_face], linear_deflection=0.01)
+            dev = envelope_deviation(path, env.surface)
+            from .viz import render_deviation
+
+            render_deviation(dev, st.path("deviation.png"), vtp_path=st.path("deviation.vtp"),
+                             title=f"nominal vs envelope of {cutter.spec()} ({args.setting}); red gouge, blue undercut",
+                             tolerance=args.tol)
+            files += ["toolpath.csv", "toolpath.apt", "envelope.step", "envelope.stl", "deviation.png", "deviation.vtp"]
+            rep["whole"] = {**path.report(), "envelope_fit": env.report(), "deviation_from_envelope": dev.report()}
+            _say(f"whole surface: {len(path.settings)} rules, max gouge {path.max_gouge:.4g} mm, max undercut "
+                 f"{path.max_undercut:.4g} mm (rule u = {path.worst['rule_u']:.5g}); envelope {env.surface.shape[0]}x"
+                 f"{env.surface.shape[1]} poles, fit error {env.max_error:.3g} mm; nominal vs envelope max "
+                 f"{dev.max_abs:.4g} mm" + (f"; {len(path.discontinuities)} setting jump(s)" if path.discontinuities else ""))
+        if args.study:
+            from .flank.study import parameter_study
+            from .viz.plots import plot_ratio_curves
+
+            data = parameter_study()
+            plot_ratio_curves(data["by_h_p"], st.path("study_h_p.png"), label_key="h_p_mm",
+                              label_fmt="h_p = {:g} mm", title="hyperbolic paraboloid, alpha0 = 30 deg (fig. 9)")
+            plot_ratio_curves(data["by_alpha0"], st.path("study_alpha0.png"), label_key="alpha0_deg",
+                              label_fmt="alpha0 = {:g} deg", title="hyperbolic paraboloid, h_p = 80 mm (fig. 10)")
+            files += ["study_h_p.png", "study_alpha0.png"]
+            rep["study"] = data
+            _say(f"parameter study: smallest ratio standard/optimum {data['min_ratio']:.3g}")
+        if args.radius_range is not None:
+            from .flank.path import radius_range
+
+            rr = radius_range(surf, args.radius_range, kind=args.setting, side=args.side)
+            rep["radius_range"] = rr
+            _say(f"radius range for {args.radius_range:g} mm: " + (
+                f"R in [{rr['R_min_mm']:.4g}, {rr['R_max_mm']:.4g}] mm after {len(rr['iterations'])} evaluations"
+                if rr["feasible"] else rr["message"]))
+        rep["files"] = files + ["report.json"]
+        rep["time_s"] = time.perf_counter() - t0
+        _write_json(st.path("report.json"), rep)
+        st.commit()
+    except BaseException:
+        st.abort()
+        raise
+    _say(f"outputs in {args.out}/: {', '.join(rep['files'])}")
+    if args.whole and max(rep["whole"]["max_gouge_mm"], rep["whole"]["max_undercut_mm"]) > args.tol:
+        _say(f"tolerance {args.tol:g} mm NOT met on the whole surface")
+        return EXIT_TOLERANCE
+    return EXIT_OK
+
+
+def _write_flank_cl(st, path, cutter):
+    import csv
+
+    with open(st.path("toolpath.csv"), "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["rule", "u", "tip_x", "tip_y", "tip_z", "i", "j", "k", "gamma_deg", "h0_mm"])
+        for k, (u, p, a, s) in enumerate(zip(path.u, path.tip, path.axis, path.settings)):
+            w.writerow([k, f"{u:.10g}", *(f"{x:.6f}" for x in p), *(f"{x:.9f}" for x in a), f"{s.gamma_deg:.6f}",
+                        f"{s.h0:.6f}"])
+    lines = [f"$$ machsurf_cad flank path: {path.kind}, {len(path.u)} rules, R = {path.R:g} mm", "PARTNO/MACHSURF_FLANK",
+             "UNITS/MM", f"CUTTER/{cutter.D:.4f},0.0000,0.0000,0.0000,0.0000,0.0000,{path.length:.4f}", "MULTAX/ON"]
+    a0, p0 = path.axis[0], path.tip[0]
+    lines += ["RAPID", "GOTO/{:.5f},{:.5f},{:.5f},{:.7f},{:.7f},{:.7f}".format(*(p0 - 10 * a0), *a0)]
+    lines += ["GOTO/{:.5f},{:.5f},{:.5f},{:.7f},{:.7f},{:.7f}".format(*p, *a) for p, a in zip(path.tip, path.axis)]
+    lines.append("FINI")
+    st.path("toolpath.apt").write_text("\n".join(lines) + "\n")
+
+
 def cmd_demo(args) -> int:
     from .demo import run_demo
 
@@ -416,6 +548,25 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--no-render", action="store_true", help="numbers only")
     e.add_argument("-o", "--out", default="out/reff", help="output folder")
     e.set_defaults(func=cmd_reff)
+
+    f = sub.add_parser("flank", help="flank milling settings of a cylindrical cutter on a ruled surface")
+    f.add_argument("part", nargs="?", help="STEP file with a ruled face (or use --example)")
+    f.add_argument("--example", help="eq18 | hypar | liu (the paper's surfaces, exact)")
+    f.add_argument("--face", type=int, default=0, help="face index (default 0)")
+    f.add_argument("--fit-ruled", type=float, default=None, help="accept a non-ruled face within this many mm")
+    f.add_argument("--tool", default="cyl:D=20", help="cylindrical cutter, e.g. cyl:D=80 (mm)")
+    f.add_argument("--rule", type=float, default=0.5, help="rule position as a fraction of the u range [0, 1]")
+    f.add_argument("--setting", default="optimum",
+                   choices=["standard-tangent", "standard-distributed", "optimum", "minimax"])
+    f.add_argument("--side", type=int, default=1, help="+1: tool on the side of S_u x S_v, -1: the other")
+    f.add_argument("--whole", action="store_true", help="settings on the whole surface: CL files, envelope, map")
+    f.add_argument("--tol", type=float, default=0.01, help="whole-surface tolerance and rule step criterion, mm")
+    f.add_argument("--envelope-tol", type=float, default=1e-3, help="envelope fit tolerance, mm")
+    f.add_argument("--study", action="store_true", help="the paper's parameter study plots (figs 9 and 10)")
+    f.add_argument("--radius-range", type=float, default=None, metavar="TOL",
+                   help="smallest and largest R keeping the whole surface within TOL mm")
+    f.add_argument("-o", "--out", default="out/flank", help="output folder")
+    f.set_defaults(func=cmd_flank)
     return p
 
 

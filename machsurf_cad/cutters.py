@@ -430,6 +430,7 @@ def _length(length, D) -> float:
 _KINDS = {
     "ball": (BallEndMill, {"D": "D", "L": "length"}),
     "flat": (FlatEndMill, {"D": "D", "L": "length"}),
+    "cyl": (FlatEndMill, {"D": "D", "L": "length"}),  # a cylindrical (flank) cutter is a flat end mill
     "bull": (BullNoseEndMill, {"D": "D", "r": "r", "L": "length"}),
     "torus": (BullNoseEndMill, {"D": "D", "r": "r", "L": "length"}),
     "cone": (ConicalCutter, {"D": "D", "angle": "angle", "L": "length"}),

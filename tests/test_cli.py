@@ -178,3 +178,39 @@ def test_reff_command_bad_input(tmp_path):
     r = run("reff", "--example", "blade", "--tool", "bull:D=10,r=2", "--scallop", "7", "-o", tmp_path / "b")
     assert r.returncode == 1 and "scallop" in r.stderr
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+@needs_pyvista
+def test_flank_command(tmp_path):
+    out = tmp_path / "flank"
+    r = run("flank", "--example", "liu", "--tool", "cyl:D=20", "--rule", "0.5", "--setting", "optimum", "--side", "+1",
+            "--whole", "--tol", "0.5", "-o", out)
+    assert r.returncode == 0, r.stderr
+    rep = json.loads((out / "report.json").read_text())
+    st, e = rep["setting"], rep["interference"]
+    assert st["kind"] == "optimum" and abs(st["h0_mm"] + st["h1_mm"] - st["h_p_mm"]) < 1e-9
+    assert f"{st['gamma_deg']:.6f}" in r.stdout and f"{e['max_gouge_mm']:.6g}" in r.stdout
+    assert e["max_abs_mm"] < 0.05
+    w = rep["whole"]
+    assert w["envelope_fit"]["max_error_mm"] <= 1e-3 and w["n_rules"] >= 9
+    assert w["deviation_from_envelope"]["max_abs"] < 0.5
+    rows = (out / "toolpath.csv").read_text().splitlines()
+    assert len(rows) == w["n_rules"] + 1
+    assert sum(ln.startswith("GOTO/") for ln in (out / "toolpath.apt").read_text().splitlines()) == w["n_rules"] + 1
+    for name in ("envelope.step", "envelope.stl", "deviation.png"):
+        assert (out / name).is_file()
+    # the whole surface is not within 0.01 mm with R = 10: exit 2, outputs still written
+    r = run("flank", "--example", "liu", "--tool", "cyl:D=20", "--whole", "--tol", "0.01", "-o", tmp_path / "tight")
+    assert r.returncode == 2 and "NOT met" in r.stdout
+
+
+def test_flank_command_bad_input(tmp_path):
+    r = run("flank", "--example", "hypar", "--rule", "1.5", "-o", tmp_path / "a")
+    assert r.returncode == 1 and "outside [0, 1]" in r.stderr
+    r = run("flank", "--example", "hypar", "--tool", "cyl:D=200", "--setting", "optimum", "-o", tmp_path / "b")
+    assert r.returncode == 1 and "no admissible" in r.stderr
+    r = run("flank", ROOT / "example_parts" / "bezier5_patch.step", "-o", tmp_path / "c")
+    assert r.returncode == 1 and "not a ruled surface" in r.stderr
+    r = run("flank", "--example", "hypar", "--tool", "ball:D=10", "-o", tmp_path / "d")
+    assert r.returncode == 1 and "cylindrical" in r.stderr
+    assert not any((tmp_path / x).exists() for x in "abcd")

@@ -244,3 +244,39 @@ def radius_range(surface: RuledSurface, tolerance: float, *, kind: str = "optimu
     return {"feasible": True, "R_min_mm": float(R_lo), "R_max_mm": float(R_hi), "scan": [float(x) for x in grid],
             "iterations": its, "note": ("bounded by the scan range" if first == 0 or last == len(grid) - 1 else ""),
             "contiguous": all(ok[first:last + 1])}
+
+
+def envelope_deviation(path: FlankPath, env_surface, n: int = 121):
+    """Deviation of the nominal ruled surface from the swept envelope (mm): **gouge positive**.
+
+    The magnitude is the distance to the fitted envelope surface; where the closest envelope
+    point is on its start or end edge (the first or last tool position), the distance to that
+    whole cylinder is used instead of the distance to the edge curve. The sign says whether the
+    nominal point is inside the swept tool (gouge, +) or outside (undercut, -), decided by the
+    densely interpolated tool positions. Returns a :class:`~machsurf_cad.deviation.DeviationResult`.
+    """
+    from ..deviation import DeviationResult, deviation_stats, project_points
+
+    surf = path.surface
+    pts_grid, brute = position_deviation(path, n_u=n, n_v=n)
+    pts = pts_grid.reshape(-1, 3)
+    proj = project_points(env_surface, pts)
+    mag = np.linalg.norm(pts - proj.foot, axis=1)
+    t0, t1 = env_surface.bounds[2], env_surface.bounds[3]
+    at_end = proj.on_boundary & ((np.abs(proj.uv[:, 1] - t0) < 1e-9 * (t1 - t0)) |
+                                 (np.abs(proj.uv[:, 1] - t1) < 1e-9 * (t1 - t0)))
+    if np.any(at_end):
+        ends = []
+        for k in (0, -1):
+            w = pts - path.tip[k]
+            w = w - (w @ path.axis[k])[:, None] * path.axis[k]
+            ends.append(np.abs(np.linalg.norm(w, axis=1) - path.R))
+        mag = np.where(at_end, np.minimum(ends[0], ends[1]), mag)
+    sign = np.where(brute.ravel() < 0, 1.0, -1.0)
+    signed = sign * mag
+    uu, vv = np.meshgrid(np.linspace(path.u[0], path.u[-1], n), np.linspace(0, 1, n), indexing="ij")
+    uv = np.stack([uu.ravel(), vv.ravel()], 1)
+    stats = deviation_stats(signed, pts, uv)
+    stats["n_measured_to_end_positions"] = int(at_end.sum())
+    stats["sign_convention"] = "gouge positive (nominal inside the swept tool), undercut negative"
+    return DeviationResult(pts, signed, uv, proj.foot, proj.on_boundary, (n, n), None, path.step_tolerance, stats)

@@ -35,6 +35,8 @@ class RuledSurface:
     c1: Directrix
     u_range: tuple = (0.0, 1.0)
     name: str = "ruled"
+    source_deviation: float = 0.0
+    """Largest distance (mm) from the face this ruled surface was made from (0 when exact)."""
 
     # ------------------------------------------------------------------ builders
     @classmethod
@@ -50,12 +52,14 @@ class RuledSurface:
     def from_surface(cls, s: BSplineSurface, *, tolerance: float = 1e-6, name: str | None = None) -> "RuledSurface":
         """The ruled surface of a B-spline face, rules along v (or u, swapped).
 
-        A surface of degree 1 in one direction is ruled exactly. Otherwise the ruled surface
-        through its two boundary curves is measured against it; when they differ by more
-        than ``tolerance`` (mm) this raises :class:`InputError` with the largest deviation.
+        The ruled surface through the face's two boundary curves is measured against the face
+        (61 x 21 samples); when they differ by more than ``tolerance`` (mm) this raises
+        :class:`InputError` with the largest deviation. Pass a larger tolerance to accept a
+        ruled approximation; its measured deviation is kept in ``source_deviation``.
         """
         from ..geometry.builders import ruled_surface
 
+        best = np.inf
         for direction in ("v", "u"):
             surf = s if direction == "v" else _swap_uv(s)
             u0, u1, v0, v1 = surf.bounds
@@ -69,7 +73,10 @@ class RuledSurface:
             ref = rs.evaluate_grid(uu, (vv - v0) / (v1 - v0))
             dev = float(np.linalg.norm(pts - ref, axis=-1).max())
             if dev <= tolerance:
-                return cls.from_curves(c0, c1, name or s.name or "ruled")
+                r = cls.from_curves(c0, c1, name or s.name or "ruled")
+                return cls(r.c0, r.c1, r.u_range, r.name, dev)
+            best = dev if direction == "v" else min(best, dev)
+        dev = best
         raise InputError(f"face is not a ruled surface: it deviates by {dev:.4g} mm from the ruled surface through "
                          f"its boundary curves (tolerance {tolerance:g} mm)")
 
@@ -152,9 +159,10 @@ def _poly_directrix(coeffs):
     def f(u, order=2):
         u = np.asarray(u, dtype=float)
         out = np.empty(u.shape + (order + 1, 3))
-        for k in range(order + 1):
-            for i in range(3):
-                out[..., k, i] = coeffs[i][k](u)
+        with np.errstate(invalid="ignore", divide="ignore"):  # NaN outside a directrix's domain
+            for k in range(order + 1):
+                for i in range(3):
+                    out[..., k, i] = coeffs[i][k](u)
         return out
 
     return f

@@ -1,0 +1,151 @@
+"""Flank milling: closed forms, developable surfaces, tangency residuals, brute-force interference,
+whole-surface path and envelope, radius search, bad input."""
+
+import math
+
+import numpy as np
+import pytest
+
+from machsurf_cad.errors import InputError
+from machsurf_cad.flank import (NoAdmissibleSetting, RuledSurface, interference, minimax_setting, optimum_setting,
+                                rule_frame, standard_setting)
+from machsurf_cad.flank import ruled as R_
+from machsurf_cad.geometry import BSplineCurve, builders
+
+
+def _arc3d(radius, z, start=0.0, end=120.0):
+    a = builders.circular_arc(radius, start, end)
+    return BSplineCurve(a.degree, a.knots, a.mults, np.column_stack([a.poles, np.full(len(a.poles), z)]), a.weights)
+
+
+@pytest.mark.parametrize("shape", ["cylinder", "cone"])
+@pytest.mark.parametrize("side", [1, -1])
+def test_developable_surfaces_are_exact(shape, side):
+    top = 30.0 if shape == "cylinder" else 18.0
+    s = RuledSurface.from_curves(_arc3d(30.0, 0.0), _arc3d(top, 50.0))
+    st = optimum_setting(s, 0.5, 8.0, side=side)
+    assert interference(s, st).max_abs < 1e-6
+    assert rule_frame(s, 0.5, side).alpha0_deg < 1e-6
+
+
+def test_closed_forms_on_straight_directrices():
+    s = R_.hyperbolic_paraboloid(30.0, 80.0)
+    for R in (10.0, 40.0):
+        fr = rule_frame(s, 0.5)
+        a0 = math.radians(fr.alpha0_deg)
+        assert fr.alpha0_deg == pytest.approx(30.0, abs=1e-9)
+        e = interference(s, standard_setting(s, 0.5, R))
+        assert e.max_gouge == pytest.approx(R * (1 - math.cos(a0)), rel=1e-9)  # R (1 - cos alpha0)
+        assert e.max_undercut == pytest.approx(0.0, abs=1e-12)
+        e = interference(s, standard_setting(s, 0.5, R, distributed=False))
+        assert e.max_gouge == pytest.approx(R * (1 - math.cos(2 * a0)), rel=1e-9)  # tangent: the full angle
+
+
+def test_tangency_conditions_hold_at_the_solution():
+    for s, u_p, R in ((R_.liu(), 11.507, 10.0), (R_.hyperbolic_paraboloid(), 0.5, 40.0), (R_.eq18(), 0.4, 10.0)):
+        st = optimum_setting(s, u_p, R)
+        q, a = st.q, st.a
+
+        def dist(p):
+            w = p - q
+            return np.linalg.norm(w - (w @ a) * a)
+
+        for key, c in (("u0", s.c0), ("u1", s.c1)):
+            u = st.contacts[key]
+            h = 1e-6
+            d0 = dist(c(np.array([u]), 0)[0, 0])
+            assert abs(d0 - R) < 1e-9
+            slope = (dist(c(np.array([u + h]), 0)[0, 0]) - dist(c(np.array([u - h]), 0)[0, 0])) / (2 * h)
+            assert abs(slope) < 1e-6 * max(1.0, np.linalg.norm(c(np.array([u]), 1)[0, 1]))
+        # the rule touches the cylinder at M2: the rule line is at distance R from the axis
+        fr = st.frame
+        m2 = st.contacts["M2"]
+        assert abs(dist(m2) - R) < 1e-9
+        cross = np.cross(fr.z1, a)
+        line_dist = abs((fr.p0 - q) @ cross) / np.linalg.norm(cross)
+        assert abs(line_dist - R) < 1e-9
+
+
+def test_interference_matches_brute_force():
+    s = R_.liu()
+    for kind in ("standard", "optimum"):
+        st = standard_setting(s, 11.507, 10.0) if kind == "standard" else optimum_setting(s, 11.507, 10.0)
+        e = interference(s, st, n_v=51)
+        # brute force: dense points of the band, distance to the axis minus R, min over u per v
+        su = np.linalg.norm(s.derivatives(np.full(51, 11.507), e.v)[1], axis=1)
+        best = np.empty(51)
+        for i, (v, du) in enumerate(zip(e.v, 10.0 / su)):
+            u = np.linspace(max(0, 11.507 - du), min(23.014, 11.507 + du), 200001)
+            p = s.evaluate(u, np.full(u.shape, v))
+            w = p - st.q
+            w = w - (w @ st.a)[:, None] * st.a
+            best[i] = np.linalg.norm(w, axis=1).min() - 10.0
+        assert np.abs(best - e.e).max() < 1e-6
+
+
+def test_optimum_beats_standard_tenfold_on_the_hyperbolic_paraboloid():
+    from machsurf_cad.flank.study import ratio_curve
+
+    c = ratio_curve(30.0, 80.0, [5.0, 10.0, 20.0, 40.0, 60.0, 78.0])
+    assert min(c["ratio"]) >= 10.0
+    s = R_.hyperbolic_paraboloid(30.0, 80.0)
+    optimum_setting(s, 0.5, 79.9)  # below h_p / (2 sin alpha0) = 80 mm: exists
+    with pytest.raises(NoAdmissibleSetting, match="no admissible"):
+        optimum_setting(s, 0.5, 81.0)
+
+
+def test_minimax_is_no_worse_than_optimum():
+    s = R_.liu()
+    o = interference(s, optimum_setting(s, 11.507, 10.0)).max_abs
+    m = interference(s, minimax_setting(s, 11.507, 10.0)).max_abs
+    assert m <= o + 1e-9
+
+
+def test_whole_surface_path_envelope_and_its_deviation():
+    from machsurf_cad.flank.path import envelope_deviation, envelope_surface, flank_path, position_deviation
+
+    s = R_.hyperbolic_paraboloid(20.0, 80.0)
+    path = flank_path(s, 15.0, "optimum", tolerance=0.01)
+    assert len(path.settings) >= 9 and path.axis.shape == (len(path.settings), 3)
+    assert np.allclose(np.linalg.norm(path.axis, axis=1), 1.0)
+    env = envelope_surface(path, tolerance=1e-3)
+    assert env.max_error <= 1e-3
+    # the envelope lies at R from the motion's axes: sample it and check against the nearest position
+    X = env.surface.evaluate_grid(np.linspace(0, path.length, 7), np.linspace(path.u[0], path.u[-1], 9))
+    dev = envelope_deviation(path, env.surface, n=41)
+    pts, brute = position_deviation(path, n_u=41, n_v=41, refine=60)  # dense positions: near-continuous motion
+    inner = ~dev.on_boundary
+    # the map's magnitude (distance to the envelope) matches the brute-force swept-volume distance
+    assert np.abs(np.abs(dev.signed[inner]) - np.abs(brute.ravel()[inner])).max() < 5e-3
+    assert dev.stats["max"] == pytest.approx(-min(brute.min(), 0.0), abs=5e-3)
+    assert X.shape == (7, 9, 3)
+
+
+def test_radius_range_brackets_the_tolerance():
+    from machsurf_cad.flank.path import radius_range, whole_surface_error
+
+    s = R_.hyperbolic_paraboloid(30.0, 80.0)
+    rr = radius_range(s, 0.1, kind="optimum", r_min=1.0, r_max=100.0, n_scan=10, n_rules=5, rel_precision=1e-2)
+    assert rr["feasible"] and rr["iterations"]
+    assert whole_surface_error(s, rr["R_max_mm"], "optimum", 1, 5) <= 0.1
+    assert whole_surface_error(s, rr["R_max_mm"] * 1.03, "optimum", 1, 5) > 0.1
+
+
+def test_bad_inputs():
+    s = R_.hyperbolic_paraboloid()
+    with pytest.raises(InputError, match="outside"):
+        optimum_setting(s, 1.5, 10.0)
+    crossing = RuledSurface.from_curves(builders.line_segment([0, 0, 0], [10, 0, 0]),
+                                        builders.line_segment([0, 0, 5], [10, 0, -5]))
+    with pytest.raises(InputError, match="zero length"):
+        standard_setting(crossing, 0.5, 5.0)
+    from machsurf_cad import examples
+
+    with pytest.raises(InputError, match="not a ruled surface: it deviates by"):
+        RuledSurface.from_surface(examples.bezier5_patch())
+    approx = RuledSurface.from_surface(examples.bezier5_patch(), tolerance=50.0)
+    assert 0 < approx.source_deviation < 50.0
+    exact = RuledSurface.from_surface(examples.liu_surface())
+    assert exact.source_deviation < 1e-9
+    with pytest.raises(InputError, match="tool radius"):
+        optimum_setting(s, 0.5, -1.0)
