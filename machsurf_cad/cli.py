@@ -387,8 +387,12 @@ def cmd_flank(args) -> int:
     st_ = tool_setting(surf, u_p, R, args.setting, side=args.side)
     t_set = time.perf_counter() - t0
     e = interference(surf, st_)
+    from .flank import compare_settings
+
+    comparison = compare_settings(surf, u_p, R, side=args.side)
     rep = {"command": "flank", "surface": desc, "tool": cutter.to_dict(), "R_mm": R, "rule": args.rule, "u_p": u_p,
-           "setting": st_.report(), "interference": e.report(), "time_setting_s": t_set}
+           "setting": st_.report(), "interference": e.report(), "time_setting_s": t_set,
+           "all_settings_on_this_rule": comparison}
     _say(f"surface: {desc}; rule u = {u_p:.6g} (fraction {args.rule:g}), h_p = {st_.frame.h_p:.4f} mm, "
          f"alpha0 = {st_.frame.alpha0_deg:.4f} deg; tool {cutter.spec()} (R = {R:g} mm), side {args.side:+d}")
     _say(f"{args.setting}: gamma = {st_.gamma_deg:.6f} deg, h0 = {st_.h0:.6f} mm, h1 = {st_.h1:.6f} mm"
@@ -399,6 +403,8 @@ def cmd_flank(args) -> int:
     w = e.worst()
     _say(f"interference: max gouge {e.max_gouge:.6g} mm, max undercut {e.max_undercut:.6g} mm, worst at v = "
          f"{w['v']:.4f}, xyz ({', '.join(f'{x:.4f}' for x in w['xyz'])}) mm")
+    _say("all settings on this rule: " + "; ".join(
+        f"{k} {v['max_abs_mm']:.4g} mm" if "max_abs_mm" in v else f"{k} not admissible" for k, v in comparison.items()))
     st = Staging(args.out)
     try:
         files = []
