@@ -10,7 +10,7 @@ import json
 import platform
 import sys
 
-from . import bench_eval, bench_flank, bench_offset, bench_reff
+from . import bench_envelope, bench_eval, bench_flank, bench_offset, bench_reff
 
 
 def main(argv=None) -> int:
@@ -26,6 +26,10 @@ def main(argv=None) -> int:
         rows.append(row)
         _print_row(row, header=False)
     print("* per-point OCCT time measured on a 256^2 sub-grid and scaled to the full grid")
+    for row in bench_envelope.envelope_rows(quick=args.quick):
+        rows.append(row)
+        _print_row(row, header=False)
+    print("* brute force: 10 positions measured (2000 x 400 points each) and scaled to 200")
     for row in bench_flank.flank_rows(quick=args.quick):
         rows.append(row)
         _print_row(row, header=False)

@@ -486,6 +486,95 @@ def _write_flank_cl(st, path, cutter):
     st.path("toolpath.apt").write_text("\n".join(lines) + "\n")
 
 
+def cmd_envelope(args) -> int:
+    import numpy as np
+
+    from .cutters import parse_cutter
+    from .envelope import make_envelope
+    from .envelope.examples import EXAMPLES, load_path
+    from .envelope.passes import build_chain, max_theta
+
+    t0 = time.perf_counter()
+    cutter = parse_cutter(args.tool)
+    if args.path:
+        motion = load_path(args.path)
+    else:
+        name = args.example or "sine"
+        if name not in EXAMPLES:
+            raise InputError(f"unknown example motion {name!r}; known: {', '.join(sorted(EXAMPLES))}")
+        motion = EXAMPLES[name]()
+    if args.passes < 1:
+        raise InputError("--passes must be >= 1")
+    try:
+        thetas = [float(x) for x in str(args.theta).split(",")]
+    except ValueError:
+        raise InputError(f"--theta must be degrees, e.g. 0 or 0,15,-10; got {args.theta!r}") from None
+    for th in thetas:
+        if not -180 < th < 180:
+            raise InputError(f"theta {th:g} deg is outside (-180, 180)")
+    first = make_envelope(motion, cutter, side=args.side)
+    chain = build_chain(first, args.passes, continuity=args.continuity,
+                        theta_deg=thetas if len(thetas) > 1 else thetas[0], tolerance=args.tol)
+    rep = chain.report()
+    rep.update({"command": "envelope", "tool": cutter.to_dict(), "motion": motion.label})
+    _say(f"tool {cutter.spec()}, motion: {motion.label}; {args.passes} pass(es), {args.continuity.upper()}, "
+         f"theta {args.theta} deg")
+    for prow in rep["passes"]:
+        f = prow["fit"]
+        _say(f"{prow['name']}: {f['poles'][0]}x{f['poles'][1]} poles, fit error {f['max_error_mm']:.3g} mm "
+             f"(tol {args.tol:g})")
+    for srow in rep["seams"]:
+        ex, fi = srow["exact"], srow["fitted"]
+        _say(f"seam {srow['between'][0] + 1}-{srow['between'][1] + 1}: exact gap {ex['max_gap_mm']:.3g} mm, angle "
+             f"{ex['max_normal_angle_deg']:.3g} deg; fitted faces gap {fi['max_gap_mm']:.3g} mm, angle "
+             f"{fi['max_normal_angle_deg']:.3g} deg")
+    if args.passes > 1 and not args.no_theta_scan:
+        rep["max_theta_deg"] = max_theta(first, continuity=args.continuity)
+        _say(f"largest |theta| without fold-back or loss of envelope (5 deg steps): {rep['max_theta_deg']:g} deg")
+    st = Staging(args.out)
+    try:
+        from .geometry.face import Face
+        from .occ import write_step, write_stl
+
+        faces = [Face(f.surface, name=e.name) for e, f in zip(chain.passes, chain.fits)]
+        write_step(st.path("envelopes.step"), faces)
+        write_stl(st.path("envelopes.stl"), faces, linear_deflection=args.tol * 10)
+        files = ["envelopes.step", "envelopes.stl"]
+        if not args.no_render and args.passes > 1:
+            from .viz import render_zebra
+
+            other = "g0" if args.continuity == "g1" else "g1"
+            alt = build_chain(first, args.passes, continuity=other,
+                              theta_deg=thetas if len(thetas) > 1 else thetas[0], tolerance=args.tol)
+
+            def panel(ch):
+                out = []
+                for fit in ch.fits:
+                    s = fit.surface
+                    us, vs = s.sample_grid(60, 120)
+                    d = s.derivatives_grid(us, vs, 1)
+                    nn = np.cross(d.su, d.sv)
+                    out.append((d.point, nn / np.linalg.norm(nn, axis=-1, keepdims=True)))
+                return out
+
+            g1 = chain if args.continuity == "g1" else alt
+            g0 = alt if args.continuity == "g1" else chain
+            ang = max(s["fitted"]["max_normal_angle_deg"] for s in g0.report()["seams"])
+            render_zebra([(f"G0 (crease up to {ang:.3g} deg)", panel(g0)),
+                          (f"G1 (seam angle {max(s['fitted']['max_normal_angle_deg'] for s in g1.report()['seams']):.2g}"
+                           " deg)", panel(g1))], st.path("zebra.png"))
+            files.append("zebra.png")
+        rep["files"] = files + ["report.json"]
+        rep["time_s_total"] = time.perf_counter() - t0
+        _write_json(st.path("report.json"), rep)
+        st.commit()
+    except BaseException:
+        st.abort()
+        raise
+    _say(f"outputs in {args.out}/: {', '.join(rep['files'])}")
+    return EXIT_OK
+
+
 def cmd_demo(args) -> int:
     from .demo import run_demo
 
@@ -573,6 +662,21 @@ def build_parser() -> argparse.ArgumentParser:
                    help="smallest and largest R keeping the whole surface within TOL mm")
     f.add_argument("-o", "--out", default="out/flank", help="output folder")
     f.set_defaults(func=cmd_flank)
+
+    v = sub.add_parser("envelope", help="swept envelopes of a rotational tool and G1/G0 adjacent passes")
+    v.add_argument("--tool", required=True, help="cyl:D=.. | cone:D=..,angle=.. | drum:D=..,Rp=..,L=.. | "
+                                                 "barrel:... | ball:D=.. (mm, degrees)")
+    v.add_argument("--path", help="JSON path file: {points: [[x,y,z]...], axes: [[i,j,k]...]} (tip points, mm)")
+    v.add_argument("--example", help="example motion instead of --path: sine (default), line, helix")
+    v.add_argument("--passes", type=int, default=2, help="number of passes (default 2)")
+    v.add_argument("--continuity", choices=["g0", "g1"], default="g1", help="between passes (default g1)")
+    v.add_argument("--theta", default="0", help="rotation of each next axis about n1, degrees (one, or one per seam)")
+    v.add_argument("--side", type=int, default=1, help="envelope sheet: +1 (side of S_a x S_t) or -1")
+    v.add_argument("--tol", type=float, default=1e-3, help="fit tolerance per pass, mm (default 0.001)")
+    v.add_argument("--no-theta-scan", action="store_true", help="skip the scan of the admissible theta range")
+    v.add_argument("--no-render", action="store_true", help="skip the zebra picture")
+    v.add_argument("-o", "--out", default="out/envelope", help="output folder")
+    v.set_defaults(func=cmd_envelope)
     return p
 
 

@@ -214,3 +214,38 @@ def test_flank_command_bad_input(tmp_path):
     r = run("flank", "--example", "hypar", "--tool", "ball:D=10", "-o", tmp_path / "d")
     assert r.returncode == 1 and "cylindrical" in r.stderr
     assert not any((tmp_path / x).exists() for x in "abcd")
+
+
+@needs_pyvista
+def test_envelope_command(tmp_path):
+    from machsurf_cad.occ import read_step_faces
+
+    out = tmp_path / "env"
+    r = run("envelope", "--tool", "cone:D=10,angle=10", "--example", "sine", "--passes", "3", "--continuity", "g1",
+            "--theta", "0", "--tol", "0.001", "-o", out)
+    assert r.returncode == 0, r.stderr
+    rep = json.loads((out / "report.json").read_text())
+    assert len(rep["passes"]) == 3 and len(rep["seams"]) == 2
+    for p in rep["passes"]:
+        assert p["fit"]["max_error_mm"] <= 0.001
+    for s in rep["seams"]:
+        assert s["exact"]["max_gap_mm"] < 1e-6 and s["exact"]["max_normal_angle_deg"] < 1e-4
+        assert f"{s['exact']['max_gap_mm']:.3g}" in r.stdout
+    assert 0 < rep["max_theta_deg"] < 90
+    assert [f.name for f in read_step_faces(out / "envelopes.step")] == ["pass_1", "pass_2", "pass_3"]
+    assert (out / "zebra.png").stat().st_size > 10000 and (out / "envelopes.stl").is_file()
+
+
+def test_envelope_command_bad_input(tmp_path):
+    bad = tmp_path / "path.json"
+    bad.write_text('{"points": [[0,0,0],[1,0,0],[1,0,0],[2,0,0],[3,0,0]]}')
+    r = run("envelope", "--tool", "cyl:D=10", "--path", bad, "-o", tmp_path / "a")
+    assert r.returncode == 1 and "cusp" in r.stderr
+    bad.write_text('{"points": [[0,0,0],[1,0,0],[2,1,0],[3,0,0]], "axis": [0, 0, 0]}')
+    r = run("envelope", "--tool", "cyl:D=10", "--path", bad, "-o", tmp_path / "b")
+    assert r.returncode == 1 and "zero-length axis" in r.stderr
+    r = run("envelope", "--tool", "cone:D=10,angle=10", "--theta", "250", "-o", tmp_path / "c")
+    assert r.returncode == 1 and "theta" in r.stderr
+    r = run("envelope", "--tool", "cone:D=10,angle=10", "--theta", "120", "--passes", "2", "-o", tmp_path / "d")
+    assert r.returncode == 1 and ("folds back" in r.stderr or "no real envelope" in r.stderr)
+    assert not any((tmp_path / x).exists() for x in "abcd")

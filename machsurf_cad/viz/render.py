@@ -175,3 +175,39 @@ def render_scalar_map(points, values, png_path, *, title: str = "", label: str =
     if vtp_path is not None:
         mesh.save(str(vtp_path))
     return png_path
+
+
+def zebra_values(normals, *, light=(0.3, 0.2, 1.0), stripes: int = 24) -> np.ndarray:
+    """Reflection-line (zebra) value in [0, 1] per normal: stripes of the angle to a light direction."""
+    L = np.asarray(light, float)
+    L = L / np.linalg.norm(L)
+    ang = np.arccos(np.clip(np.abs(np.asarray(normals) @ L), -1, 1))
+    return 0.5 * (1 + np.sign(np.sin(stripes * ang)))
+
+
+def render_zebra(panels, png_path, *, window_size=(1600, 800), stripes: float | None = None,
+                 light=(0.3, 0.2, 1.0)) -> Path:
+    """Side-by-side zebra renderings. ``panels`` is a list of ``(title, [(points (nu,nv,3), normals), ...])``:
+    continuous stripes across a seam show G1, kinked stripes show a G0 crease. By default the stripe
+    density is set so that about 12 stripes cover the range of normal directions."""
+    n = len(panels)
+    if stripes is None:
+        L = np.asarray(light, float) / np.linalg.norm(light)
+        angs = np.concatenate([np.arccos(np.clip(np.abs(np.asarray(nrm).reshape(-1, 3) @ L), -1, 1))
+                               for _, surfs in panels for _, nrm in surfs])
+        stripes = 12 * np.pi / max(float(np.ptp(angs)), 1e-6)
+    p = pv.Plotter(off_screen=True, window_size=list(window_size), shape=(1, n))
+    for k, (title, surfaces) in enumerate(panels):
+        p.subplot(0, k)
+        p.set_background("lightsteelblue")
+        for pts, nrm in surfaces:
+            mesh = grid_polydata(pts)
+            mesh.point_data["zebra"] = zebra_values(np.asarray(nrm).reshape(-1, 3), light=light, stripes=stripes)
+            p.add_mesh(mesh, scalars="zebra", cmap="gray", clim=[0, 1], show_scalar_bar=False, lighting=False)
+        p.add_text(title, position="upper_left", font_size=12, color="black")
+        p.view_isometric()
+    png_path = Path(png_path)
+    png_path.parent.mkdir(parents=True, exist_ok=True)
+    p.screenshot(str(png_path))
+    p.close()
+    return png_path
