@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench venv clean np124
+.PHONY: demo test bench venv clean np124 workbench-install workbench-uninstall
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -28,6 +28,16 @@ np124:
 	test -x .venv-np124/bin/python || $(PY) -m venv .venv-np124
 	.venv-np124/bin/python -m pip install --quiet "numpy==1.24.4" "scipy==1.10.1" pytest
 	.venv-np124/bin/python -m pytest -p no:cacheprovider tests/test_core_np124.py
+
+# the FreeCAD add-on, linked into the current user's Mod folder (FreeCAD 0.20+ on Linux)
+FC_MOD ?= $(HOME)/.local/share/FreeCAD/Mod
+workbench-install:
+	mkdir -p $(FC_MOD)
+	ln -sfn $(CURDIR)/workbench $(FC_MOD)/machsurf
+	@echo "linked $(FC_MOD)/machsurf -> $(CURDIR)/workbench; restart FreeCAD and pick the machsurf workbench"
+
+workbench-uninstall:
+	rm -f $(FC_MOD)/machsurf
 
 clean:
 	rm -rf out .pytest_cache build *.egg-info

@@ -1,0 +1,48 @@
+"""Runs inside the FreeCAD GUI under Xvfb: activates the workbench, selects a face, runs the command,
+saves a screenshot, exports STEP, writes the figures to MACHSURF_FC_OUT and exits."""
+
+import json
+import os
+import traceback
+
+out_path = os.environ["MACHSURF_FC_OUT"]
+root = os.environ["MACHSURF_ROOT"]
+result = {"ok": False}
+try:
+    import FreeCAD
+    import FreeCADGui as Gui
+    import Part
+
+    Gui.activateWorkbench("MachsurfWorkbench")
+    result["workbench"] = Gui.activeWorkbench().name()
+    doc = FreeCAD.newDocument("gui_check")
+    part = doc.addObject("Part::Feature", "Block")
+    part.Shape = Part.read(os.path.join(root, "example_parts", "freeform_block.step"))
+    doc.recompute()
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(part, "Face1")
+    Gui.runCommand("Machsurf_MachiningSurface")
+    doc.recompute()
+    ms = next(o for o in doc.Objects if o.Name.startswith("MachiningSurface"))
+    result.update({"valid": ms.isValid(), "status": ms.Status, "max_s1": ms.MaxErrorS1, "faces": len(ms.Shape.Faces),
+                   "colours": [list(c) for c in ms.ViewObject.DiffuseColor]})
+    part.ViewObject.Transparency = 60
+    view = Gui.ActiveDocument.ActiveView
+    view.viewIsometric()
+    Gui.SendMsgToActiveView("ViewFit")
+    Gui.updateGui()
+    png = os.path.join(os.path.dirname(out_path), "freecad_gui.png")
+    view.saveImage(png, 1200, 900, "White")
+    result["png"] = png
+    from freecad.machsurf.commands import ExportStepCommand
+
+    step = os.path.join(os.path.dirname(out_path), "freecad_export.step")
+    ExportStepCommand().Activated(step)
+    result["step_bytes"] = os.path.getsize(step)
+    result["ok"] = True
+except Exception:
+    result["error"] = traceback.format_exc()
+finally:
+    with open(out_path, "w") as fh:
+        json.dump(result, fh, indent=1, default=str)
+    os._exit(0)

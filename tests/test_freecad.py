@@ -1,0 +1,83 @@
+"""The FreeCAD workbench, headless (FreeCADCmd) and in the GUI under Xvfb, with FreeCAD's own Python.
+
+FreeCADCmd exits 0 even on an uncaught exception, so the scripts write every figure to a JSON file
+and these tests read it. The add-on is installed the way a user installs it: linked into the Mod
+folder of a throwaway $HOME.
+"""
+
+import json
+import os
+import shutil
+import subprocess
+
+import pytest
+
+from conftest import ROOT
+
+FREECADCMD = shutil.which("freecadcmd") or shutil.which("FreeCADCmd")
+FREECAD = shutil.which("freecad") or shutil.which("FreeCAD")
+XVFB = shutil.which("xvfb-run")
+
+pytestmark = pytest.mark.skipif(FREECADCMD is None, reason="FreeCAD is not installed (apt-get install freecad)")
+
+
+def _home(tmp_path):
+    mod = tmp_path / "home" / ".local" / "share" / "FreeCAD" / "Mod"
+    mod.mkdir(parents=True)
+    (mod / "machsurf").symlink_to(ROOT / "workbench")
+    return tmp_path / "home"
+
+
+def _run(cmd, tmp_path, script, timeout=600):
+    out = tmp_path / "result.json"
+    env = dict(os.environ, HOME=str(_home(tmp_path)), MACHSURF_FC_OUT=str(out), MACHSURF_ROOT=str(ROOT),
+               QTWEBENGINE_DISABLE_SANDBOX="1")
+    env.pop("PYTHONPATH", None)  # FreeCAD's Python must not pick up the venv's packages
+    subprocess.run(cmd + [str(ROOT / "tests" / "freecad" / script)], cwd=tmp_path, env=env, timeout=timeout,
+                   stdin=subprocess.DEVNULL, capture_output=True, text=True)
+    assert out.is_file(), "the FreeCAD script wrote no result"
+    res = json.loads(out.read_text())
+    assert res["ok"], res.get("error")
+    return res
+
+
+def test_features_recompute_headless(tmp_path):
+    r = _run([FREECADCMD], tmp_path, "headless_check.py")
+    assert r["no_ocp_in_process"]  # machsurf_cad's numpy core only: no cadquery/OCP in FreeCAD's process
+    rc = r["recompute"]
+    assert rc["valid"] and rc["status"] == "ok" and rc["n_faces"] == 2
+    assert 0 < rc["max_s1"] <= 1e-3 and 0 < rc["max_s2"] <= 1e-3
+    cmp = r["compare_direct"]
+    assert cmp["max_dev"] < 1e-9  # the feature's faces equal machsurf_cad's direct result
+    assert cmp["wires"] == [2, 2]  # trimmed like the nominal face (outer loop + hole)
+    assert rc["max_s1"] == pytest.approx(cmp["direct_max_s1"], rel=1e-9)
+    ct = r["change_tool"]
+    assert ct["valid"] and ct["report_tool"] == "ball:D=10" and ct["max_s1"] != rc["max_s1"]
+    of = r["other_features"]
+    assert of["reff_valid"] and 2.0 <= of["reff_mean"]
+    assert of["env_valid"] and of["env_faces"] == 2 and of["env_gap"] < 1e-3
+    bad = r["bad_input"]
+    assert not bad["edge_valid"] and "not a face" in bad["edge_status"]
+    assert bad["planar_valid"] and bad["planar_faces"] == 2  # a plane is converted to NURBS and machined
+    assert not bad["tight_valid"] and "did not reach" in bad["tight_status"]
+    ro = r["reopen"]
+    assert ro["valid"] and ro["proxy"] == "MachiningSurfaceFeature" and ro["n_faces"] == 2
+    assert ro["max_s1"] == pytest.approx(rc["max_s1"], rel=1e-9)
+    ds = r["deleted_source"]
+    assert not ds["valid"] and "deleted" in ds["status"] and ds["n_objects"] >= 5
+
+
+@pytest.mark.skipif(FREECAD is None or XVFB is None, reason="FreeCAD GUI or xvfb-run is not installed")
+def test_gui_command_on_a_selected_face(tmp_path):
+    r = _run([XVFB, "-a", "-s", "-screen 0 1600x1200x24", FREECAD], tmp_path, "gui_check.py")
+    assert r["workbench"] == "MachsurfWorkbench"
+    assert r["valid"] and r["faces"] == 2 and 0 < r["max_s1"] <= 1e-3
+    # colours follow the measured error over the tolerance: red share = error / tolerance (blue = within)
+    assert r["colours"][0][0] == pytest.approx(r["max_s1"] / 1e-3, abs=1e-6)
+    assert all(0 <= c[0] <= 1 and abs(c[0] + c[2] - 1) < 1e-6 for c in r["colours"])
+    assert r["step_bytes"] > 10000
+    from PIL import Image
+    import numpy as np
+
+    img = np.asarray(Image.open(r["png"]).convert("RGB"))
+    assert img.shape[:2] == (900, 1200) and len(np.unique(img.reshape(-1, 3), axis=0)) > 100

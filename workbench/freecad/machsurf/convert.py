@@ -1,0 +1,94 @@
+"""FreeCAD Part geometry <-> machsurf_cad numpy types, as B-spline arrays only."""
+
+import numpy as np
+
+import FreeCAD
+import Part
+
+from machsurf_cad.errors import InputError
+from machsurf_cad.geometry import BSplineCurve, BSplineSurface
+from machsurf_cad.geometry.face import Face
+
+
+def _surface_arrays(bs, name=""):
+    poles = np.array([[[p.x, p.y, p.z] for p in row] for row in bs.getPoles()])
+    w = np.array(bs.getWeights(), dtype=float)
+    rational = bool(bs.isURational() or bs.isVRational())
+    return BSplineSurface(bs.UDegree, bs.VDegree, bs.getUKnots(), bs.getUMultiplicities(), bs.getVKnots(),
+                          bs.getVMultiplicities(), poles, w if rational else None, bool(bs.isUPeriodic()),
+                          bool(bs.isVPeriodic()), name)
+
+
+def face_to_numpy(face, name="F"):
+    """A Part.Face (any surface type: converted to NURBS) as a machsurf_cad Face with its trimming."""
+    if not isinstance(face, Part.Face):
+        raise InputError("select a face (not an edge, vertex or solid)")
+    f = face
+    if not isinstance(f.Surface, Part.BSplineSurface):
+        f = face.toNurbs().Faces[0]
+    surf = _surface_arrays(f.Surface, name)
+    u0, u1, v0, v1 = f.ParameterRange
+    loops = []
+    outer = f.OuterWire
+    wires = [outer] + [w for w in f.Wires if not w.isSame(outer)]
+    for w in wires:
+        loop = []
+        for e in w.OrderedEdges if hasattr(w, "OrderedEdges") else w.Edges:
+            c2d, first, last = f.curveOnSurface(e)
+            bs = c2d.toBSpline(first, last)
+            if bs.isPeriodic():
+                bs.setNotPeriodic()  # plain clamped knots: the form machsurf_cad's trimming loops use
+            poles = np.array([[p.x, p.y] for p in bs.getPoles()])
+            weights = np.array(bs.getWeights(), dtype=float)
+            c = BSplineCurve(bs.Degree, bs.getKnots(), bs.getMultiplicities(), poles,
+                             weights if bs.isRational() else None, False)
+            if e.Orientation == "Reversed":
+                c = BSplineCurve(c.degree, (c.knots[-1] + c.knots[0]) - c.knots[::-1], c.mults[::-1], c.poles[::-1],
+                                 None if c.weights is None else c.weights[::-1])
+            loop.append(c)
+        loops.append(loop)
+    sb = surf.bounds
+    natural = len(loops) == 1 and all(abs(a - b) < 1e-9 for a, b in zip((u0, u1, v0, v1), sb)) and len(loops[0]) == 4
+    return Face(surf, () if natural else tuple(tuple(lp) for lp in loops), name, -1,
+                f.Orientation == "Reversed", type(face.Surface).__name__, (u0, u1, v0, v1), float(face.Area))
+
+
+def surface_to_part(s):
+    """A Part.BSplineSurface from a machsurf_cad BSplineSurface (buildFromPolesMultsKnots)."""
+    bs = Part.BSplineSurface()
+    poles = [[FreeCAD.Vector(*map(float, p)) for p in row] for row in s.poles]
+    weights = None if s.weights is None else [[float(w) for w in row] for row in s.weights]
+    args = (poles, [int(m) for m in s.mults_u], [int(m) for m in s.mults_v], [float(k) for k in s.knots_u],
+            [float(k) for k in s.knots_v], bool(s.periodic_u), bool(s.periodic_v), int(s.degree_u), int(s.degree_v))
+    if weights is None:
+        bs.buildFromPolesMultsKnots(*args)
+    else:
+        bs.buildFromPolesMultsKnots(*args, weights)
+    return bs
+
+
+def face_to_part(face):
+    """A Part.Face from a machsurf_cad Face: natural bounds, or the same trimming loops."""
+    bs = surface_to_part(face.surface)
+    if not face.loops:
+        u0, u1, v0, v1 = face.surface.bounds
+        return bs.toShape(u0, u1, v0, v1)
+    wires = []
+    for loop in face.loops:
+        edges = []
+        for c in loop:
+            g = Part.Geom2d.BSplineCurve2d()
+            poles = [FreeCAD.Base.Vector2d(float(x), float(y)) for x, y in c.poles]
+            if c.weights is None:
+                g.buildFromPolesMultsKnots(poles, [int(m) for m in c.mults], [float(k) for k in c.knots], False,
+                                           int(c.degree))
+            else:
+                g.buildFromPolesMultsKnots(poles, [int(m) for m in c.mults], [float(k) for k in c.knots], False,
+                                           int(c.degree), [float(w) for w in c.weights])
+            edges.append(g.toShape(bs, float(c.knots[0]), float(c.knots[-1])))
+        wires.append(Part.Wire(edges))
+    f = Part.Face(bs, wires[0])
+    for w in wires[1:]:
+        f.cutHoles([w]) if hasattr(f, "cutHoles") else None
+    f.validate()
+    return f
