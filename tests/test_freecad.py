@@ -75,7 +75,7 @@ def test_gui_command_on_a_selected_face(tmp_path):
     # colours follow the measured error over the tolerance: red share = error / tolerance (blue = within)
     assert r["colours"][0][0] == pytest.approx(r["max_s1"] / 1e-3, abs=1e-6)
     assert all(0 <= c[0] <= 1 and abs(c[0] + c[2] - 1) < 1e-6 for c in r["colours"])
-    assert r["step_bytes"] > 10000
+    assert r["step_bytes"] > 10000 and r["step_names"] == ["S1_guiding", "S2_orientation"]
     from PIL import Image
     import numpy as np
 

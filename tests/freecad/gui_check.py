@@ -39,6 +39,8 @@ try:
     step = os.path.join(os.path.dirname(out_path), "freecad_export.step")
     ExportStepCommand().Activated(step)
     result["step_bytes"] = os.path.getsize(step)
+    text = open(step, errors="replace").read()
+    result["step_names"] = [n for n in ("S1_guiding", "S2_orientation") if n in text]
     result["ok"] = True
 except Exception:
     result["error"] = traceback.format_exc()

@@ -79,9 +79,32 @@ class ExportStepCommand:
         if path is None:
             path, _ = QtWidgets.QFileDialog.getSaveFileName(None, "Export STEP", "", "STEP (*.step *.stp)")
         if path:
-            Import.export(objs, path)
-            FreeCAD.Console.PrintMessage(f"machsurf: wrote {len(objs)} object(s) to {path}\n")
+            # one named object per result face (S1_guiding, S2_orientation, pass_k, ...): the STEP carries
+            # the names as product names, which CAM systems show
+            tmp = []
+            for o in objs:
+                names = _face_names(o)
+                for i, f in enumerate(o.Shape.Faces):
+                    t = doc.addObject("Part::Feature", "machsurf_export")
+                    t.Shape = f
+                    t.Label = f"{o.Label}_{names[i] if i < len(names) else 'face' + str(i + 1)}"
+                    tmp.append(t)
+            try:
+                Import.export(tmp, path)
+            finally:
+                for t in tmp:
+                    doc.removeObject(t.Name)
+            FreeCAD.Console.PrintMessage(f"machsurf: wrote {len(tmp)} named face(s) to {path}\n")
         return path
+
+
+def _face_names(obj):
+    kind = obj.Proxy.__class__.__name__
+    if kind == "MachiningSurfaceFeature":
+        return ["S1_guiding", "S2_orientation"]
+    if kind == "EnvelopeFeature":
+        return [f"pass_{i + 1}" for i in range(len(obj.Shape.Faces))]
+    return ["face"]
 
 
 def register():
