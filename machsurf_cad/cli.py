@@ -30,7 +30,11 @@ class _Parser(argparse.ArgumentParser):
 
 
 class Staging:
-    """Write outputs into a hidden sibling folder, move them into ``out_dir`` on success."""
+    """Write outputs into a hidden sibling folder, move them into ``out_dir`` on success.
+
+    Use as a context manager: the files move into place when the block ends normally and are
+    removed when it raises, so a failed command leaves nothing half-written.
+    """
 
     def __init__(self, out_dir):
         self.out_dir = Path(out_dir)
@@ -55,6 +59,16 @@ class Staging:
 
     def abort(self):
         shutil.rmtree(self.dir, ignore_errors=True)
+
+    def __enter__(self) -> "Staging":
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is None:
+            self.commit()
+        else:
+            self.abort()
+        return False
 
 
 def _write_json(path: Path, data: dict) -> None:
@@ -100,13 +114,8 @@ def cmd_info(args) -> int:
              f"[{f.uv_bounds[0]:.4g}, {f.uv_bounds[1]:.4g}] x [{f.uv_bounds[2]:.4g}, {f.uv_bounds[3]:.4g}]")
     report = {"command": "info", "part": str(args.part), "n_faces": len(faces), "faces": rows,
               "time_s": time.perf_counter() - t0}
-    st = Staging(args.out)
-    try:
+    with Staging(args.out) as st:
         _write_json(st.path("report.json"), report)
-        st.commit()
-    except BaseException:
-        st.abort()
-        raise
     _say(f"report: {Path(args.out) / 'report.json'}")
     return EXIT_OK
 
@@ -161,8 +170,7 @@ def _finish_deviation(args, result, nominal, cand_desc, t0) -> int:
          f"uv = ({s['worst_uv'][0]:.6f}, {s['worst_uv'][1]:.6f})")
     if args.tol is not None:
         _say(f"tolerance {args.tol:g} mm: {'met' if result.within_tolerance else 'NOT met'}")
-    st = Staging(args.out)
-    try:
+    with Staging(args.out) as st:
         files = {}
         if not args.no_render:
             from .viz import render_deviation
@@ -174,10 +182,6 @@ def _finish_deviation(args, result, nominal, cand_desc, t0) -> int:
                   "candidate": str(args.candidate), "candidate_desc": cand_desc, "units": "mm",
                   "deviation": result.report(), "files": files, "time_s": time.perf_counter() - t0}
         _write_json(st.path("report.json"), report)
-        st.commit()
-    except BaseException:
-        st.abort()
-        raise
     _say(f"outputs in {args.out}/: {', '.join(list(files.values()) + ['report.json'])}")
     if args.tol is not None and not result.within_tolerance:
         return EXIT_TOLERANCE
@@ -242,8 +246,7 @@ def cmd_machining_surface(args) -> int:
              f"{rep['alpha_max_deg_for_measured_errors']:.4g} deg for the measured errors; measured axis error "
              f"{rep['axis_error_deg_measured']:.4g} deg")
     _say("loops: " + ("none" if not ms.loops.found else "; ".join(r.describe() for r in ms.loops.regions)))
-    st = Staging(args.out)
-    try:
+    with Staging(args.out) as st:
         from .occ import write_step, write_stl
         from .viz import render_deviation
 
@@ -271,10 +274,6 @@ def cmd_machining_surface(args) -> int:
         rep.update({"command": "machining-surface", "nominal": desc, "files": files + ["report.json"],
                     "time_s_total": time.perf_counter() - t0})
         _write_json(st.path("report.json"), rep)
-        st.commit()
-    except BaseException:
-        st.abort()
-        raise
     _say(f"outputs in {args.out}/: {', '.join(rep['files'])}")
     return EXIT_OK
 
@@ -309,8 +308,7 @@ def cmd_reff(args) -> int:
             _say(f"    step-over for scallop {args.scallop:g} mm: torus {d['stepover_mean_mm']:.4g} mm, ball "
                  f"{d['stepover_ball_mean_mm']:.4g} mm (ratio {d['stepover_ratio_mean']:.3f}); unreachable "
                  f"{d['n_unreachable']} sample(s)")
-    st = Staging(args.out)
-    try:
+    with Staging(args.out) as st:
         files = []
         if not args.no_render:
             from .viz import render_scalar_map
@@ -340,10 +338,6 @@ def cmd_reff(args) -> int:
         rep.update({"command": "reff", "face": desc, "files": files + ["report.json"],
                     "time_s_total": time.perf_counter() - t0})
         _write_json(st.path("report.json"), rep)
-        st.commit()
-    except BaseException:
-        st.abort()
-        raise
     _say(f"outputs in {args.out}/: {', '.join(rep['files'])}")
     return EXIT_OK
 
@@ -405,8 +399,7 @@ def cmd_flank(args) -> int:
          f"{w['v']:.4f}, xyz ({', '.join(f'{x:.4f}' for x in w['xyz'])}) mm")
     _say("all settings on this rule: " + "; ".join(
         f"{k} {v['max_abs_mm']:.4g} mm" if "max_abs_mm" in v else f"{k} not admissible" for k, v in comparison.items()))
-    st = Staging(args.out)
-    try:
+    with Staging(args.out) as st:
         files = []
         if args.whole:
             from .flank.path import envelope_deviation, envelope_surface, flank_path
@@ -457,10 +450,6 @@ def cmd_flank(args) -> int:
         rep["files"] = files + ["report.json"]
         rep["time_s"] = time.perf_counter() - t0
         _write_json(st.path("report.json"), rep)
-        st.commit()
-    except BaseException:
-        st.abort()
-        raise
     _say(f"outputs in {args.out}/: {', '.join(rep['files'])}")
     if args.whole and max(rep["whole"]["max_gouge_mm"], rep["whole"]["max_undercut_mm"]) > args.tol:
         _say(f"tolerance {args.tol:g} mm NOT met on the whole surface")
@@ -531,8 +520,7 @@ def cmd_envelope(args) -> int:
     if args.passes > 1 and not args.no_theta_scan:
         rep["max_theta_deg"] = max_theta(first, continuity=args.continuity)
         _say(f"largest |theta| without fold-back or loss of envelope (5 deg steps): {rep['max_theta_deg']:g} deg")
-    st = Staging(args.out)
-    try:
+    with Staging(args.out) as st:
         from .geometry.face import Face
         from .occ import write_step, write_stl
 
@@ -567,10 +555,6 @@ def cmd_envelope(args) -> int:
         rep["files"] = files + ["report.json"]
         rep["time_s_total"] = time.perf_counter() - t0
         _write_json(st.path("report.json"), rep)
-        st.commit()
-    except BaseException:
-        st.abort()
-        raise
     _say(f"outputs in {args.out}/: {', '.join(rep['files'])}")
     return EXIT_OK
 

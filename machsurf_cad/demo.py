@@ -47,8 +47,7 @@ def run_demo(out: Path, say=print) -> int:
     from .viz import render_deviation
 
     t0 = time.perf_counter()
-    st = Staging(out)
-    try:
+    with Staging(out) as st:
         part = default_part_path(st.dir)
         faces = read_step_faces(part)
         try:
@@ -141,10 +140,6 @@ def run_demo(out: Path, say=print) -> int:
         }
         _write_json(st.path("report.json"), report)
         (st.dir / "freeform_block.step").unlink(missing_ok=True)
-        st.commit()
-    except BaseException:
-        st.abort()
-        raise
     say(f"outputs in {out}/: " + ", ".join(report["files"]))
     return 0
 

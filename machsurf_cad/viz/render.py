@@ -20,6 +20,17 @@ except Exception:  # pragma: no cover - older VTK
 pv.OFF_SCREEN = True
 
 
+def _save(plotter, png_path, mesh=None, vtp_path=None) -> Path:
+    """Screenshot to ``png_path`` (folders made), close the plotter, and save ``mesh`` as .vtp if asked."""
+    png_path = Path(png_path)
+    png_path.parent.mkdir(parents=True, exist_ok=True)
+    plotter.screenshot(str(png_path))
+    plotter.close()
+    if vtp_path is not None and mesh is not None:
+        mesh.save(str(vtp_path))
+    return png_path
+
+
 def grid_polydata(points) -> pv.PolyData:
     """Quad mesh of a ``(nu, nv, 3)`` point grid; point order is the grid's C order."""
     pts = np.asarray(points, dtype=float)
@@ -103,13 +114,7 @@ def render_deviation(result: DeviationResult, png_path, *, title: str = "deviati
     p.add_mesh(pv.PolyData(w[None, :]), color="magenta", point_size=14, render_points_as_spheres=True)
     p.show_axes()
     p.view_isometric()
-    png_path = Path(png_path)
-    png_path.parent.mkdir(parents=True, exist_ok=True)
-    p.screenshot(str(png_path))
-    p.close()
-    if vtp_path is not None:
-        mesh.save(str(vtp_path))
-    return png_path
+    return _save(p, png_path, mesh, vtp_path)
 
 
 def render_surfaces(meshes, png_path, *, title: str = "", window_size=(1200, 900)) -> Path:
@@ -123,11 +128,7 @@ def render_surfaces(meshes, png_path, *, title: str = "", window_size=(1200, 900
         p.add_text(title, position="upper_left", font_size=11, color="black")
     p.show_axes()
     p.view_isometric()
-    png_path = Path(png_path)
-    png_path.parent.mkdir(parents=True, exist_ok=True)
-    p.screenshot(str(png_path))
-    p.close()
-    return png_path
+    return _save(p, png_path)
 
 
 def render_scalar_map(points, values, png_path, *, title: str = "", label: str = "value [mm]", clim=None,
@@ -168,13 +169,7 @@ def render_scalar_map(points, values, png_path, *, title: str = "", label: str =
         p.view_xy()  # along the 3-axis tool axis
     else:
         p.view_isometric()
-    png_path = Path(png_path)
-    png_path.parent.mkdir(parents=True, exist_ok=True)
-    p.screenshot(str(png_path))
-    p.close()
-    if vtp_path is not None:
-        mesh.save(str(vtp_path))
-    return png_path
+    return _save(p, png_path, mesh, vtp_path)
 
 
 def zebra_values(normals, *, light=(0.3, 0.2, 1.0), stripes: int = 24) -> np.ndarray:
@@ -206,8 +201,4 @@ def render_zebra(panels, png_path, *, window_size=(1600, 800), stripes: float | 
             p.add_mesh(mesh, scalars="zebra", cmap="gray", clim=[0, 1], show_scalar_bar=False, lighting=False)
         p.add_text(title, position="upper_left", font_size=12, color="black")
         p.view_isometric()
-    png_path = Path(png_path)
-    png_path.parent.mkdir(parents=True, exist_ok=True)
-    p.screenshot(str(png_path))
-    p.close()
-    return png_path
+    return _save(p, png_path)
