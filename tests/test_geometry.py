@@ -158,3 +158,19 @@ def test_types_are_immutable_and_equality_is_exact():
         s.poles[0, 0, 0] = 1.0
     t = s.with_poles(s.poles + 1e-15)
     assert s == builders.plane_patch() and s != t
+
+
+def test_evaluate_with_normals_matches_derivatives(rng):
+    import machsurf_cad.geometry.bspline as B
+
+    s = random_surface(rng, rational=True)
+    n = 5 * B._CHUNK + 17  # large enough for the threaded path
+    u, v = rng.uniform(0, 1, (2, n))
+    p, nrm = s.evaluate_with_normals(u, v)
+    d = s.derivatives(u, v, 1)
+    ref = np.cross(d.su, d.sv)
+    ref /= np.linalg.norm(ref, axis=1, keepdims=True)
+    assert np.abs(p - d.point).max() < 1e-12 and np.abs(nrm - ref).max() < 1e-12
+    collapsed = builders.bezier_surface([[[0, 0, 0], [50, 50, 0]], [[100, 0, 0], [50, 50, 0]]])
+    with pytest.raises(DegenerateGeometryError):
+        collapsed.evaluate_with_normals(np.array([0.3, 0.5]), np.array([0.2, 1.0]))
