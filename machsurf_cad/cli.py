@@ -604,7 +604,8 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--tol", type=float, default=1e-3, help="fit tolerance, max-norm mm (default 0.001)")
     m.add_argument("--degree", type=int, default=3, help="fit degree in u and v (default 3)")
     m.add_argument("--max-poles", type=int, default=40000, help="pole budget per surface (default 40000)")
-    m.add_argument("--loops", choices=["error", "flag"], default="error", help="on loops: error (default) or flag")
+    m.add_argument("--loops", choices=["error", "flag", "trim"], default="error",
+                   help="on loops: error (default), flag (export and report) or trim (cut interior regions away)")
     m.add_argument("--stl-deflection", type=float, default=0.01, help="STL linear deflection, mm (default 0.01)")
     m.add_argument("--toolpath", action="store_true", help="also write CL files (CSV, APT CLDATA)")
     m.add_argument("--stepover", type=float, default=2.0, help="distance between passes, mm (default 2)")

@@ -267,3 +267,42 @@ def test_iso_paths_three_axis(tmp_path):
         assert np.allclose(p.uv[:, 1], p.level)  # v constant along an iso-u pass
         assert np.allclose(p.axis, [0, 0, 1])
         assert np.allclose(p.tip, p.k - [0, 0, 5.0])
+
+
+def _dimpled_plate():
+    x = np.linspace(0, 100, 41)
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    Z = -6.0 * np.exp(-((X - 50) ** 2 + (Y - 50) ** 2) / 100.0)  # bottom radius w^2 / (2 depth) = 8.3 mm
+    return builders.interpolate_grid(np.stack([X, Y, Z], -1), 3, 3, np.linspace(0, 1, 41), np.linspace(0, 1, 41))
+
+
+def test_loops_can_be_trimmed_away(tmp_path):
+    plate = _dimpled_plate()
+    with pytest.raises(LoopError, match="local loop"):
+        machining_surface(plate, "ball:D=20", axes=5, strategy="planes:x", lead=5, tolerance=0.01)
+    ms = machining_surface(plate, "ball:D=20", axes=5, strategy="planes:x", lead=5, tolerance=0.01, loops="trim")
+    assert ms.loops.found and ms.report()["trimmed_holes"] == 1
+    assert len(ms.s1.loops) == 2 and ms.s1.loops == ms.s2.loops  # the box plus one hole, same on S1 and S2
+    for region in ms.loops.regions:  # every flagged sample is cut away, the far corners stay
+        assert not ms.s1.contains_uv(region.uv[:, 0], region.uv[:, 1]).any()
+    assert ms.s1.contains_uv(np.array([0.05, 0.95]), np.array([0.05, 0.95])).all()
+    from conftest import HAS_OCP
+
+    if HAS_OCP:  # the trimmed faces are valid B-rep faces and survive a STEP round trip
+        from machsurf_cad.occ import read_step_faces, write_step
+
+        back = read_step_faces(write_step(tmp_path / "trim.step", ms.faces()))
+        assert [len(f.loops) for f in back] == [2, 2]
+
+
+def test_tool_paths_avoid_trimmed_loops():
+    from machsurf_cad.machining.surfaces import fit_deviation
+    from machsurf_cad.machining.toolpath import tool_paths
+
+    ms = machining_surface(_dimpled_plate(), "ball:D=20", axes=5, strategy="planes:x", lead=5, tolerance=0.01,
+                           loops="trim")
+    tp = tool_paths(ms, stepover=5.0, chordal_tolerance=0.01)
+    uv = np.concatenate([p.uv for p in tp.passes])
+    assert ms.s1.contains_uv(uv[:, 0], uv[:, 1]).all()
+    dev = fit_deviation(ms, "S1", samples=60)
+    assert ms.s1.contains_uv(dev.foot_uv[:, 0], dev.foot_uv[:, 1]).all() and dev.max_abs <= 0.01

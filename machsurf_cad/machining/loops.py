@@ -48,6 +48,9 @@ class LoopRegion:
 class LoopReport:
     regions: tuple
     grid: tuple
+    mask: np.ndarray | None = None
+    us: np.ndarray | None = None
+    vs: np.ndarray | None = None
 
     @property
     def found(self) -> bool:
@@ -86,3 +89,40 @@ def fold_mask(X: np.ndarray, us: np.ndarray, vs: np.ndarray, n: np.ndarray) -> t
     scale = np.linalg.norm(xu, axis=-1) * np.linalg.norm(xv, axis=-1)
     jn = j / np.where(scale > 0, scale, 1.0)
     return jn <= 0.0, -jn
+
+
+def hole_loops(report: LoopReport, margin_cells: int = 2):
+    """Closed parameter-space polylines around the flagged samples (one per connected region),
+    grown by ``margin_cells`` grid cells, as degree-1 closed 2-D B-spline loops.
+
+    Raises :class:`LoopError` when a region reaches the face's parameter boundary: cutting it
+    would need a boolean with the outer loop, which is not done here.
+    """
+    import contourpy
+
+    from ..geometry.bspline import BSplineCurve
+
+    m = np.asarray(report.mask, bool)
+    grown = m.copy()
+    for _ in range(margin_cells):
+        g = grown.copy()
+        g[1:, :] |= grown[:-1, :]
+        g[:-1, :] |= grown[1:, :]
+        g[:, 1:] |= grown[:, :-1]
+        g[:, :-1] |= grown[:, 1:]
+        grown = g
+    if grown[0, :].any() or grown[-1, :].any() or grown[:, 0].any() or grown[:, -1].any():
+        raise LoopError("a loop region reaches the edge of the face: it cannot be trimmed away as a hole; "
+                        "use loops='flag' or a smaller tool", report)
+    gen = contourpy.contour_generator(x=report.vs, y=report.us, z=grown.astype(float), line_type="Separate")
+    loops = []
+    for line in gen.lines(0.5):
+        uv = np.stack([line[:, 1], line[:, 0]], 1)
+        if np.linalg.norm(uv[0] - uv[-1]) > 1e-12:
+            uv = np.vstack([uv, uv[:1]])
+        n = uv.shape[0]
+        knots = np.arange(n, dtype=float)
+        mults = np.ones(n, dtype=int)
+        mults[0] = mults[-1] = 2
+        loops.append((BSplineCurve(1, knots, mults, uv),))
+    return loops

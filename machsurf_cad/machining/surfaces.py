@@ -243,6 +243,7 @@ class MachiningSurface:
     def report(self) -> dict:
         kind, r, Rt = tool_radii(self.cutter)
         out = {
+            "trimmed_holes": max(0, len(self.s1.loops) - max(1, len(self.nominal.loops))) if self.loops.found else 0,
             "tool": self.cutter.to_dict(), "tool_kind": kind, "r_mm": r, "R_t_mm": Rt,
             "axes": self.axes, "strategy": self.strategy.describe(), "tolerance_mm": self.tolerance,
             "tip_location": self.tip, "axis_length_mm": self.axis_length if kind == "ball" else None,
@@ -295,9 +296,11 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
         Tool axis ``func(u, v) -> (..., 3)`` given by the caller (5 axes).
     tolerance : float
         Max-norm fit tolerance in mm, for S1 and S2 each (measured on unseen points).
-    loops : {"error", "flag"}
+    loops : {"error", "flag", "trim"}
         What to do when loops are found: raise :class:`LoopError` naming the regions
-        (default), or return the surfaces with the regions in the report.
+        (default), return the surfaces with the regions in the report, or trim them away
+        (a hole around each region, grown by two loop-grid cells; regions touching the face's
+        edge are refused).
     axis_length : float, optional
         ``L`` of the 5-axis ball orientation surface ``S2 = F + r n + L u`` (default D), mm.
     tip : bool
@@ -314,8 +317,8 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
     """
     import time
 
-    if loops not in ("error", "flag"):
-        raise InputError("loops must be 'error' or 'flag'")
+    if loops not in ("error", "flag", "trim"):
+        raise InputError("loops must be 'error', 'flag' or 'trim'")
     if tip and axes != 3:
         raise InputError("tip=True is for 3-axis machining (5-axis S1 is the offset F + r n)")
     cutter = parse_cutter(tool) if isinstance(tool, str) else tool
@@ -349,8 +352,15 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
         s2_fit = fit_surface(maps.s2, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles,
                              name="S2_orientation", breaks=brk, progress=progress)
         timings["fit_S2"] = time.perf_counter() - t2
-    s1 = face.with_surface(s1_fit.surface, "S1_guiding")
-    s2 = face.with_surface(s2_fit.surface, "S2_orientation") if s2_fit is not None else None
+    trimmed = face
+    if report.found and loops == "trim":
+        from .loops import hole_loops
+
+        outer = face.loops or (_box_loop(face.uv_bounds),)
+        trimmed = Face(face.surface, tuple(outer) + tuple(hole_loops(report)), face.name, face.index, face.reversed,
+                       face.source_type, face.uv_bounds, face.area)
+    s1 = trimmed.with_surface(s1_fit.surface, "S1_guiding")
+    s2 = trimmed.with_surface(s2_fit.surface, "S2_orientation") if s2_fit is not None else None
     axis_err = a_tol = a_meas = None
     if axes == 5:
         axis_err = _measured_axis_error(maps, s1_fit.surface, s2_fit.surface, kind, L)
@@ -397,12 +407,12 @@ def fit_deviation(ms: MachiningSurface, which: str = "S1", samples: int = 150):
     diff = got - exact
     signed = np.linalg.norm(diff, axis=-1) * np.where(np.einsum("...i,...i->...", diff, n) < 0, -1.0, 1.0)
     U, V = np.meshgrid(us, vs, indexing="ij")
-    inside = ms.nominal.contains_uv(U, V)
+    inside = ms.s1.contains_uv(U, V)  # S1's trimming: the nominal's, plus any loop holes cut away
     pts, ref = got.reshape(-1, 3), exact.reshape(-1, 3)
     sg = signed.ravel()
     uv = np.stack([U.ravel(), V.ravel()], 1)
     grid_points = grid_index = None
-    if ms.nominal.is_trimmed:
+    if ms.s1.is_trimmed:
         keep = inside.ravel()
         grid_points, grid_index = pts, np.nonzero(keep)[0]
         pts, ref, sg, uv = pts[keep], ref[keep], sg[keep], uv[keep]
@@ -473,7 +483,21 @@ def detect_loops(maps: MachiningMaps, n: int = 121) -> LoopReport:
         reg = region_from_mask("global", "S1", mask, U, V, offs, r - np.where(np.isfinite(dist), dist, r))
         if reg is not None:
             regions.append(reg)
-    return LoopReport(tuple(regions), (n, n))
+    mask = np.zeros((n, n), bool)
+    for rg in regions:
+        iu = np.clip(np.round((rg.uv[:, 0] - u0) / (u1 - u0) * (n - 1)).astype(int), 0, n - 1)
+        iv = np.clip(np.round((rg.uv[:, 1] - v0) / (v1 - v0) * (n - 1)).astype(int), 0, n - 1)
+        mask[iu, iv] = True
+    return LoopReport(tuple(regions), (n, n), mask, us, vs)
+
+
+def _box_loop(bounds):
+    """The parameter box as a closed loop of four straight 2-D segments."""
+    from ..geometry.builders import line_segment
+
+    u0, u1, v0, v1 = bounds
+    c = [(u0, v0), (u1, v0), (u1, v1), (u0, v1), (u0, v0)]
+    return tuple(line_segment(a, b) for a, b in zip(c[:-1], c[1:]))
 
 
 def _near_edge(n: int) -> np.ndarray:

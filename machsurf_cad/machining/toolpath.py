@@ -114,7 +114,7 @@ def tool_paths(ms: MachiningSurface, *, stepover: float, chordal_tolerance: floa
     u0, u1, v0, v1 = ms.s1.uv_bounds
     us, vs = np.linspace(u0, u1, grid), np.linspace(v0, v1, grid)
     U, V = np.meshgrid(us, vs, indexing="ij")
-    inside = ms.nominal.contains_uv(U, V)
+    inside = ms.s1.contains_uv(U, V)  # the trimmed face, loop holes included
     if isinstance(feed, PlanesFeed):
         N = np.asarray(feed.plane_normal)
         g = np.einsum("ijk,k->ij", s1.evaluate_grid(us, vs), N)
