@@ -10,5 +10,24 @@ from .geometry import BSplineCurve, BSplineSurface, builders, local_properties
 
 __version__ = "0.1.0"
 
+_LAZY = {  # the main entry points, imported on first use (numpy/scipy only)
+    "machining_surface": ("machsurf_cad.machining", "machining_surface"),
+    "reff_maps": ("machsurf_cad.reff", "reff_maps"),
+    "flank": ("machsurf_cad.flank", "flank"),
+    "envelope": ("machsurf_cad.envelope", "envelope"),
+    "deviation": ("machsurf_cad.deviation", "deviation"),
+    "parse_cutter": ("machsurf_cad.cutters", "parse_cutter"),
+}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        mod, attr = _LAZY[name]
+        return getattr(importlib.import_module(mod), attr)
+    raise AttributeError(f"module 'machsurf_cad' has no attribute {name!r}")
+
+
 __all__ = ["BSplineCurve", "BSplineSurface", "builders", "local_properties", "MachsurfError", "InputError",
-           "DegenerateGeometryError", "ToleranceError", "__version__"]
+           "DegenerateGeometryError", "ToleranceError", "__version__", *_LAZY]
