@@ -418,9 +418,11 @@ def cmd_flank(args) -> int:
             dev = envelope_deviation(path, env.surface)
             from .viz import render_deviation
 
+            lo_, hi_ = surf.u_range
+            mean_n = surf.normal(np.linspace(lo_, hi_, 9), np.full(9, 0.5)).mean(axis=0) * args.side
             render_deviation(dev, st.path("deviation.png"), vtp_path=st.path("deviation.vtp"),
                              title=f"nominal vs envelope of {cutter.spec()} ({args.setting}); red gouge, blue undercut",
-                             tolerance=args.tol)
+                             tolerance=args.tol, view_direction=mean_n)
             files += ["toolpath.csv", "toolpath.apt", "envelope.step", "envelope.stl", "deviation.png", "deviation.vtp"]
             rep["whole"] = {**path.report(), "envelope_fit": env.report(), "deviation_from_envelope": dev.report()}
             _say(f"whole surface: {len(path.settings)} rules, max gouge {path.max_gouge:.4g} mm, max undercut "

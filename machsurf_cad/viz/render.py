@@ -70,12 +70,14 @@ def deviation_polydata(result: DeviationResult) -> pv.PolyData:
 
 def render_deviation(result: DeviationResult, png_path, *, title: str = "deviation", vtp_path=None,
                      tolerance: float | None = None, extra_lines=None, extra_points=None,
-                     window_size=(1200, 900)) -> Path:
+                     view_direction=None, window_size=(1200, 900)) -> Path:
     """Off-screen PNG of a deviation map.
 
     Diverging colour map centred on zero (blue below the reference normal, red above), legend
     in mm, tolerance band drawn as black iso-lines at +/- tolerance and shaded in the legend.
     Also writes the mesh with its ``deviation_mm`` data as .vtp when ``vtp_path`` is given.
+    ``view_direction`` (a vector from the scene towards the camera) replaces the isometric view,
+    e.g. the surface's mean normal for a face seen edge-on from the iso direction.
     """
     tol = tolerance if tolerance is not None else result.tolerance
     mesh = deviation_polydata(result)
@@ -113,7 +115,15 @@ def render_deviation(result: DeviationResult, png_path, *, title: str = "deviati
     w = np.array(s["worst_xyz"])
     p.add_mesh(pv.PolyData(w[None, :]), color="magenta", point_size=14, render_points_as_spheres=True)
     p.show_axes()
-    p.view_isometric()
+    if view_direction is not None:
+        d = np.asarray(view_direction, float)
+        d = d / np.linalg.norm(d)
+        c = np.asarray(mesh.center)
+        up = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        p.camera_position = [tuple(c + d * mesh.length * 2.0), tuple(c), tuple(up)]
+        p.reset_camera()
+    else:
+        p.view_isometric()
     return _save(p, png_path, mesh, vtp_path)
 
 
