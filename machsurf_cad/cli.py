@@ -140,10 +140,9 @@ def cmd_inspect(args) -> int:
     suffix = cand_path.suffix.lower()
     from .progress import Bar
 
-    bar = Bar("measuring deviation")
     if suffix == ".stl":
         pts, tris = _mesh_candidate(cand_path)
-        with bar:
+        with Bar("measuring deviation") as bar:
             result = deviation(nominal, pts, tolerance=args.tol, triangles=tris, progress=bar.update)
         cand_desc = f"STL mesh {cand_path.name} ({tris.shape[0] // 16} triangles, sampled inside triangles)"
     elif suffix in (".step", ".stp"):
@@ -151,7 +150,7 @@ def cmd_inspect(args) -> int:
         idx = args.candidate_face if args.candidate_face is not None else args.face
         if not 0 <= idx < len(cands):
             raise InputError(f"candidate face index {idx} out of range: {cand_path} has {len(cands)} face(s)")
-        with bar:
+        with Bar("measuring deviation") as bar:
             result = deviation(nominal, cands[idx], samples=args.samples, tolerance=args.tol, progress=bar.update)
         cand_desc = f"STEP face {idx} '{cands[idx].name}' of {cand_path.name}"
     else:
