@@ -214,3 +214,30 @@ def test_cadquery_face_round_trip(rng):
     u, v = rng.uniform(0, 1, (2, 500))
     assert np.abs(back.surface.evaluate(u, v) - top.surface.evaluate(u, v)).max() < 1e-12
     assert len(back.loops) == 2
+
+
+@pytest.mark.parametrize("spec", ["ball:D=10", "flat:D=16", "bull:D=20,r=4", "cone:D=10,angle=6", "cone:D=12,angle=-8",
+                                  "drum:D=20,Rp=40,L=20", "barrel:D=20,Rp=40,L=20",
+                                  "apt:D=20,r=4,e=6,f=4,alpha=10,beta=5,h=60"])
+def test_every_cutter_solid_is_valid_with_the_profile_volume(spec):
+    from machsurf_cad.cutters import parse_cutter
+    from machsurf_cad.occ import is_valid
+    from machsurf_cad.occ.solids import cutter_solid, solid_volume
+
+    c = parse_cutter(spec)
+    solid = cutter_solid(c, tip=(3, -2, 7), axis=(0.2, 0.1, 1.0))
+    assert is_valid(solid)
+    # independent volume: integral of pi rho(z)^2 over the dense profile (trapezoid rule on z)
+    prof = np.concatenate([seg.points(4001) for seg in c.profile()])
+    prof = prof[np.argsort(prof[:, 1], kind="stable")]
+    z = np.linspace(prof[:, 1].min(), prof[:, 1].max(), 200001)
+    rho = np.interp(z, *_monotone(prof))
+    ref = float(np.sum(0.5 * (rho[1:] ** 2 + rho[:-1] ** 2) * np.diff(z)) * math.pi)
+    assert abs(solid_volume(solid) - ref) < 1e-4 * ref
+
+
+def _monotone(prof):
+    """For each z keep the largest radius (profile points sorted by z): rho(z) of the solid."""
+    zs, idx = np.unique(np.round(prof[:, 1], 9), return_index=True)
+    rho = np.maximum.reduceat(prof[:, 0], idx)
+    return zs, rho
