@@ -187,21 +187,30 @@ def _finish_deviation(args, result, nominal, cand_desc, t0) -> int:
     return EXIT_OK
 
 
+def _example(table: dict, name: str, what: str):
+    """Build the example ``name`` from ``table``, or a one-line error listing the known ones."""
+    if name not in table:
+        raise InputError(f"unknown {what} {name!r}; known: {', '.join(sorted(table))}")
+    return table[name]()
+
+
+def _step_face(args):
+    if not args.part:
+        raise InputError("give a STEP file or --example NAME")
+    from .occ import read_step_face
+
+    return read_step_face(args.part, args.face)
+
+
 def _face_or_example(args):
     from .geometry.face import Face
 
     if args.example:
         from .examples import EXAMPLES
 
-        if args.example not in EXAMPLES:
-            raise InputError(f"unknown example {args.example!r}; known: {', '.join(sorted(EXAMPLES))}")
-        s = EXAMPLES[args.example]()
+        s = _example(EXAMPLES, args.example, "example")
         return Face(s, name=s.name or args.example), f"example {args.example}"
-    if not args.part:
-        raise InputError("give a STEP file or --example NAME")
-    from .occ import read_step_face
-
-    f = read_step_face(args.part, args.face)
+    f = _step_face(args)
     return f, f"face {f.index} '{f.name}' of {args.part}"
 
 
@@ -345,15 +354,8 @@ def _ruled_input(args):
     from .flank.ruled import EXAMPLES, RuledSurface
 
     if args.example:
-        if args.example not in EXAMPLES:
-            raise InputError(f"unknown ruled example {args.example!r}; known: {', '.join(sorted(EXAMPLES))}")
-        s = EXAMPLES[args.example]()
-        return s, f"example {args.example}"
-    if not args.part:
-        raise InputError("give a STEP file with a ruled face or --example eq18|hypar|liu")
-    from .occ import read_step_face
-
-    f = read_step_face(args.part, args.face)
+        return _example(EXAMPLES, args.example, "ruled example"), f"example {args.example}"
+    f = _step_face(args)
     tol = args.fit_ruled if args.fit_ruled is not None else 1e-6
     s = RuledSurface.from_surface(f.surface, tolerance=tol, name=f.name)
     return s, f"face {f.index} '{f.name}' of {args.part} (deviation from ruled: {s.source_deviation:.3g} mm)"
@@ -489,10 +491,7 @@ def cmd_envelope(args) -> int:
     if args.path:
         motion = load_path(args.path)
     else:
-        name = args.example or "sine"
-        if name not in EXAMPLES:
-            raise InputError(f"unknown example motion {name!r}; known: {', '.join(sorted(EXAMPLES))}")
-        motion = EXAMPLES[name]()
+        motion = _example(EXAMPLES, args.example or "sine", "example motion")
     if args.passes < 1:
         raise InputError("--passes must be >= 1")
     try:
