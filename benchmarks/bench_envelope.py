@@ -21,7 +21,7 @@ def envelope_rows(quick=False):
         best = np.inf
         for _ in range(3):
             t0 = time.perf_counter()
-            X = env.grid(a, t)
+            env.grid(a, t)  # the 200 x 200 evaluation, timed with the fit
             fit = fit_pass(env, 1e-3)
             best = min(best, time.perf_counter() - t0)
         # brute force: for 200 positions, the tool's grazing points found by sampling each tool's

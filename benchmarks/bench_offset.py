@@ -36,7 +36,6 @@ def _measure(F, r, surf_eval, n=301):
 def _occt(F, r, tol, max_deg):
     from OCP.Geom import Geom_OffsetSurface
     from OCP.GeomAbs import GeomAbs_C2
-    from OCP.gp import gp_Pnt
 
     from machsurf_cad.occ import from_geom_surface, to_geom_surface
 

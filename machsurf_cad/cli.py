@@ -321,7 +321,6 @@ def cmd_reff(args) -> int:
         if not args.no_render:
             from .viz import render_scalar_map
 
-            n = maps.us.size
             mask = maps.inside if maps.face.is_trimmed else None
             for d in maps.directions:
                 tag = f"{d.theta_deg:g}".replace("-", "m")
@@ -566,6 +565,12 @@ def cmd_demo(args) -> int:
 
 
 # ----------------------------------------------------------------------------- entry point
+def _add_face_input(p, example_help: str, part_help: str = "STEP file (or use --example)") -> None:
+    p.add_argument("part", nargs="?", help=part_help)
+    p.add_argument("--example", help=example_help)
+    p.add_argument("--face", type=int, default=0, help="face index (default 0)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="machsurf", description="Free-form surface machining geometry (mm, degrees).")
     p.add_argument("--version", action="version", version=f"machsurf_cad {__version__}")
@@ -591,9 +596,7 @@ def build_parser() -> argparse.ArgumentParser:
     n.add_argument("-o", "--out", default="out/inspect", help="output folder (default: out/inspect)")
     n.set_defaults(func=cmd_inspect)
     m = sub.add_parser("machining-surface", help="guiding S1 and orientation S2 surfaces of a face (Table 1)")
-    m.add_argument("part", nargs="?", help="STEP file (or use --example)")
-    m.add_argument("--example", help="example surface instead of a STEP: bezier5, blade, hypar, liu, eq18")
-    m.add_argument("--face", type=int, default=0, help="face index (default 0)")
+    _add_face_input(m, "example surface instead of a STEP: bezier5, blade, hypar, liu, eq18")
     m.add_argument("--tool", required=True, help="ball:D=..|flat:D=..|bull:D=..,r=.. (mm)")
     m.add_argument("--axes", type=int, default=5, help="3 or 5 (default 5)")
     m.add_argument("--strategy", default="planes:x", help="planes:x|y|z|a,b,c or iso:u|v (default planes:x)")
@@ -614,9 +617,7 @@ def build_parser() -> argparse.ArgumentParser:
     m.set_defaults(func=cmd_machining_surface)
 
     e = sub.add_parser("reff", help="effective cutter radius and step-over maps over a face")
-    e.add_argument("part", nargs="?", help="STEP file (or use --example)")
-    e.add_argument("--example", help="example surface instead of a STEP: blade, bezier5, ...")
-    e.add_argument("--face", type=int, default=0, help="face index (default 0)")
+    _add_face_input(e, "example surface instead of a STEP: blade, bezier5, ...")
     e.add_argument("--tool", required=True, help="bull:D=..,r=.. | flat:D=.. | ball:D=.. (mm)")
     e.add_argument("--compare", default="ball", help="reference cutter: ball (same D, default), a cutter string, none")
     e.add_argument("--direction", default="0", help="machining direction(s) theta in degrees: 45 | -45,0,45,90 | all")
@@ -630,9 +631,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.set_defaults(func=cmd_reff)
 
     f = sub.add_parser("flank", help="flank milling settings of a cylindrical cutter on a ruled surface")
-    f.add_argument("part", nargs="?", help="STEP file with a ruled face (or use --example)")
-    f.add_argument("--example", help="eq18 | hypar | liu (the paper's surfaces, exact)")
-    f.add_argument("--face", type=int, default=0, help="face index (default 0)")
+    _add_face_input(f, "eq18 | hypar | liu (the paper's surfaces, exact)", "STEP file with a ruled face (or use --example)")
     f.add_argument("--fit-ruled", type=float, default=None, help="accept a non-ruled face within this many mm")
     f.add_argument("--tool", default="cyl:D=20", help="cylindrical cutter, e.g. cyl:D=80 (mm)")
     f.add_argument("--rule", type=float, default=0.5, help="rule position as a fraction of the u range [0, 1]")

@@ -214,6 +214,10 @@ class BallEndMill(Cutter):
     def r(self) -> float:
         return self.D / 2
 
+    @property
+    def corner_radius(self) -> float:
+        return self.D / 2
+
     def profile(self):
         R = self.D / 2
         return [ArcSegment(0.0, R, R, -90.0, 0.0), LineSegment(R, R, R, self.length)]
@@ -236,6 +240,7 @@ class FlatEndMill(Cutter):
         object.__setattr__(self, "length", _length(self.length, self.D))
 
     r = 0.0
+    corner_radius = 0.0
 
     @property
     def R_t(self) -> float:
@@ -274,6 +279,10 @@ class BullNoseEndMill(Cutter):
     def R_t(self) -> float:
         return self.D / 2 - self.r
 
+    @property
+    def corner_radius(self) -> float:
+        return self.r
+
     def profile(self):
         R, r = self.D / 2, self.r
         segs = []
@@ -309,7 +318,7 @@ class ConicalCutter(Cutter):
         object.__setattr__(self, "length", _length(self.length, self.D))
         top = self.D / 2 + self.length * math.tan(math.radians(a))
         if top <= 0:
-            raise InputError(f"cone narrows to a point below its length: reduce angle or length")
+            raise InputError("cone narrows to a point below its length: reduce angle or length")
 
     def profile(self):
         R = self.D / 2
@@ -424,6 +433,17 @@ def _length(length, D) -> float:
     if x < 0:
         raise InputError("cutter parameter length must be >= 0 mm")
     return x if x > 0 else 3.0 * _num("D", D)
+
+
+def end_mill_radii(cutter: Cutter, purpose: str) -> tuple[str, float, float]:
+    """``(kind, r, R_t)`` of a ball, flat or bull-nose end mill: corner radius and torus major radius (mm).
+
+    Other cutters raise :class:`InputError` saying what ``purpose`` needs them for.
+    """
+    if cutter.kind not in ("ball", "flat", "bull"):
+        raise InputError(f"{purpose} are defined for ball, flat and bull-nose end mills, not {cutter.spec()}")
+    r = cutter.corner_radius
+    return cutter.kind, r, cutter.D / 2 - r
 
 
 # ----------------------------------------------------------------------------- strings

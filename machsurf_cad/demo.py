@@ -10,7 +10,6 @@ the face (trimmed like it), their deviation map against the exact offset, and a 
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 
@@ -144,4 +143,4 @@ def run_demo(out: Path, say=print) -> int:
     return 0
 
 
-__all__ = ["run_demo", "default_part_path", "json"]
+__all__ = ["run_demo", "default_part_path"]

@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import cosdg, sindg
 
-from .cutters import BallEndMill, BullNoseEndMill, Cutter, FlatEndMill, parse_cutter
+from .cutters import Cutter, end_mill_radii, parse_cutter
 from .errors import DegenerateGeometryError, InputError
 from .geometry.bspline import BSplineSurface, unit_normals
 from .geometry.face import Face
@@ -48,13 +48,9 @@ _S_FLAT_DEG = 1e-9  # slopes below this are a flat spot: R_eff is infinite
 
 
 def _radii(cutter: Cutter) -> tuple[str, float, float]:
-    if isinstance(cutter, BallEndMill):
-        return "ball", cutter.D / 2, cutter.D / 2
-    if isinstance(cutter, FlatEndMill):
-        return "flat", cutter.D / 2, 0.0
-    if isinstance(cutter, BullNoseEndMill):
-        return "bull", cutter.D / 2, cutter.r
-    raise InputError(f"effective radius is defined here for ball, flat and bull-nose end mills, not {cutter.spec()}")
+    """``(kind, R, r)``: outer radius D/2 (the paper's "R") and corner radius (mm)."""
+    kind, r, _ = end_mill_radii(cutter, "effective radius maps")
+    return kind, cutter.D / 2, r
 
 
 def _check_angles(name: str, deg) -> np.ndarray:
@@ -323,7 +319,7 @@ def reff_maps(face, tool, *, directions=(0.0,), grid: int = 256, compare="ball",
     maps = []
     t = time.perf_counter()
     for theta in dirs:
-        maps.append(_direction_map(theta, forms, kind, R, r, comp, scallop, axes, lead, tilt, inside))
+        maps.append(_direction_map(theta, forms, cutter, comp, scallop, axes, lead, tilt, inside))
     timings["maps"] = time.perf_counter() - t
     best_t = best_v = None
     if len(maps) > 1:
@@ -384,7 +380,7 @@ class _Forms:
             self.L, self.M, self.N = _dot(d.suu, n), _dot(d.suv, n), _dot(d.svv, n)
 
 
-def _direction_map(theta, fm: _Forms, kind, R, r, comp, scallop, axes, lead, tilt, inside) -> DirectionMap:
+def _direction_map(theta, fm: _Forms, cutter, comp, scallop, axes, lead, tilt, inside) -> DirectionMap:
     th = math.radians(theta)
     n = fm.n
     nz = n[..., 2]
@@ -419,7 +415,7 @@ def _direction_map(theta, fm: _Forms, kind, R, r, comp, scallop, axes, lead, til
     cos_a = np.where(sinS > 1e-15, np.clip(cos_a, 0.0, 1.0), 1.0)  # flat spot: alpha immaterial (R_eff inf)
     S = np.degrees(np.arctan2(sinS, cosS))
     alpha = np.degrees(np.arccos(cos_a))
-    r_eff = _reff_from(kind, R, 0.0 if kind == "flat" else r, S, alpha)
+    r_eff = effective_radius(cutter, S, alpha)
     rho = np.full(S.shape, np.inf)
     so = sob = reach = None
     if scallop is not None:
@@ -434,16 +430,9 @@ def _direction_map(theta, fm: _Forms, kind, R, r, comp, scallop, axes, lead, til
         with np.errstate(divide="ignore"):
             rho = np.where(np.abs(kn) > 1e-14, -1.0 / kn, np.inf)
         so, reach = stepover(scallop, r_eff, rho)
-        rb = comp.D / 2 if comp is not None else R
+        rb = (comp or cutter).D / 2
         sob, _ = stepover(scallop, np.full(S.shape, rb), rho)
     return DirectionMap(float(theta), S, alpha, r_eff, rho, so, sob, reach)
-
-
-def _reff_from(kind, R, r, S_deg, alpha_deg):
-    if kind == "ball":
-        return np.full(np.shape(S_deg), R)
-    c = BullNoseEndMill(2 * R, r) if r > 0 else FlatEndMill(2 * R)
-    return effective_radius(c, S_deg, alpha_deg)
 
 
 reff = reff_maps

@@ -159,7 +159,7 @@ def test_trimmed_face_gives_trimmed_s1_s2():
 
     if not HAS_OCP:
         pytest.skip("cadquery-ocp is not installed: the trimmed example comes from STEP")
-    from machsurf_cad.occ import read_step_faces, write_step
+    from machsurf_cad.occ import read_step_faces
 
     top = read_step_faces(ROOT / "example_parts" / "freeform_block.step")[0]
     ms = machining_surface(top, "ball:D=10", axes=5, lead=10, tolerance=TOL)

@@ -257,7 +257,6 @@ def envelope_deviation(path: FlankPath, env_surface, n: int = 121):
     """
     from ..deviation import DeviationResult, deviation_stats, project_points
 
-    surf = path.surface
     pts_grid, brute = position_deviation(path, n_u=n, n_v=n)
     pts = pts_grid.reshape(-1, 3)
     proj = project_points(env_surface, pts)

@@ -13,7 +13,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError, ToleranceError
-from .basis import collocation_matrix, find_spans
+from .basis import collocation_matrix
 from .bspline import BSplineCurve, BSplineSurface, elevate_and_merge
 
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..approx import SurfaceFit, fit_surface
-from ..cutters import BallEndMill, BullNoseEndMill, Cutter, FlatEndMill, parse_cutter
+from ..cutters import Cutter, end_mill_radii, parse_cutter
 from ..errors import DegenerateGeometryError, InputError
 from ..geometry.bspline import BSplineSurface, unit_normals
 from ..geometry.differential import local_properties_grid
@@ -42,14 +42,7 @@ _MIN_AXIS_ELEVATION_DEG = 1.0   # the axis must stay this far above the tangent 
 
 def tool_radii(cutter: Cutter) -> tuple[str, float, float]:
     """``(kind, r, R_t)`` of a Table-1 cutter: corner radius and torus major radius (mm)."""
-    if isinstance(cutter, BallEndMill):
-        return "ball", cutter.D / 2, 0.0
-    if isinstance(cutter, FlatEndMill):
-        return "flat", 0.0, cutter.D / 2
-    if isinstance(cutter, BullNoseEndMill):
-        return "bull", cutter.r, cutter.R_t
-    raise InputError(f"machining surfaces are defined for ball, flat and bull-nose end mills (Table 1), "
-                     f"not {cutter.spec()}")
+    return end_mill_radii(cutter, "machining surfaces (Table 1)")
 
 
 def _as_face(face) -> Face:
@@ -175,15 +168,6 @@ class MachiningMaps:
     def tool_axis(self, us, vs) -> np.ndarray:
         """Exact unit tool axis on the grid."""
         return self.axis(self.frame(us, vs))
-
-    def cutter_location(self, us, vs) -> np.ndarray:
-        """Point on the axis in the torus centre-circle plane (C_L) on the grid, mm."""
-        kind, r, Rt = tool_radii(self.cutter)
-        fr = self.frame(us, vs)
-        u = self.axis(fr)
-        if kind == "ball":
-            return fr.point + r * fr.normal
-        return fr.point + r * fr.normal + Rt * self.v_direction(u, fr)
 
 
 def recover_axis(k: np.ndarray, cl: np.ndarray, n: np.ndarray, *, ball_length: float | None = None) -> np.ndarray:

@@ -11,9 +11,9 @@ from OCP.BRepGProp import BRepGProp
 from OCP.BRepPrimAPI import BRepPrimAPI_MakeRevol
 from OCP.GC import GC_MakeArcOfCircle, GC_MakeSegment
 from OCP.GProp import GProp_GProps
-from OCP.gp import gp_Ax1, gp_Ax3, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec
+from OCP.gp import gp_Ax1, gp_Ax3, gp_Dir, gp_Pnt, gp_Trsf
 
-from ..cutters import ArcSegment, Cutter, LineSegment
+from ..cutters import Cutter, LineSegment
 from ..errors import InputError
 from .convert import check_valid
 

@@ -186,7 +186,3 @@ def write_step_shape(path, shape, named: list | None = None) -> Path:
         if os.path.exists(tmp):
             os.unlink(tmp)
     return path
-
-
-def shape_faces(shape) -> list:
-    return list(iter_faces(shape))

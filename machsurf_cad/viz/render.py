@@ -127,20 +127,6 @@ def render_deviation(result: DeviationResult, png_path, *, title: str = "deviati
     return _save(p, png_path, mesh, vtp_path)
 
 
-def render_surfaces(meshes, png_path, *, title: str = "", window_size=(1200, 900)) -> Path:
-    """Off-screen PNG of several ``(points (nu, nv, 3), colour)`` grids."""
-    p = pv.Plotter(off_screen=True, window_size=list(window_size))
-    p.set_background("white")
-    for pts, color in meshes:
-        pts = np.asarray(pts)
-        p.add_mesh(grid_polydata(pts), color=color, smooth_shading=True, opacity=0.9)
-    if title:
-        p.add_text(title, position="upper_left", font_size=11, color="black")
-    p.show_axes()
-    p.view_isometric()
-    return _save(p, png_path)
-
-
 def render_scalar_map(points, values, png_path, *, title: str = "", label: str = "value [mm]", clim=None,
                       cmap: str = "jet", contour_level: float | None = None, contour_color: str = "white",
                       mask=None, vtp_path=None, extra_arrays: dict | None = None, annotations: dict | None = None,
