@@ -7,9 +7,9 @@ import time
 
 import numpy as np
 
-from machsurf_cad.envelope import make_envelope
-from machsurf_cad.envelope.examples import sine_motion
-from machsurf_cad.envelope.passes import fit_pass
+from machsurf_cad.sweep import make_envelope
+from machsurf_cad.examples import sine_motion
+from machsurf_cad.sweep.passes import fit_pass
 
 
 def envelope_rows(quick=False):

@@ -7,7 +7,7 @@ import time
 import numpy as np
 
 from machsurf_cad import examples
-from machsurf_cad.deviation import project_points
+from machsurf_cad.measure import project_points
 from machsurf_cad.geometry import builders, local_properties_grid
 from machsurf_cad.geometry.bspline import unit_normals
 

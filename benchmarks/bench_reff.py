@@ -10,7 +10,7 @@ import time
 import numpy as np
 
 from machsurf_cad import examples
-from machsurf_cad.reff import effective_radius, reff_maps, stepover
+from machsurf_cad.effradius import effective_radius, reff_maps, stepover
 
 
 def reff_rows(quick=False):

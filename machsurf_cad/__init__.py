@@ -12,10 +12,10 @@ __version__ = "0.1.0"
 
 _LAZY = {  # the main entry points, imported on first use (numpy/scipy only)
     "machining_surface": ("machsurf_cad.machining", "machining_surface"),
-    "reff_maps": ("machsurf_cad.reff", "reff_maps"),
-    "flank": ("machsurf_cad.flank", "flank"),
-    "envelope": ("machsurf_cad.envelope", "envelope"),
-    "deviation": ("machsurf_cad.deviation", "deviation"),
+    "reff_maps": ("machsurf_cad.effradius", "reff_maps"),
+    "flank": ("machsurf_cad.flank_milling", "flank"),
+    "envelope": ("machsurf_cad.sweep", "envelope"),
+    "deviation": ("machsurf_cad.measure", "deviation"),
     "parse_cutter": ("machsurf_cad.cutters", "parse_cutter"),
 }
 

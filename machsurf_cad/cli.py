@@ -129,7 +129,7 @@ def _mesh_candidate(path: Path):
 
 
 def cmd_inspect(args) -> int:
-    from .deviation import deviation
+    from .measure import deviation
     from .occ import read_step_face, read_step_faces
 
     t0 = time.perf_counter()
@@ -290,7 +290,7 @@ def cmd_reff(args) -> int:
     import numpy as np
 
     from .cutters import parse_cutter
-    from .reff import parse_directions, reff_maps
+    from .effradius import parse_directions, reff_maps
 
     t0 = time.perf_counter()
     cutter = parse_cutter(args.tool)
@@ -350,7 +350,7 @@ def cmd_reff(args) -> int:
 
 
 def _ruled_input(args):
-    from .flank.ruled import EXAMPLES, RuledSurface
+    from .flank_milling.ruled import EXAMPLES, RuledSurface
 
     if args.example:
         return _example(EXAMPLES, args.example, "ruled example"), f"example {args.example}"
@@ -364,7 +364,7 @@ def cmd_flank(args) -> int:
     import numpy as np
 
     from .cutters import FlatEndMill, parse_cutter
-    from .flank import interference, tool_setting
+    from .flank_milling import interference, tool_setting
 
     t0 = time.perf_counter()
     cutter = parse_cutter(args.tool)
@@ -381,7 +381,7 @@ def cmd_flank(args) -> int:
     st_ = tool_setting(surf, u_p, R, args.setting, side=args.side)
     t_set = time.perf_counter() - t0
     e = interference(surf, st_)
-    from .flank import compare_settings
+    from .flank_milling import compare_settings
 
     comparison = compare_settings(surf, u_p, R, side=args.side)
     rep = {"command": "flank", "surface": desc, "tool": cutter.to_dict(), "R_mm": R, "rule": args.rule, "u_p": u_p,
@@ -402,7 +402,7 @@ def cmd_flank(args) -> int:
     with Staging(args.out) as st:
         files = []
         if args.whole:
-            from .flank.path import envelope_deviation, envelope_surface, flank_path
+            from .flank_milling.path import envelope_deviation, envelope_surface, flank_path
             from .geometry.face import Face
             from .occ import write_step, write_stl
             from .progress import Bar
@@ -430,7 +430,7 @@ def cmd_flank(args) -> int:
                  f"{env.surface.shape[1]} poles, fit error {env.max_error:.3g} mm; nominal vs envelope max "
                  f"{dev.max_abs:.4g} mm" + (f"; {len(path.discontinuities)} setting jump(s)" if path.discontinuities else ""))
         if args.study:
-            from .flank.study import parameter_study
+            from .flank_milling.study import parameter_study
             from .viz.plots import plot_ratio_curves
 
             data = parameter_study()
@@ -442,7 +442,7 @@ def cmd_flank(args) -> int:
             rep["study"] = data
             _say(f"parameter study: smallest ratio standard/optimum {data['min_ratio']:.3g}")
         if args.radius_range is not None:
-            from .flank.path import radius_range
+            from .flank_milling.path import radius_range
 
             rr = radius_range(surf, args.radius_range, kind=args.setting, side=args.side)
             rep["radius_range"] = rr
@@ -481,9 +481,9 @@ def cmd_envelope(args) -> int:
     import numpy as np
 
     from .cutters import parse_cutter
-    from .envelope import make_envelope
-    from .envelope.examples import EXAMPLES, load_path
-    from .envelope.passes import build_chain, max_theta
+    from .sweep import make_envelope
+    from .sweep.examples import EXAMPLES, load_path
+    from .sweep.passes import build_chain, max_theta
 
     t0 = time.perf_counter()
     cutter = parse_cutter(args.tool)

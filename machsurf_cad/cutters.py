@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -135,17 +136,69 @@ def _positive(name: str, value) -> float:
 
 
 # ----------------------------------------------------------------------------- cutters
+@dataclass(frozen=True)
+class Shank:
+    """A plain cylinder above the cutting part (shank) or above the shank (holder), mm."""
+
+    diameter: float
+    length: float
+
+    def __post_init__(self):
+        _positive("shank/holder diameter", self.diameter)
+        _positive("shank/holder length", self.length)
+
+
+class EndMillRadii(NamedTuple):
+    """Radii of a ball, flat or bull-nose end mill (mm): the one radius helper.
+
+    ``r`` corner radius, ``R_t = D/2 - r`` torus major radius (the machining-surface paper's
+    "R"), ``R = D/2`` outer radius (the effective-radius paper's "R").
+    """
+
+    r: float
+    R_t: float
+    R: float
+
+    @property
+    def is_ball(self) -> bool:
+        """True for a ball end mill (R_t = 0)."""
+        return self.R_t == 0.0
+
+    @property
+    def is_flat(self) -> bool:
+        """True for a flat end mill (r = 0)."""
+        return self.r == 0.0
+
+
 class Cutter:
-    """Base of all cutters (frozen dataclasses): ``D`` diameter and ``length`` cutting length (mm)."""
+    """Base of all cutters (frozen dataclasses): ``D`` diameter and ``length`` cutting length (mm).
+
+    The shared vocabulary (after OpenCAMLib's ``height(r)``, ``width(h)``, ``offsetCutter(d)``)
+    is methods here, computed from the profile: :meth:`height`, :meth:`width`, :meth:`offset`,
+    :meth:`signed_distance`, :meth:`apt_parameters`, :meth:`end_mill_radii`; optional
+    ``shank`` and ``holder`` cylinders extend the body upwards.
+    """
 
     D: float
     length: float
+    shank: Shank | None
+    holder: Shank | None
     kind = "cutter"
 
     @property
     def radius(self) -> float:
         """Outer radius ``D/2`` (mm); the effective-radius paper's "R"."""
         return self.D / 2
+
+    @property
+    def corner_radius(self) -> float:
+        """Corner radius r (mm); 0 where the cutter has no corner arc."""
+        return 0.0
+
+    @property
+    def torus_radius(self) -> float:
+        """Distance from the axis to the corner centre ``R_t = D/2 - r`` (mm)."""
+        return self.D / 2 - self.corner_radius
 
     def profile(self) -> list:
         raise NotImplementedError
@@ -157,6 +210,10 @@ class Cutter:
             out.extend(_family_of(seg))
         return out
 
+    def sweep_segment(self) -> SphereFamilySegment:
+        """The sphere-family segment that sweeps a flank envelope: the side (cylinder or cone)."""
+        return self.sphere_family()[-1]
+
     def profile_points(self, n_per_segment: int = 32) -> np.ndarray:
         """Polyline ``(rho, z)`` of the whole profile, tip to top (mm)."""
         pts = [seg.points(n_per_segment) for seg in self.profile()]
@@ -167,9 +224,187 @@ class Cutter:
         raise NotImplementedError
 
     def to_dict(self) -> dict:
-        d = {"kind": self.kind, "spec": self.spec()}
-        d.update({k: getattr(self, k) for k in self.__dataclass_fields__})
+        d: dict = {"kind": self.kind, "spec": self.spec()}
+        for k in self.__dataclass_fields__:  # type: ignore[attr-defined]
+            v = getattr(self, k)
+            d[k] = None if v is None else (v if not isinstance(v, Shank) else [v.diameter, v.length])
         return d
+
+    # ------------------------------------------------------------------ shared vocabulary
+    def end_mill_radii(self, purpose: str) -> EndMillRadii:
+        """``(r, R_t, R)`` of a ball, flat or bull-nose end mill (mm).
+
+        Other cutters raise :class:`InputError` saying what ``purpose`` needs them for.
+        """
+        raise InputError(f"{purpose} are defined for ball, flat and bull-nose end mills, not {self.spec()}")
+
+    def height(self, rho) -> np.ndarray:
+        """Height of the tool's lower surface above the tip at distance ``rho`` from the axis (mm).
+
+        ``inf`` beyond the tool's largest radius (OpenCAMLib's ``height(r)``).
+
+        >>> BullNoseEndMill(20, 4).height([0.0, 6.0, 10.0]).round(12).tolist()
+        [0.0, 0.0, 4.0]
+        """
+        rho = np.abs(np.asarray(rho, float))
+        out = np.full(rho.shape, np.inf)
+        for seg in self.profile():
+            out = np.minimum(out, _segment_z_at(seg, rho, lowest=True))
+        return out
+
+    def width(self, h) -> np.ndarray:
+        """Radius of the tool at height ``h`` above the tip (mm); 0 outside ``[0, length]``
+        (OpenCAMLib's ``width(h)``).
+
+        >>> BallEndMill(10).width([0.0, 5.0]).round(12).tolist()
+        [0.0, 5.0]
+        """
+        h = np.asarray(h, float)
+        out = np.zeros(h.shape)
+        for seg in self.profile():
+            out = np.maximum(out, _segment_rho_at(seg, h))
+        return out
+
+    def offset(self, d: float) -> "Cutter":
+        """The cutter grown by ``d`` mm normal to its surface (OpenCAMLib's ``offsetCutter``):
+        ball D -> ball D + 2d, flat D -> bull (D + 2d, r = d), bull (D, r) -> bull (D + 2d, r + d)."""
+        raise InputError(f"the offset of {self.spec()} is not a cutter of this library (ball, flat or bull only)")
+
+    def apt_parameters(self) -> tuple[float, float, float, float, float, float, float]:
+        """The APT 7 parameters ``(d, r, e, f, alpha, beta, h)``: diameter, corner radius, radial
+        and axial position of the corner centre (mm), bottom and side angles (degrees), height (mm).
+        One convention for every tool: a flat end mill is ``(D, 0, D/2, 0, 0, 0, h)``."""
+        raise NotImplementedError
+
+    def body_parts(self) -> list[tuple[float, float, float]]:
+        """The cylinders above the cutting part: ``(radius, z_bottom, z_top)`` of shank and holder (mm)."""
+        out = []
+        z = self.length
+        for part in (self.shank, self.holder):
+            if part is not None:
+                out.append((part.diameter / 2, z, z + part.length))
+                z += part.length
+        return out
+
+    def signed_distance(self, points, *, tip=(0.0, 0.0, 0.0), axis=(0.0, 0.0, 1.0)) -> np.ndarray:
+        """Signed distance (mm) of 3-D points to the tool body placed with its tip at ``tip`` and unit
+        ``axis`` (tip towards shank): negative inside the body, positive outside.
+
+        The body is the profile revolved about the axis and closed by its top, plus the shank and
+        holder cylinders. Exact for line and arc profiles (distances to each segment).
+
+        >>> float(BallEndMill(10).signed_distance([[0.0, 0.0, -1.0]])[0])
+        1.0
+        >>> float(FlatEndMill(10).signed_distance([[0.0, 0.0, 1.0]])[0])
+        -1.0
+        """
+        p = np.asarray(points, float).reshape(-1, 3) - np.asarray(tip, float)
+        a = np.asarray(axis, float)
+        a = a / np.linalg.norm(a)
+        z = p @ a
+        rho = np.linalg.norm(p - z[:, None] * a, axis=1)
+        d = _region_distance(self._outline(), rho, z)
+        for R_, z0, z1 in self.body_parts():
+            box = [LineSegment(0.0, z0, R_, z0), LineSegment(R_, z0, R_, z1), LineSegment(R_, z1, 0.0, z1)]
+            d = np.minimum(d, _region_distance(box, rho, z))
+        return d.reshape(np.shape(points)[:-1])
+
+    def _outline(self) -> list:
+        """The closed half-section boundary without the axis: profile and top cap."""
+        segs = list(self.profile())
+        last = segs[-1]
+        end = last.points(2)[-1]
+        if end[0] > 1e-12:
+            segs.append(LineSegment(float(end[0]), float(end[1]), 0.0, float(end[1])))
+        return segs
+
+
+def _segment_z_at(seg, rho: np.ndarray, lowest: bool) -> np.ndarray:
+    """z of the segment at radius rho (inf where it does not reach rho)."""
+    if isinstance(seg, LineSegment):
+        lo, hi = min(seg.rho0, seg.rho1), max(seg.rho0, seg.rho1)
+        if hi - lo < 1e-15:
+            z = np.where(np.abs(rho - lo) <= 1e-12, min(seg.z0, seg.z1), np.inf)
+            return z
+        t = (rho - seg.rho0) / (seg.rho1 - seg.rho0)
+        z = seg.z0 + t * (seg.z1 - seg.z0)
+        return np.where((rho >= lo - 1e-12) & (rho <= hi + 1e-12), z, np.inf)
+    pts = _arc_points_at_rho(seg, rho)
+    return pts
+
+
+def _arc_points_at_rho(seg, rho):
+    dx = rho - seg.rho_c
+    inside = np.abs(dx) <= seg.radius + 1e-12
+    dz = np.sqrt(np.clip(seg.radius ** 2 - dx * dx, 0, None))
+    best = np.full(rho.shape, np.inf)
+    for sgn in (-1.0, 1.0):
+        z = seg.z_c + sgn * dz
+        ang = np.degrees(np.arctan2(z - seg.z_c, dx))
+        ok = inside & _angle_in(ang, seg.start_deg, seg.end_deg)
+        best = np.where(ok, np.minimum(best, z), best)
+    return best
+
+
+def _angle_in(ang, a0, a1):
+    lo, hi = min(a0, a1), max(a0, a1)
+    ang = np.asarray(ang)
+    return ((ang >= lo - 1e-9) & (ang <= hi + 1e-9)) | ((ang + 360 >= lo - 1e-9) & (ang + 360 <= hi + 1e-9)) | (
+        (ang - 360 >= lo - 1e-9) & (ang - 360 <= hi + 1e-9))
+
+
+def _segment_rho_at(seg, h: np.ndarray) -> np.ndarray:
+    if isinstance(seg, LineSegment):
+        lo, hi = min(seg.z0, seg.z1), max(seg.z0, seg.z1)
+        if hi - lo < 1e-15:
+            return np.where(np.abs(h - lo) <= 1e-12, max(seg.rho0, seg.rho1), 0.0)
+        t = (h - seg.z0) / (seg.z1 - seg.z0)
+        r = seg.rho0 + t * (seg.rho1 - seg.rho0)
+        return np.where((h >= lo - 1e-12) & (h <= hi + 1e-12), r, 0.0)
+    dz = h - seg.z_c
+    inside = np.abs(dz) <= seg.radius + 1e-12
+    dr = np.sqrt(np.clip(seg.radius ** 2 - dz * dz, 0, None))
+    best = np.zeros(h.shape)
+    for sgn in (-1.0, 1.0):
+        r = seg.rho_c + sgn * dr
+        ang = np.degrees(np.arctan2(dz, sgn * dr))
+        ok = inside & _angle_in(ang, seg.start_deg, seg.end_deg)
+        best = np.where(ok, np.maximum(best, r), best)
+    return best
+
+
+def _segment_distance(seg, rho, z) -> np.ndarray:
+    if isinstance(seg, LineSegment):
+        a = np.array([seg.rho0, seg.z0])
+        b = np.array([seg.rho1, seg.z1])
+        ab = b - a
+        L2 = float(ab @ ab)
+        t = np.clip(((rho - a[0]) * ab[0] + (z - a[1]) * ab[1]) / L2, 0, 1) if L2 > 0 else np.zeros_like(rho)
+        return np.hypot(rho - a[0] - t * ab[0], z - a[1] - t * ab[1])
+    dx, dz = rho - seg.rho_c, z - seg.z_c
+    ang = np.degrees(np.arctan2(dz, dx))
+    on = _angle_in(ang, seg.start_deg, seg.end_deg)
+    d_circle = np.abs(np.hypot(dx, dz) - seg.radius)
+    ends = seg.points(2)
+    d_end = np.minimum(np.hypot(rho - ends[0, 0], z - ends[0, 1]), np.hypot(rho - ends[1, 0], z - ends[1, 1]))
+    return np.where(on, np.minimum(d_circle, d_end), d_end)
+
+
+def _region_distance(segs, rho, z) -> np.ndarray:
+    """Signed distance to the half-section region bounded by ``segs`` and the axis (inside < 0)."""
+    d = np.full(rho.shape, np.inf)
+    for seg in segs:
+        d = np.minimum(d, _segment_distance(seg, rho, z))
+    # inside, exactly: above the lowest boundary at rho, within the width at z, below the top
+    low = np.full(rho.shape, np.inf)
+    wid = np.zeros(rho.shape)
+    top = -np.inf
+    for seg in segs:
+        low = np.minimum(low, _segment_z_at(seg, rho, lowest=True))
+        wid = np.maximum(wid, _segment_rho_at(seg, z))
+        top = max(top, float(seg.points(2)[:, 1].max()))
+    inside = (z > low) & (rho < wid) & (z < top)
+    return np.where(inside, -d, d)
 
 
 def _family_of(seg) -> list[SphereFamilySegment]:
@@ -204,6 +439,9 @@ class BallEndMill(Cutter):
     D: float
     length: float = 0.0
 
+    shank: Shank | None = None
+    holder: Shank | None = None
+
     kind = "ball"
 
     def __post_init__(self):
@@ -217,6 +455,19 @@ class BallEndMill(Cutter):
     @property
     def corner_radius(self) -> float:
         return self.D / 2
+
+    def end_mill_radii(self, purpose: str) -> EndMillRadii:
+        return EndMillRadii(self.D / 2, 0.0, self.D / 2)
+
+    def offset(self, d: float) -> "Cutter":
+        return BallEndMill(self.D + 2 * _num("d", d), self.length, self.shank, self.holder)
+
+    def apt_parameters(self):
+        R = self.D / 2
+        return (self.D, R, 0.0, R, 0.0, 0.0, self.length)
+
+    def sweep_segment(self) -> SphereFamilySegment:
+        return self.sphere_family()[0]  # the ball's single sphere
 
     def profile(self):
         R = self.D / 2
@@ -233,6 +484,9 @@ class FlatEndMill(Cutter):
     D: float
     length: float = 0.0
 
+    shank: Shank | None = None
+    holder: Shank | None = None
+
     kind = "flat"
 
     def __post_init__(self):
@@ -240,11 +494,20 @@ class FlatEndMill(Cutter):
         object.__setattr__(self, "length", _length(self.length, self.D))
 
     r = 0.0
-    corner_radius = 0.0
 
     @property
     def R_t(self) -> float:
         return self.D / 2
+
+    def end_mill_radii(self, purpose: str) -> EndMillRadii:
+        return EndMillRadii(0.0, self.D / 2, self.D / 2)
+
+    def offset(self, d: float) -> "Cutter":
+        d = _num("d", d)
+        return BullNoseEndMill(self.D + 2 * d, d, self.length, self.shank, self.holder) if d > 0 else self
+
+    def apt_parameters(self):
+        return (self.D, 0.0, self.D / 2, 0.0, 0.0, 0.0, self.length)
 
     def profile(self):
         R = self.D / 2
@@ -266,6 +529,9 @@ class BullNoseEndMill(Cutter):
     r: float
     length: float = 0.0
 
+    shank: Shank | None = None
+    holder: Shank | None = None
+
     kind = "bull"
 
     def __post_init__(self):
@@ -282,6 +548,16 @@ class BullNoseEndMill(Cutter):
     @property
     def corner_radius(self) -> float:
         return self.r
+
+    def end_mill_radii(self, purpose: str) -> EndMillRadii:
+        return EndMillRadii(self.r, self.D / 2 - self.r, self.D / 2)
+
+    def offset(self, d: float) -> "Cutter":
+        d = _num("d", d)
+        return BullNoseEndMill(self.D + 2 * d, self.r + d, self.length, self.shank, self.holder)
+
+    def apt_parameters(self):
+        return (self.D, self.r, self.D / 2 - self.r, self.r, 0.0, 0.0, self.length)
 
     def profile(self):
         R, r = self.D / 2, self.r
@@ -308,6 +584,9 @@ class ConicalCutter(Cutter):
     angle: float
     length: float = 0.0
 
+    shank: Shank | None = None
+    holder: Shank | None = None
+
     kind = "cone"
 
     def __post_init__(self):
@@ -325,6 +604,9 @@ class ConicalCutter(Cutter):
         top = R + self.length * math.tan(math.radians(self.angle))
         return [LineSegment(0.0, 0.0, R, 0.0), LineSegment(R, 0.0, top, self.length)]
 
+    def apt_parameters(self):
+        return (self.D, 0.0, self.D / 2, 0.0, 0.0, float(self.angle), self.length)
+
     def spec(self):
         return f"cone:D={self.D:g},angle={self.angle:g}"
 
@@ -341,6 +623,9 @@ class DrumCutter(Cutter):
     R_p: float
     length: float = 0.0
     concave: bool = False
+
+    shank: Shank | None = None
+    holder: Shank | None = None
 
     kind = "drum"
 
@@ -369,6 +654,14 @@ class DrumCutter(Cutter):
             arc = ArcSegment(R - self.R_p, h, self.R_p, -half, half, convex=True)
         return [LineSegment(0.0, 0.0, end, 0.0), arc, LineSegment(end, self.length, 0.0, self.length)]
 
+    def sweep_segment(self) -> SphereFamilySegment:
+        return next(sg for sg in self.sphere_family() if sg.kind == "arc")
+
+    def apt_parameters(self):
+        """APT has no drum: the arc as the corner ``(D, R_p, D/2 - R_p, L/2, 0, 0, L)`` (e < 0 for a drum)."""
+        sign = -1.0 if self.concave else 1.0
+        return (self.D, self.R_p, self.D / 2 - sign * self.R_p, self.length / 2, 0.0, 0.0, self.length)
+
     def spec(self):
         return f"{'barrel' if self.concave else 'drum'}:D={self.D:g},Rp={self.R_p:g},L={self.length:g}"
 
@@ -391,6 +684,9 @@ class APTCutter(Cutter):
     beta: float
     h: float
     length: float = 0.0
+
+    shank: Shank | None = None
+    holder: Shank | None = None
 
     kind = "apt"
 
@@ -423,6 +719,13 @@ class APTCutter(Cutter):
         segs.append(LineSegment(*p_end, top_rho, self.h))
         return segs
 
+    @property
+    def corner_radius(self) -> float:
+        return self.r
+
+    def apt_parameters(self):
+        return (self.D, self.r, self.e, self.f, self.alpha, self.beta, self.h)
+
     def spec(self):
         return (f"apt:D={self.D:g},r={self.r:g},e={self.e:g},f={self.f:g},alpha={self.alpha:g},"
                 f"beta={self.beta:g},h={self.h:g}")
@@ -435,15 +738,36 @@ def _length(length, D) -> float:
     return x if x > 0 else 3.0 * _num("D", D)
 
 
-def end_mill_radii(cutter: Cutter, purpose: str) -> tuple[str, float, float]:
-    """``(kind, r, R_t)`` of a ball, flat or bull-nose end mill: corner radius and torus major radius (mm).
+def cutter_from_apt(params) -> Cutter | None:
+    """The cutter of an APT ``CUTTER/`` statement (1, 2 or 7 values, mm and degrees).
 
-    Other cutters raise :class:`InputError` saying what ``purpose`` needs them for.
+    Ball, flat and bull-nose end mills are recognised from the 7 parameters (the convention of
+    :meth:`Cutter.apt_parameters`), a conical cutter from ``r = 0, alpha = 0, beta != 0``; other
+    consistent sets give an :class:`APTCutter`; ``None`` when the set is not a cutter of this library.
+
+    >>> cutter_from_apt([20, 4, 6, 4, 0, 0, 60]).spec()
+    'bull:D=20,r=4'
     """
-    if cutter.kind not in ("ball", "flat", "bull"):
-        raise InputError(f"{purpose} are defined for ball, flat and bull-nose end mills, not {cutter.spec()}")
-    r = cutter.corner_radius
-    return cutter.kind, r, cutter.D / 2 - r
+    v = [float(x) for x in params]
+    if not v:
+        return None
+    d = v[0]
+    r = v[1] if len(v) > 1 else 0.0
+    e, f = (v[2], v[3]) if len(v) >= 4 else (d / 2 - r, r)
+    alpha, beta = (v[4], v[5]) if len(v) >= 6 else (0.0, 0.0)
+    h = v[6] if len(v) >= 7 else 0.0
+    try:
+        if alpha == 0 and beta == 0 and abs(e - (d / 2 - r)) < 1e-9 and abs(f - r) < 1e-9:
+            if r == 0:
+                return FlatEndMill(d, h)
+            if abs(r - d / 2) < 1e-9:
+                return BallEndMill(d, h)
+            return BullNoseEndMill(d, r, h)
+        if r == 0 and alpha == 0 and abs(e - d / 2) < 1e-9 and f == 0:
+            return ConicalCutter(d, beta, h)
+        return APTCutter(d, r, e, f, alpha, beta, h)
+    except InputError:
+        return None
 
 
 # ----------------------------------------------------------------------------- strings

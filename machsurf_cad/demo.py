@@ -37,7 +37,7 @@ def default_part_path(work_dir: Path) -> Path:
 def run_demo(out: Path, say=print) -> int:
     from .cli import Staging, _write_json
     from .cutters import parse_cutter
-    from .deviation import deviation
+    from .measure import deviation
     from .geometry import local_properties
     from .meshsample import subdivide
     from .occ import read_step_faces, read_stl, write_step, write_stl

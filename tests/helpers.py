@@ -26,3 +26,20 @@ def random_surface(rng, rational=False, degree=(3, 2), n=(7, 5), size=100.0):
     kv, mv = knots(nv, q)
     w = rng.uniform(0.6, 1.8, size=(nu, nv)) if rational else None
     return BSplineSurface(p, q, ku, mu, kv, mv, poles, w)
+
+
+def assert_points_close(actual, expected, atol, what="points"):
+    """Every point (row) of ``actual`` within ``atol`` (mm, Euclidean) of ``expected``; reports the worst."""
+    a = np.asarray(actual, float)
+    b = np.asarray(expected, float)
+    assert a.shape == b.shape, f"{what}: shapes {a.shape} and {b.shape} differ"
+    d = np.linalg.norm(np.atleast_2d(a - b), axis=-1) if a.ndim >= 1 and a.shape[-1:] in ((2,), (3,)) else np.abs(a - b)
+    worst = float(np.max(d)) if d.size else 0.0
+    assert worst <= atol, f"{what}: max distance {worst:.3g} > {atol:.3g} at index {int(np.argmax(d))}"
+
+
+def assert_close(actual, expected, atol, what="value"):
+    """``|actual - expected| <= atol`` elementwise, reporting the worst difference."""
+    d = np.abs(np.asarray(actual, float) - np.asarray(expected, float))
+    worst = float(np.max(d)) if d.size else 0.0
+    assert worst <= atol, f"{what}: max difference {worst:.3g} > {atol:.3g}"

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from helpers import random_surface
-from machsurf_cad.deviation import deviation, project_points
+from machsurf_cad.measure import deviation, project_points
 from machsurf_cad.geometry import builders
 from machsurf_cad.geometry.face import Face
 

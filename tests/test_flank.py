@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from machsurf_cad.errors import InputError
-from machsurf_cad.flank import (NoAdmissibleSetting, RuledSurface, interference, minimax_setting, optimum_setting,
+from machsurf_cad.flank_milling import (NoAdmissibleSetting, RuledSurface, interference, minimax_setting, optimum_setting,
                                 rule_frame, standard_setting)
-from machsurf_cad.flank import ruled as R_
+from machsurf_cad import examples
 from machsurf_cad.geometry import BSplineCurve, builders
 
 
@@ -29,7 +29,7 @@ def test_developable_surfaces_are_exact(shape, side):
 
 
 def test_closed_forms_on_straight_directrices():
-    s = R_.hyperbolic_paraboloid(30.0, 80.0)
+    s = examples.hypar_ruled(30.0, 80.0)
     for R in (10.0, 40.0):
         fr = rule_frame(s, 0.5)
         a0 = math.radians(fr.alpha0_deg)
@@ -42,7 +42,7 @@ def test_closed_forms_on_straight_directrices():
 
 
 def test_tangency_conditions_hold_at_the_solution():
-    for s, u_p, R in ((R_.liu(), 11.507, 10.0), (R_.hyperbolic_paraboloid(), 0.5, 40.0), (R_.eq18(), 0.4, 10.0)):
+    for s, u_p, R in ((examples.liu_ruled(), 11.507, 10.0), (examples.hypar_ruled(), 0.5, 40.0), (examples.eq18_ruled(), 0.4, 10.0)):
         st = optimum_setting(s, u_p, R)
         q, a = st.q, st.a
 
@@ -67,7 +67,7 @@ def test_tangency_conditions_hold_at_the_solution():
 
 
 def test_interference_matches_brute_force():
-    s = R_.liu()
+    s = examples.liu_ruled()
     for kind in ("standard", "optimum"):
         st = standard_setting(s, 11.507, 10.0) if kind == "standard" else optimum_setting(s, 11.507, 10.0)
         e = interference(s, st, n_v=51)
@@ -84,27 +84,27 @@ def test_interference_matches_brute_force():
 
 
 def test_optimum_beats_standard_tenfold_on_the_hyperbolic_paraboloid():
-    from machsurf_cad.flank.study import ratio_curve
+    from machsurf_cad.flank_milling.study import ratio_curve
 
     c = ratio_curve(30.0, 80.0, [5.0, 10.0, 20.0, 40.0, 60.0, 78.0])
     assert min(c["ratio"]) >= 10.0
-    s = R_.hyperbolic_paraboloid(30.0, 80.0)
+    s = examples.hypar_ruled(30.0, 80.0)
     optimum_setting(s, 0.5, 79.9)  # below h_p / (2 sin alpha0) = 80 mm: exists
     with pytest.raises(NoAdmissibleSetting, match="no admissible"):
         optimum_setting(s, 0.5, 81.0)
 
 
 def test_minimax_is_no_worse_than_optimum():
-    s = R_.liu()
+    s = examples.liu_ruled()
     o = interference(s, optimum_setting(s, 11.507, 10.0)).max_abs
     m = interference(s, minimax_setting(s, 11.507, 10.0)).max_abs
     assert m <= o + 1e-9
 
 
 def test_whole_surface_path_envelope_and_its_deviation():
-    from machsurf_cad.flank.path import envelope_deviation, envelope_surface, flank_path, position_deviation
+    from machsurf_cad.flank_milling.path import envelope_deviation, envelope_surface, flank_path, position_deviation
 
-    s = R_.hyperbolic_paraboloid(20.0, 80.0)
+    s = examples.hypar_ruled(20.0, 80.0)
     path = flank_path(s, 15.0, "optimum", tolerance=0.01)
     assert len(path.settings) >= 9 and path.axis.shape == (len(path.settings), 3)
     assert np.allclose(np.linalg.norm(path.axis, axis=1), 1.0)
@@ -130,9 +130,9 @@ def test_whole_surface_path_envelope_and_its_deviation():
 
 
 def test_radius_range_brackets_the_tolerance():
-    from machsurf_cad.flank.path import radius_range, whole_surface_error
+    from machsurf_cad.flank_milling.path import radius_range, whole_surface_error
 
-    s = R_.hyperbolic_paraboloid(30.0, 80.0)
+    s = examples.hypar_ruled(30.0, 80.0)
     rr = radius_range(s, 0.1, kind="optimum", r_min=1.0, r_max=100.0, n_scan=10, n_rules=5, rel_precision=1e-2)
     assert rr["feasible"] and rr["iterations"]
     assert whole_surface_error(s, rr["R_max_mm"], "optimum", 1, 5) <= 0.1
@@ -140,15 +140,13 @@ def test_radius_range_brackets_the_tolerance():
 
 
 def test_bad_inputs():
-    s = R_.hyperbolic_paraboloid()
+    s = examples.hypar_ruled()
     with pytest.raises(InputError, match="outside"):
         optimum_setting(s, 1.5, 10.0)
     crossing = RuledSurface.from_curves(builders.line_segment([0, 0, 0], [10, 0, 0]),
                                         builders.line_segment([0, 0, 5], [10, 0, -5]))
     with pytest.raises(InputError, match="zero length"):
         standard_setting(crossing, 0.5, 5.0)
-    from machsurf_cad import examples
-
     with pytest.raises(InputError, match="not a ruled surface: it deviates by"):
         RuledSurface.from_surface(examples.bezier5_patch())
     approx = RuledSurface.from_surface(examples.bezier5_patch(), tolerance=50.0)

@@ -4,6 +4,7 @@ cutter, the paper's example, loops, tool paths, bad input."""
 import math
 
 import numpy as np
+from helpers import assert_points_close
 import pytest
 
 from machsurf_cad import examples
@@ -169,12 +170,12 @@ def test_trimmed_face_gives_trimmed_s1_s2():
     from machsurf_cad.machining.toolpath import tool_paths
 
     tp = tool_paths(ms, stepover=4.0, chordal_tolerance=0.01)
-    cc = np.concatenate([p.cc for p in tp.passes])
+    cc = np.concatenate([p.cc for p in tp.cutting_passes()])
     assert np.hypot(cc[:, 0] - 70, cc[:, 1] - 45).min() >= 12.0 - 1e-6
-    uv = np.concatenate([p.uv for p in tp.passes])
+    uv = np.concatenate([p.extras["uv"] for p in tp.cutting_passes()])
     assert top.contains_uv(uv[:, 0], uv[:, 1]).all()
     # some plane crosses the hole: it is split in two passes on the same level
-    levels = [round(p.level, 9) for p in tp.passes]
+    levels = [round(p.extras["level"][0], 9) for p in tp.cutting_passes()]
     assert len(levels) > len(set(levels))
 
 
@@ -231,30 +232,42 @@ def test_bad_inputs():
 
 
 def test_tool_paths_on_planes_and_cl_files(tmp_path):
-    from machsurf_cad.machining.toolpath import tool_paths, write_apt, write_csv
+    from machsurf_cad.cam import Move, read_apt, write_apt, write_csv
+    from machsurf_cad.machining.toolpath import tool_paths
 
     F = examples.bezier5_patch()
     ms = machining_surface(F, "bull:D=28,r=4", axes=5, strategy="planes:x", lead=20, tolerance=TOL)
     tp = tool_paths(ms, stepover=5.0, chordal_tolerance=0.01)
-    levels = sorted({round(p.level, 9) for p in tp.passes})
+    levels = sorted({round(p.extras["level"][0], 9) for p in tp.cutting_passes()})
     assert np.allclose(np.diff(levels), 5.0)
-    for p in tp.passes:
-        assert np.abs(p.k[:, 0] - p.level).max() < 1e-8  # C1 lies in its plane x = level
+    for p in tp.cutting_passes():
+        assert np.abs(p.extras["K"][:, 0] - p.extras["level"][0]).max() < 1e-8  # C1 lies in its plane x = level
         assert np.allclose(np.linalg.norm(p.axis, axis=1), 1.0)
         # tip = CL - r u and CL = K + R_t v: |CL - K| = R_t, (CL - K) . u = 0
-        w = p.cl - p.k
+        w = p.extras["CL"] - p.extras["K"]
         assert np.abs(np.linalg.norm(w, axis=1) - 10.0).max() < 3 * TOL
-        assert np.allclose(p.tip, p.cl - 4.0 * p.axis)
-    assert tp.chordal_error_measured <= 0.01
-    assert tp.axis_error_deg <= ms.alpha_max_deg_measured
+        assert np.allclose(p.tip, p.extras["CL"] - 4.0 * p.axis)
+    assert tp.info["chordal_error_measured_mm"] <= 0.01
+    assert tp.info["axis_error_deg_measured"] <= ms.alpha_max_deg_measured
     rows = write_csv(tmp_path / "p.csv", tp).read_text().splitlines()
-    assert len(rows) == tp.n_points + 1
-    apt = write_apt(tmp_path / "p.apt", tp, ms).read_text().splitlines()
+    assert len(rows) == tp.n_positions + 1 and rows[0].startswith("pass,index,move,tip_x,tip_y,tip_z,i,j,k")
+    apt = write_apt(tmp_path / "p.apt", tp).read_text().splitlines()
     assert apt[3] == "CUTTER/28.0000,4.0000,10.0000,4.0000,0.0000,0.0000,84.0000"
+    assert apt[4:7] == ["LOADTL/1", "SPINDL/RPM,10000.0000,CLW", "MULTAX/ON"] and apt[-1] == "FINI"
     gotos = [ln for ln in apt if ln.startswith("GOTO/")]
-    assert len(gotos) == tp.n_points + 2 * len(tp.passes)
+    assert len(gotos) == tp.n_positions == tp.n_cut + 2 * tp.n_passes
     first = [float(x) for x in gotos[1][5:].split(",")]
-    assert np.allclose(first[:3], tp.passes[0].tip[0], atol=1e-5) and np.allclose(first[3:], tp.passes[0].axis[0])
+    p0 = tp.cutting_passes()[0]
+    assert_points_close(first[:3], p0.tip[0], atol=1e-5)
+    assert_points_close(first[3:], p0.axis[0], atol=1e-9)
+    back = read_apt(tmp_path / "p.apt")  # round trip: same positions, axes, moves and passes
+    assert_points_close(back.tip, tp.tip, atol=1e-5)
+    assert_points_close(back.axis, tp.axis, atol=2e-9)
+    assert (back.move == tp.move).all() and (back.pass_index == tp.pass_index).all()
+    assert back.cutter == ms.cutter.__class__(28.0, 4.0, 84.0)
+    # approach and retract along the axis from the shank side, 5 mm
+    app = np.nonzero(tp.move == Move.APPROACH)[0]
+    assert_points_close(tp.tip[app - 1] - tp.tip[app], 5.0 * tp.axis[app], atol=1e-12)
 
 
 def test_iso_paths_three_axis(tmp_path):
@@ -262,11 +275,11 @@ def test_iso_paths_three_axis(tmp_path):
 
     ms = machining_surface(_tilted_wave(), "ball:D=10", axes=3, strategy="iso:u", tolerance=TOL)
     tp = tool_paths(ms, stepover=4.0, chordal_tolerance=0.005)
-    assert len(tp.passes) >= 10
-    for p in tp.passes:
-        assert np.allclose(p.uv[:, 1], p.level)  # v constant along an iso-u pass
+    assert len(tp.cutting_passes()) >= 10
+    for p in tp.cutting_passes():
+        assert np.allclose(p.extras["uv"][:, 1], p.extras["level"][0])  # v constant along an iso-u pass
         assert np.allclose(p.axis, [0, 0, 1])
-        assert np.allclose(p.tip, p.k - [0, 0, 5.0])
+        assert np.allclose(p.tip, p.extras["K"] - [0, 0, 5.0])
 
 
 def _dimpled_plate():
@@ -302,7 +315,7 @@ def test_tool_paths_avoid_trimmed_loops():
     ms = machining_surface(_dimpled_plate(), "ball:D=20", axes=5, strategy="planes:x", lead=5, tolerance=0.01,
                            loops="trim")
     tp = tool_paths(ms, stepover=5.0, chordal_tolerance=0.01)
-    uv = np.concatenate([p.uv for p in tp.passes])
+    uv = np.concatenate([p.extras["uv"] for p in tp.cutting_passes()])
     assert ms.s1.contains_uv(uv[:, 0], uv[:, 1]).all()
     dev = fit_deviation(ms, "S1", samples=60)
     assert ms.s1.contains_uv(dev.foot_uv[:, 0], dev.foot_uv[:, 1]).all() and dev.max_abs <= 0.01

@@ -138,7 +138,7 @@ def test_any_face_type_is_converted_to_nurbs():
 
 
 def test_stl_deflection_is_measured(tmp_path):
-    from machsurf_cad.deviation import deviation
+    from machsurf_cad.measure import deviation
     from machsurf_cad.meshsample import subdivide
     from machsurf_cad.occ import read_stl, write_stl
 

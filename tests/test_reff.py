@@ -8,7 +8,7 @@ import pytest
 from machsurf_cad.errors import DegenerateGeometryError, InputError
 from machsurf_cad.geometry import builders
 from machsurf_cad.geometry.face import Face
-from machsurf_cad.reff import effective_radius, parse_directions, reff_maps, stepover
+from machsurf_cad.effradius import effective_radius, parse_directions, reff_maps, stepover
 
 mpmath = pytest.importorskip("mpmath", reason="mpmath gives the extended-precision reference")
 

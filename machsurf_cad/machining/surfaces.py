@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..approx import SurfaceFit, fit_surface
-from ..cutters import Cutter, end_mill_radii, parse_cutter
+from ..cutters import Cutter, parse_cutter
 from ..errors import DegenerateGeometryError, InputError
 from ..geometry.bspline import BSplineSurface, unit_normals
 from ..geometry.differential import local_properties_grid
@@ -40,9 +40,7 @@ _SIN_MIN_AXIS_TO_NORMAL = 1e-6  # |u x n| below this: v undefined (axis along th
 _MIN_AXIS_ELEVATION_DEG = 1.0   # the axis must stay this far above the tangent plane
 
 
-def tool_radii(cutter: Cutter) -> tuple[str, float, float]:
-    """``(kind, r, R_t)`` of a Table-1 cutter: corner radius and torus major radius (mm)."""
-    return end_mill_radii(cutter, "machining surfaces (Table 1)")
+_PURPOSE = "machining surfaces (Table 1)"
 
 
 def _as_face(face) -> Face:
@@ -67,7 +65,7 @@ class MachiningMaps:
     def __post_init__(self):
         if self.axes not in (3, 5):
             raise InputError("axes must be 3 or 5")
-        tool_radii(self.cutter)
+        self.cutter.end_mill_radii(_PURPOSE)
 
     # ------------------------------------------------------------------ exact local data
     def frame(self, us, vs) -> LocalFrame:
@@ -108,12 +106,13 @@ class MachiningMaps:
     # ------------------------------------------------------------------ Table 1
     def s1(self, us, vs) -> np.ndarray:
         """Guiding surface map on the grid ``us x vs`` (mm)."""
-        kind, r, Rt = tool_radii(self.cutter)
+        em = self.cutter.end_mill_radii(_PURPOSE)
+        r, Rt = em.r, em.R_t
         fr = self.frame(us, vs)
         if self.axes == 5:
             return fr.point + r * fr.normal
         u = self.axis(fr)
-        if kind == "ball":
+        if em.is_ball:
             x = fr.point + r * fr.normal
         else:
             x = fr.point + r * fr.normal + Rt * self.v_direction(u, fr)
@@ -123,10 +122,11 @@ class MachiningMaps:
         """Orientation surface map on the grid (5-axis only), mm."""
         if self.axes != 5:
             raise InputError("3-axis machining has no orientation surface (the axis is fixed)")
-        kind, r, Rt = tool_radii(self.cutter)
+        em = self.cutter.end_mill_radii(_PURPOSE)
+        r, Rt = em.r, em.R_t
         fr = self.frame(us, vs)
         u = self.axis(fr)
-        if kind == "ball":
+        if em.is_ball:
             return fr.point + r * fr.normal + self.axis_length * u
         return fr.point + r * fr.normal + Rt * self.v_direction(u, fr)
 
@@ -136,8 +136,9 @@ class MachiningMaps:
         The direction of ``u x n`` in the plane normal to ``u`` winds once around such a point;
         a non-zero winding number around a grid cell finds it even when no sample hits it.
         """
-        kind, r, Rt = tool_radii(self.cutter)
-        if kind == "ball" or (self.axes == 5 and isinstance(self.strategy, LeadTilt) and self.strategy.lead_deg != 0):
+        em = self.cutter.end_mill_radii(_PURPOSE)
+        r, Rt = em.r, em.R_t
+        if em.is_ball or (self.axes == 5 and isinstance(self.strategy, LeadTilt) and self.strategy.lead_deg != 0):
             return
         u0, u1, v0, v1 = self.face.uv_bounds
         us, vs = np.linspace(u0, u1, n), np.linspace(v0, v1, n)
@@ -225,12 +226,13 @@ class MachiningSurface:
         return [self.s1] + ([self.s2] if self.s2 is not None else [])
 
     def report(self) -> dict:
-        kind, r, Rt = tool_radii(self.cutter)
+        em = self.cutter.end_mill_radii(_PURPOSE)
+        r, Rt = em.r, em.R_t
         out = {
             "trimmed_holes": max(0, len(self.s1.loops) - max(1, len(self.nominal.loops))) if self.loops.found else 0,
-            "tool": self.cutter.to_dict(), "tool_kind": kind, "r_mm": r, "R_t_mm": Rt,
+            "tool": self.cutter.to_dict(), "tool_kind": self.cutter.kind, "r_mm": r, "R_t_mm": Rt,
             "axes": self.axes, "strategy": self.strategy.describe(), "tolerance_mm": self.tolerance,
-            "tip_location": self.tip, "axis_length_mm": self.axis_length if kind == "ball" else None,
+            "tip_location": self.tip, "axis_length_mm": self.axis_length if em.is_ball else None,
             "S1": {"name": self.s1.name, **self.s1_fit.report()},
             "S2": None if self.s2 is None else {"name": self.s2.name, **self.s2_fit.report()},
             "loops": self.loops.report(),
@@ -306,7 +308,8 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
     if tip and axes != 3:
         raise InputError("tip=True is for 3-axis machining (5-axis S1 is the offset F + r n)")
     cutter = parse_cutter(tool) if isinstance(tool, str) else tool
-    kind, r, Rt = tool_radii(cutter)
+    em = cutter.end_mill_radii(_PURPOSE)
+    r, Rt = em.r, em.R_t
     face = _as_face(face)
     strat = _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field)
     L = float(axis_length) if axis_length is not None else cutter.D
@@ -347,8 +350,8 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
     s2 = trimmed.with_surface(s2_fit.surface, "S2_orientation") if s2_fit is not None else None
     axis_err = a_tol = a_meas = None
     if axes == 5:
-        axis_err = _measured_axis_error(maps, s1_fit.surface, s2_fit.surface, kind, L)
-        lever = L if kind == "ball" else Rt
+        axis_err = _measured_axis_error(maps, s1_fit.surface, s2_fit.surface, em.is_ball, L)
+        lever = L if em.is_ball else Rt
         a_tol = math.degrees(math.atan(2 * tolerance / lever))
         a_meas = math.degrees(math.atan((s1_fit.max_error + s2_fit.max_error) / lever))
     timings["total"] = time.perf_counter() - t0
@@ -374,9 +377,9 @@ def fit_deviation(ms: MachiningSurface, which: str = "S1", samples: int = 150):
     """Deviation map of a fitted machining surface against its exact map (mm).
 
     Sampled on a grid shifted off the fit's samples, inside the trimmed face; signed along
-    the face's outward normal. Returns a :class:`~machsurf_cad.deviation.DeviationResult`.
+    the face's outward normal. Returns a :class:`~machsurf_cad.measure.DeviationResult`.
     """
-    from ..deviation import DeviationResult, deviation_stats
+    from ..measure import DeviationResult, deviation_stats
 
     maps = ms.maps
     fit = ms.s1_fit if which == "S1" else ms.s2_fit
@@ -405,7 +408,7 @@ def fit_deviation(ms: MachiningSurface, which: str = "S1", samples: int = 150):
                            grid_points, grid_index)
 
 
-def _measured_axis_error(maps: MachiningMaps, s1: BSplineSurface, s2: BSplineSurface, kind: str, L: float) -> float:
+def _measured_axis_error(maps: MachiningMaps, s1: BSplineSurface, s2: BSplineSurface, is_ball: bool, L: float) -> float:
     """Largest angle (deg) between the axis recovered from the fitted S1/S2 and the exact axis."""
     u0, u1, v0, v1 = maps.face.uv_bounds
     fr_u = np.linspace(u0, u1, 41)[:-1] + (u1 - u0) / 82
@@ -414,7 +417,7 @@ def _measured_axis_error(maps: MachiningMaps, s1: BSplineSurface, s2: BSplineSur
     exact = maps.axis(fr)
     k = s1.evaluate_grid(fr_u, fr_v)
     cl = s2.evaluate_grid(fr_u, fr_v)
-    got = recover_axis(k, cl, fr.normal, ball_length=L if kind == "ball" else None)
+    got = recover_axis(k, cl, fr.normal, ball_length=L if is_ball else None)
     cosang = np.clip(np.einsum("...i,...i->...", got, exact), -1, 1)
     return float(np.degrees(np.arccos(cosang)).max())
 
@@ -422,7 +425,8 @@ def _measured_axis_error(maps: MachiningMaps, s1: BSplineSurface, s2: BSplineSur
 def detect_loops(maps: MachiningMaps, n: int = 121) -> LoopReport:
     """Local, fold and global loops of S1 (and S2) on an n x n grid inside the trimmed face."""
     face = maps.face
-    kind, r, Rt = tool_radii(maps.cutter)
+    em = maps.cutter.end_mill_radii(_PURPOSE)
+    r, Rt = em.r, em.R_t
     u0, u1, v0, v1 = face.uv_bounds
     us, vs = np.linspace(u0, u1, n), np.linspace(v0, v1, n)
     U, V = np.meshgrid(us, vs, indexing="ij")
@@ -452,8 +456,8 @@ def detect_loops(maps: MachiningMaps, n: int = 121) -> LoopReport:
         if reg is not None:
             regions.append(reg)
     # global: offset points closer to F than r (S1 = F + r n only)
-    if r > 0 and (maps.axes == 5 or kind == "ball"):
-        from ..deviation import project_points
+    if r > 0 and (maps.axes == 5 or em.is_ball):
+        from ..measure import project_points
 
         offs = fr.point + r * fr.normal
         proj = project_points(face.surface, offs[inside])
@@ -491,5 +495,5 @@ def _near_edge(n: int) -> np.ndarray:
     return m
 
 
-__all__ = ["machining_surface", "MachiningSurface", "MachiningMaps", "recover_axis", "detect_loops", "tool_radii",
+__all__ = ["machining_surface", "MachiningSurface", "MachiningMaps", "recover_axis", "detect_loops",
            "LoopError", "FixedAxis", "LeadTilt", "AxisField", "PlanesFeed", "IsoFeed"]

@@ -13,47 +13,15 @@ GOTO statements, u the tool axis.
 
 from __future__ import annotations
 
-import csv
 import math
-from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
+from ..cam.toolpath import ToolPath
 from ..errors import InputError
 from ..geometry.bspline import unit_normals
 from .strategies import IsoFeed, PlanesFeed
-from .surfaces import MachiningSurface, recover_axis, tool_radii
-
-
-@dataclass(frozen=True)
-class Pass:
-    """One tool pass: parameters and positions, all (n, 3) in mm except ``uv`` and ``axis``."""
-
-    uv: np.ndarray
-    cc: np.ndarray
-    k: np.ndarray
-    cl: np.ndarray
-    tip: np.ndarray
-    axis: np.ndarray
-    level: float
-
-
-@dataclass(frozen=True)
-class ToolPath:
-    passes: tuple
-    kind: str
-    stepover: float
-    chordal_tolerance: float
-    chordal_error_measured: float
-    axis_error_deg: float | None
-    n_points: int
-
-    def report(self) -> dict:
-        return {"kind": self.kind, "n_passes": len(self.passes), "n_points": self.n_points,
-                "stepover_mm": self.stepover, "chordal_tolerance_mm": self.chordal_tolerance,
-                "chordal_error_measured_mm": self.chordal_error_measured,
-                "axis_error_deg_measured": self.axis_error_deg}
+from .surfaces import MachiningSurface, recover_axis
 
 
 def _douglas_peucker(pts: np.ndarray, tol: float) -> np.ndarray:
@@ -98,12 +66,30 @@ def _chord_error(dense: np.ndarray, kept_idx: np.ndarray) -> float:
 
 
 def tool_paths(ms: MachiningSurface, *, stepover: float, chordal_tolerance: float = 0.01, strategy=None,
-               grid: int = 401, zigzag: bool = True) -> ToolPath:
+               grid: int = 401, zigzag: bool = True, clearance: float = 5.0) -> ToolPath:
     """Tool paths on S1: plane sections (``PlanesFeed``) or iso-parametric lines (``IsoFeed``).
 
-    ``stepover`` is the distance between planes (mm) or, for iso lines, the approximate
-    distance between lines measured on S1. ``strategy`` defaults to the machining surface's
-    feed. Points outside the trimmed face are dropped (a pass is split there).
+    Parameters
+    ----------
+    ms : MachiningSurface
+        The certified S1/S2 surfaces.
+    stepover : float
+        Distance between planes (mm) or, for iso lines, the approximate distance between lines
+        measured on S1.
+    chordal_tolerance : float
+        Max distance of the dense tip path from the chords between written positions, mm.
+    strategy : PlanesFeed or IsoFeed, optional
+        Defaults to the machining surface's feed.
+    clearance : float
+        Approach and retract distance along the tool axis, mm.
+
+    Returns
+    -------
+    ToolPath
+        Positions at the tool tip with unit axes, CC points, extras ``uv`` (on the nominal),
+        ``K`` (S1), ``CL`` (S2 / ball centre) and ``level``; ``info`` holds the measured chordal
+        error and, in 5 axes, the measured axis error. Points outside the trimmed face are
+        dropped (a pass is split there).
     """
     if not stepover > 0 or not chordal_tolerance > 0:
         raise InputError("stepover and chordal tolerance must be > 0 mm")
@@ -141,10 +127,10 @@ def tool_paths(ms: MachiningSurface, *, stepover: float, chordal_tolerance: floa
     import contourpy
 
     gen = contourpy.contour_generator(x=vs, y=us, z=g_masked, line_type="Separate")
-    passes = []
+    tips, axes, ccs, extras = [], [], [], []
     chord_err = 0.0
     axis_err = 0.0
-    for li, level in enumerate(levels):
+    for level in levels:
         for line in gen.lines(float(level)):
             if len(line) < 2:
                 continue
@@ -156,16 +142,20 @@ def tool_paths(ms: MachiningSurface, *, stepover: float, chordal_tolerance: floa
             idx = _douglas_peucker(p["tip"], chordal_tolerance)
             chord_err = max(chord_err, _chord_error(p["tip"], idx))
             axis_err = max(axis_err, p["axis_err"])
-            sel = {k: v[idx] for k, v in p.items() if k != "axis_err"}
-            if zigzag and len(passes) % 2 == 1:
-                sel = {k: v[::-1] for k, v in sel.items()}
-            passes.append(Pass(uv[idx] if not (zigzag and len(passes) % 2 == 1) else uv[idx][::-1],
-                               sel["cc"], sel["k"], sel["cl"], sel["tip"], sel["axis"], float(level)))
-    if not passes:
+            if zigzag and len(tips) % 2 == 1:
+                idx = idx[::-1]
+            tips.append(p["tip"][idx])
+            axes.append(p["axis"][idx])
+            ccs.append(p["cc"][idx])
+            extras.append({"uv": uv[idx], "K": p["k"][idx], "CL": p["cl"][idx],
+                           "level": np.full(idx.size, float(level))})
+    if not tips:
         raise InputError("no tool pass crosses the face: reduce the step-over")
-    n_pts = sum(p.tip.shape[0] for p in passes)
-    return ToolPath(tuple(passes), kind, float(stepover), float(chordal_tolerance), chord_err,
-                    axis_err if ms.axes == 5 else None, n_pts)
+    info = {"kind": kind, "stepover_mm": float(stepover), "chordal_tolerance_mm": float(chordal_tolerance),
+            "chordal_error_measured_mm": chord_err, "axis_error_deg_measured": axis_err if ms.axes == 5 else None,
+            "n_cut_positions": int(sum(t.shape[0] for t in tips))}
+    return ToolPath.from_passes(tips, axes, cc=ccs, extras=extras, clearance=clearance, cutter=ms.cutter,
+                                name="machining_surface", info=info)
 
 
 def _densify(uv: np.ndarray, ms: MachiningSurface, level: float, kind: str, N) -> np.ndarray:
@@ -196,7 +186,8 @@ def _densify(uv: np.ndarray, ms: MachiningSurface, level: float, kind: str, N) -
 
 
 def _positions(ms: MachiningSurface, uv: np.ndarray) -> dict:
-    kind, r, Rt = tool_radii(ms.cutter)
+    em = ms.cutter.end_mill_radii("tool paths on machining surfaces")
+    r = em.r
     F = ms.nominal.surface
     d = F.derivatives(uv[:, 0], uv[:, 1], 1)
     n = unit_normals(d.su, d.sv, F.scale)
@@ -206,8 +197,8 @@ def _positions(ms: MachiningSurface, uv: np.ndarray) -> dict:
     maps = ms.maps
     if ms.axes == 5:
         cl = ms.s2.surface.evaluate(uv[:, 0], uv[:, 1])
-        axis = recover_axis(k, cl, n, ball_length=ms.axis_length if kind == "ball" else None)
-        if kind == "ball":
+        axis = recover_axis(k, cl, n, ball_length=ms.axis_length if em.is_ball else None)
+        if em.is_ball:
             cl = k  # the ball's CL is its centre; S2 only orients the axis
         # measured against the exact axis
         exact = np.stack([maps.tool_axis(np.array([a]), np.array([b]))[0, 0] for a, b in uv[:: max(1, len(uv) // 16)]])
@@ -219,48 +210,3 @@ def _positions(ms: MachiningSurface, uv: np.ndarray) -> dict:
         axis_err = 0.0
     tip = cl - r * axis
     return {"cc": d.point, "k": k, "cl": cl, "tip": tip, "axis": axis, "axis_err": axis_err}
-
-
-def write_csv(path, tp: ToolPath) -> Path:
-    """One row per CL point: pass, index, u, v, tip xyz, axis ijk, K, C_L, C_C (mm)."""
-    path = Path(path)
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["pass", "index", "u", "v", "tip_x", "tip_y", "tip_z", "i", "j", "k", "K_x", "K_y", "K_z",
-                    "CL_x", "CL_y", "CL_z", "CC_x", "CC_y", "CC_z"])
-        for pi, p in enumerate(tp.passes):
-            for j in range(p.tip.shape[0]):
-                w.writerow([pi, j, f"{p.uv[j, 0]:.10g}", f"{p.uv[j, 1]:.10g}", *(f"{x:.6f}" for x in p.tip[j]),
-                            *(f"{x:.9f}" for x in p.axis[j]), *(f"{x:.6f}" for x in p.k[j]),
-                            *(f"{x:.6f}" for x in p.cl[j]), *(f"{x:.6f}" for x in p.cc[j])])
-    return path
-
-
-def apt_cutter(cutter) -> str:
-    """APT 7-parameter CUTTER statement (d, r, e, f, alpha, beta, h) in mm and degrees."""
-    kind, r, Rt = tool_radii(cutter)
-    return f"CUTTER/{cutter.D:.4f},{r:.4f},{Rt:.4f},{r:.4f},0.0000,0.0000,{cutter.length:.4f}"
-
-
-def write_apt(path, tp: ToolPath, ms: MachiningSurface, *, clearance: float = 10.0, partno: str = "MACHSURF") -> Path:
-    """APT CLDATA: UNITS/MM, CUTTER/..., MULTAX/ON for 5 axes, GOTO/x,y,z[,i,j,k] at the tool tip.
-
-    Between passes the tool retracts ``clearance`` mm along its axis (RAPID moves).
-    """
-    path = Path(path)
-    five = ms.axes == 5
-    lines = [f"$$ machsurf_cad tool path: {tp.kind}, {len(tp.passes)} passes, chordal tol {tp.chordal_tolerance:g} mm",
-             f"PARTNO/{partno}", "UNITS/MM", apt_cutter(ms.cutter), "MULTAX/ON" if five else "MULTAX/OFF"]
-
-    def goto(p, a):
-        if five:
-            return "GOTO/{:.5f},{:.5f},{:.5f},{:.7f},{:.7f},{:.7f}".format(*p, *a)
-        return "GOTO/{:.5f},{:.5f},{:.5f}".format(*p)
-
-    for ps in tp.passes:
-        lines += ["RAPID", goto(ps.tip[0] + clearance * ps.axis[0], ps.axis[0])]
-        lines += [goto(ps.tip[j], ps.axis[j]) for j in range(ps.tip.shape[0])]
-        lines += ["RAPID", goto(ps.tip[-1] + clearance * ps.axis[-1], ps.axis[-1])]
-    lines.append("FINI")
-    path.write_text("\n".join(lines) + "\n")
-    return path

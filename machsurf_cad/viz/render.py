@@ -8,7 +8,7 @@ import numpy as np
 
 import pyvista as pv
 
-from ..deviation import DeviationResult
+from ..measure import DeviationResult
 
 try:  # keep VTK's "no X server" chatter off the terminal; rendering falls back off-screen
     from vtkmodules.vtkCommonCore import vtkLogger

@@ -117,7 +117,7 @@ class MachiningSurfaceFeature(_Base):
 
 
 class EffectiveRadiusFeature(_Base):
-    """Effective cutter radius over a face for one machining direction (machsurf_cad.reff); the shape is
+    """Effective cutter radius over a face for one machining direction (machsurf_cad.effradius); the shape is
     the face, coloured by the GUI; the figures are properties."""
 
     def __init__(self, obj):
@@ -133,7 +133,7 @@ class EffectiveRadiusFeature(_Base):
             _add(obj, "App::PropertyString", name, "Result", name, read_only=True)
 
     def compute(self, obj):
-        from machsurf_cad.reff import reff_maps
+        from machsurf_cad.effradius import reff_maps
 
         fc = source_face(obj)
         f = face_to_numpy(fc, "F")
@@ -149,7 +149,7 @@ class EffectiveRadiusFeature(_Base):
 
 class FlankSettingFeature(_Base):
     """Optimum (or standard/minimax) flank setting of a cylindrical cutter on a ruled face; the shape is
-    the placed cylinder (machsurf_cad.flank)."""
+    the placed cylinder (machsurf_cad.flank_milling)."""
 
     def __init__(self, obj):
         obj.Proxy = self
@@ -165,7 +165,7 @@ class FlankSettingFeature(_Base):
             _add(obj, "App::PropertyString", name, "Result", name, read_only=True)
 
     def compute(self, obj):
-        from machsurf_cad.flank import RuledSurface, flank
+        from machsurf_cad.flank_milling import RuledSurface, flank
 
         f = face_to_numpy(source_face(obj), "F")
         rs = RuledSurface.from_surface(f.surface, tolerance=1e-6)
@@ -181,7 +181,7 @@ class FlankSettingFeature(_Base):
 
 
 class EnvelopeFeature(_Base):
-    """Swept envelopes of a rotational tool along an example motion, chained G1 (machsurf_cad.envelope)."""
+    """Swept envelopes of a rotational tool along an example motion, chained G1 (machsurf_cad.sweep)."""
 
     def __init__(self, obj):
         obj.Proxy = self
@@ -197,8 +197,8 @@ class EnvelopeFeature(_Base):
             _add(obj, "App::PropertyString", name, "Result", name, read_only=True)
 
     def compute(self, obj):
-        from machsurf_cad.envelope import envelope
-        from machsurf_cad.envelope.examples import EXAMPLES
+        from machsurf_cad.sweep import envelope
+        from machsurf_cad.sweep.examples import EXAMPLES
 
         if obj.Motion not in EXAMPLES:
             raise MachsurfError(f"unknown motion {obj.Motion!r}; known: {', '.join(sorted(EXAMPLES))}")

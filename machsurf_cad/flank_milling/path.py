@@ -253,9 +253,9 @@ def envelope_deviation(path: FlankPath, env_surface, n: int = 121):
     point is on its start or end edge (the first or last tool position), the distance to that
     whole cylinder is used instead of the distance to the edge curve. The sign says whether the
     nominal point is inside the swept tool (gouge, +) or outside (undercut, -), decided by the
-    densely interpolated tool positions. Returns a :class:`~machsurf_cad.deviation.DeviationResult`.
+    densely interpolated tool positions. Returns a :class:`~machsurf_cad.measure.DeviationResult`.
     """
-    from ..deviation import DeviationResult, deviation_stats, project_points
+    from ..measure import DeviationResult, deviation_stats, project_points
 
     pts_grid, brute = position_deviation(path, n_u=n, n_v=n)
     pts = pts_grid.reshape(-1, 3)

@@ -8,13 +8,14 @@ import math
 
 import numpy as np
 
-from .ruled import hyperbolic_paraboloid
 from .settings import NoAdmissibleSetting, interference, optimum_setting, standard_setting
 
 
 def ratio_curve(alpha0_deg: float, h_p: float, radii) -> dict:
     """Standard-distributed and optimum errors and their ratio for each R (NaN where no optimum)."""
-    s = hyperbolic_paraboloid(alpha0_deg, h_p)
+    from ..examples import hypar_ruled
+
+    s = hypar_ruled(alpha0_deg, h_p)
     std, opt = [], []
     for R in radii:
         e_s = interference(s, standard_setting(s, 0.5, float(R))).max_abs

@@ -263,11 +263,7 @@ def tool_segment(cutter: Cutter, which: str | int = "side") -> SphereFamilySegme
         if not 0 <= which < len(fam):
             raise InputError(f"segment index {which} out of range ({len(fam)} segment(s))")
         return fam[which]
-    if cutter.kind == "ball":
-        return fam[0]
-    if cutter.kind == "drum":
-        return next(s for s in fam if s.kind == "arc")
-    return fam[-1]
+    return cutter.sweep_segment()
 
 
 def make_envelope(motion: Motion, tool, *, side: int = 1, segment="side", a_range=None, name: str = "pass") -> Envelope:

@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import cosdg, sindg
 
-from .cutters import Cutter, end_mill_radii, parse_cutter
+from .cutters import Cutter, parse_cutter
 from .errors import DegenerateGeometryError, InputError
 from .geometry.bspline import BSplineSurface, unit_normals
 from .geometry.face import Face
@@ -47,10 +47,7 @@ from .geometry.face import Face
 _S_FLAT_DEG = 1e-9  # slopes below this are a flat spot: R_eff is infinite
 
 
-def _radii(cutter: Cutter) -> tuple[str, float, float]:
-    """``(kind, R, r)``: outer radius D/2 (the paper's "R") and corner radius (mm)."""
-    kind, r, _ = end_mill_radii(cutter, "effective radius maps")
-    return kind, cutter.D / 2, r
+_PURPOSE = "effective radius maps"
 
 
 def _check_angles(name: str, deg) -> np.ndarray:
@@ -75,11 +72,12 @@ def effective_radius(cutter, slope_deg, alpha_deg) -> np.ndarray:
     5.0
     """
     c = parse_cutter(cutter) if isinstance(cutter, str) else cutter
-    kind, R, r = _radii(c)
+    em = c.end_mill_radii(_PURPOSE)
+    R, r = em.R, em.r
     S = _check_angles("slope", slope_deg)
     al = _check_angles("alpha", alpha_deg)
     S, al = np.broadcast_arrays(S, al)
-    if kind == "ball":
+    if em.is_ball:
         return np.full(S.shape, R)
     # sines and cosines of angles in degrees, exact near multiples of 90 deg (no pi/2 rounding)
     sS, cS = sindg(S), cosdg(S)
@@ -198,7 +196,8 @@ class ReffMaps:
         return self.compare.D / 2 if self.compare is not None else self.cutter.D / 2
 
     def report(self) -> dict:
-        kind, R, r = _radii(self.cutter)
+        em = self.cutter.end_mill_radii(_PURPOSE)
+        R, r = em.R, em.r
         rep = {
             "tool": self.cutter.to_dict(), "compare": None if self.compare is None else self.compare.to_dict(),
             "R_mm": R, "r_mm": r, "R_t_mm": R - r, "axes": self.axes, "lead_deg": self.lead_deg,
@@ -279,12 +278,13 @@ def reff_maps(face, tool, *, directions=(0.0,), grid: int = 256, compare="ball",
     timings = {}
     face = _as_face(face)
     cutter = parse_cutter(tool) if isinstance(tool, str) else tool
-    kind, R, r = _radii(cutter)
+    em = cutter.end_mill_radii(_PURPOSE)
+    R, r = em.R, em.r
     comp = None
     if compare is not None:
         comp = parse_cutter(f"ball:D={cutter.D:g}") if compare == "ball" else (
             parse_cutter(compare) if isinstance(compare, str) else compare)
-        _radii(comp)
+        comp.end_mill_radii(_PURPOSE)
     if axes not in (3, 5):
         raise InputError("axes must be 3 or 5")
     if axes == 3 and (lead or tilt):

@@ -21,10 +21,33 @@ Directrix = Callable[[np.ndarray, int], np.ndarray]
 
 
 def _curve_directrix(c: BSplineCurve) -> Directrix:
-    def f(u, order=2):
-        return c.derivatives(np.asarray(u, dtype=float), order)
+    if c.is_rational or c.periodic or len(c.knots) != 2:
+        def f(u, order=2):
+            return c.derivatives(np.asarray(u, dtype=float), order)
 
-    return f
+        return f
+    # one polynomial span: its power-basis coefficients in s = (u - a) / L, then Horner (the
+    # optimum solver calls this thousands of times on a few points; exact to rounding)
+    a, b = c.bounds
+    L = b - a
+    s = np.linspace(0.0, 1.0, c.degree + 1)
+    coef = [np.linalg.solve(np.vander(s, c.degree + 1, increasing=True), c.evaluate(a + s * L))]
+    for k in range(1, 3):
+        prev = coef[-1]
+        coef.append(prev[1:] * np.arange(1, prev.shape[0])[:, None] / L if prev.shape[0] > 1 else np.zeros((1, 3)))
+
+    def g(u, order=2):
+        t = (np.asarray(u, dtype=float) - a) / L
+        out = np.empty(t.shape + (order + 1, 3))
+        for k in range(order + 1):
+            ck = coef[k]
+            acc = np.broadcast_to(ck[-1], t.shape + (3,)).copy()
+            for row in ck[-2::-1]:
+                acc = acc * t[..., None] + row
+            out[..., k, :] = acc
+        return out
+
+    return g
 
 
 @dataclass(frozen=True)
@@ -150,64 +173,3 @@ def _swap_uv(s: BSplineSurface) -> BSplineSurface:
     return BSplineSurface(s.degree_v, s.degree_u, s.knots_v, s.mults_v, s.knots_u, s.mults_u,
                           s.poles.transpose(1, 0, 2), None if s.weights is None else s.weights.T,
                           s.periodic_v, s.periodic_u, s.name)
-
-
-# ----------------------------------------------------------------------------- the paper's surfaces
-def _poly_directrix(coeffs):
-    """Directrix from per-coordinate callables (value, d1, d2) of u."""
-
-    def f(u, order=2):
-        u = np.asarray(u, dtype=float)
-        out = np.empty(u.shape + (order + 1, 3))
-        with np.errstate(invalid="ignore", divide="ignore"):  # NaN outside a directrix's domain
-            for k in range(order + 1):
-                for i in range(3):
-                    out[..., k, i] = coeffs[i][k](u)
-        return out
-
-    return f
-
-
-def eq18() -> RuledSurface:
-    """Redonnet et al. eq. (18), exact: C0 = (30u^2 + 10u + 30, 100 sqrt(u) - 50, 70 - 30u^2),
-    C1 = (50u^2 + 20, 40 - 60 sin(pi u / 2), -60 + 20u^2), u in [0, 1]."""
-    z = np.zeros_like
-    c0 = _poly_directrix([
-        (lambda u: 30 * u ** 2 + 10 * u + 30, lambda u: 60 * u + 10, lambda u: 60 + z(u)),
-        # sqrt(u): derivatives are infinite at u = 0; clamp to u >= 1e-12 so they stay finite
-        (lambda u: 100 * np.sqrt(u) - 50, lambda u: 50 / np.sqrt(np.maximum(u, 1e-12)),
-         lambda u: -25 * np.maximum(u, 1e-12) ** -1.5),
-        (lambda u: 70 - 30 * u ** 2, lambda u: -60 * u, lambda u: -60 + z(u)),
-    ])
-    k = 0.5 * np.pi
-    c1 = _poly_directrix([
-        (lambda u: 50 * u ** 2 + 20, lambda u: 100 * u, lambda u: 100 + z(u)),
-        (lambda u: 40 - 60 * np.sin(k * u), lambda u: -60 * k * np.cos(k * u), lambda u: 60 * k * k * np.sin(k * u)),
-        (lambda u: -60 + 20 * u ** 2, lambda u: 40 * u, lambda u: 40 + z(u)),
-    ])
-    return RuledSurface(c0, c1, (0.0, 1.0), "eq18")
-
-
-def hyperbolic_paraboloid(alpha0_deg: float = 30.0, h_p: float = 80.0, k: float | None = None) -> RuledSurface:
-    """Section 3.2's hyperbolic paraboloid (k = h_p by default), exact."""
-    k = h_p if k is None else k
-    t = k * np.tan(np.radians(alpha0_deg))
-    z = np.zeros_like
-    c0 = _poly_directrix([(lambda u: k * u, lambda u: k + z(u), z), (lambda u: t * (u - 0.5), lambda u: t + z(u), z),
-                          (lambda u: h_p / 2 + z(u), z, z)])
-    c1 = _poly_directrix([(lambda u: k * u, lambda u: k + z(u), z), (lambda u: -t * (u - 0.5), lambda u: -t + z(u), z),
-                          (lambda u: -h_p / 2 + z(u), z, z)])
-    return RuledSurface(c0, c1, (0.0, 1.0), f"hypar_a{alpha0_deg:g}_h{h_p:g}")
-
-
-def liu() -> RuledSurface:
-    """Liu's surface: C0 = (u, 20.429, 0), C1 = (u, 0.0382 u^2, 33.995), 0 <= u <= 23.014, exact."""
-    z = np.zeros_like
-    c0 = _poly_directrix([(lambda u: u, lambda u: 1 + z(u), z), (lambda u: 20.429 + z(u), z, z), (z, z, z)])
-    c1 = _poly_directrix([(lambda u: u, lambda u: 1 + z(u), z),
-                          (lambda u: 0.0382 * u ** 2, lambda u: 0.0764 * u, lambda u: 0.0764 + z(u)),
-                          (lambda u: 33.995 + z(u), z, z)])
-    return RuledSurface(c0, c1, (0.0, 23.014), "liu")
-
-
-EXAMPLES = {"eq18": eq18, "hypar": hyperbolic_paraboloid, "liu": liu}

@@ -1,14 +1,10 @@
-"""Example tool motions (mm) and the JSON path format."""
+"""Example tool motions (mm) for swept envelopes."""
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 import numpy as np
 
-from ..errors import InputError
-from .core import Motion
+from ..sweep.core import Motion
 
 
 def sine_motion() -> Motion:
@@ -35,21 +31,3 @@ def helix_motion() -> Motion:
         return np.stack([-s * np.cos(t), -s * np.sin(t), np.full(t.shape, np.cos(np.radians(15)))], -1)
 
     return Motion(tip, axis, (0.0, 1.0), "quarter helix")
-
-
-EXAMPLES = {"sine": sine_motion, "line": line_motion, "helix": helix_motion}
-
-
-def load_path(path) -> Motion:
-    """A motion from JSON: ``{"points": [[x, y, z], ...], "axes": [[i, j, k], ...]}`` (axes optional,
-    or ``"axis": [i, j, k]`` constant); tip points in mm, interpolated by a cubic B-spline."""
-    p = Path(path)
-    if not p.is_file():
-        raise InputError(f"path file not found: {p}")
-    try:
-        d = json.loads(p.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"path file {p} is not valid JSON: {exc.msg if hasattr(exc, 'msg') else exc}") from None
-    if not isinstance(d, dict) or "points" not in d:
-        raise InputError(f"path file {p} needs a 'points' list")
-    return Motion.from_points(d["points"], d.get("axes"), d.get("axis", (0.0, 0.0, 1.0)), label=p.name)

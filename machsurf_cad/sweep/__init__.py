@@ -9,7 +9,7 @@ def envelope(tool, motion, *, passes: int = 1, continuity: str = "g1", theta_deg
              side: int = 1):
     """Python form of ``machsurf envelope``: ``passes`` envelopes of ``tool`` (str or Cutter) along
     ``motion`` (a :class:`Motion`), chained G1/G0, each fitted within ``tolerance`` (mm).
-    Returns a :class:`~machsurf_cad.envelope.passes.PassChain` (``.report()`` for the figures)."""
+    Returns a :class:`~machsurf_cad.sweep.passes.PassChain` (``.report()`` for the figures)."""
     from .passes import build_chain
 
     return build_chain(make_envelope(motion, tool, side=side), passes, continuity=continuity, theta_deg=theta_deg,

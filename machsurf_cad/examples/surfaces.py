@@ -1,6 +1,7 @@
 """The papers' test surfaces and the example parts, built in numpy (lengths in mm, angles in degrees).
 
-* :func:`hyperbolic_paraboloid` and :func:`liu_surface` are exact (polynomial directrices).
+* :func:`hyperbolic_paraboloid` and :func:`liu_surface` are exact (polynomial directrices), as B-spline
+  patches or (``*_ruled``) as :class:`RuledSurface` for flank milling; the directrices are defined once.
 * :func:`eq18_surface` has a sqrt(u) directrix: it is fitted within a stated tolerance and
   carries the error measured on points the fit never saw.
 * :func:`bezier5_patch` is a degree-5 Bezier patch of about 100 mm, like the
@@ -14,21 +15,33 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .geometry import BSplineCurve, BSplineSurface, builders
+from ..flank_milling.ruled import RuledSurface
+from ..geometry import BSplineCurve, BSplineSurface, builders
 
 
 # ----------------------------------------------------------------------------- flank-milling paper
-def hyperbolic_paraboloid(alpha0_deg: float = 30.0, h_p: float = 80.0, k: float | None = None) -> BSplineSurface:
-    """Hyperbolic paraboloid of Redonnet et al. section 3.2 (exact bilinear patch).
+def hypar_directrices(alpha0_deg: float = 30.0, h_p: float = 80.0,
+                      k: float | None = None) -> tuple[BSplineCurve, BSplineCurve]:
+    """Directrices of Redonnet et al. section 3.2's hyperbolic paraboloid (exact lines, mm).
 
     ``C0(u) = (k u, k tan(alpha0) (u - 1/2), h_p/2)``, ``C1(u) = (k u, -k tan(alpha0) (u - 1/2), -h_p/2)``,
-    u, v in [0, 1], with ``k = h_p`` by default as in the paper.
+    u in [0, 1], with ``k = h_p`` by default as in the paper.
     """
     k = h_p if k is None else k
     t = k * np.tan(np.radians(alpha0_deg))
     c0 = builders.line_segment([0.0, -t / 2, h_p / 2], [k, t / 2, h_p / 2])
     c1 = builders.line_segment([0.0, t / 2, -h_p / 2], [k, -t / 2, -h_p / 2])
-    return builders.ruled_surface(c0, c1, name=f"hypar_a{alpha0_deg:g}_h{h_p:g}")
+    return c0, c1
+
+
+def hyperbolic_paraboloid(alpha0_deg: float = 30.0, h_p: float = 80.0, k: float | None = None) -> BSplineSurface:
+    """The hyperbolic paraboloid as an exact bilinear B-spline patch (u, v in [0, 1])."""
+    return builders.ruled_surface(*hypar_directrices(alpha0_deg, h_p, k), name=f"hypar_a{alpha0_deg:g}_h{h_p:g}")
+
+
+def hypar_ruled(alpha0_deg: float = 30.0, h_p: float = 80.0, k: float | None = None) -> RuledSurface:
+    """The hyperbolic paraboloid as a :class:`RuledSurface` for flank milling (exact)."""
+    return RuledSurface.from_curves(*hypar_directrices(alpha0_deg, h_p, k), name=f"hypar_a{alpha0_deg:g}_h{h_p:g}")
 
 
 def liu_directrices() -> tuple[BSplineCurve, BSplineCurve]:
@@ -40,22 +53,63 @@ def liu_directrices() -> tuple[BSplineCurve, BSplineCurve]:
 
 
 def liu_surface() -> BSplineSurface:
-    """Liu's ruled surface (exact, u keeps its physical range 0..23.014)."""
+    """Liu's ruled surface as an exact B-spline patch (u keeps its physical range 0..23.014)."""
     return builders.ruled_surface(*liu_directrices(), name="liu")
+
+
+def liu_ruled() -> RuledSurface:
+    """Liu's surface as a :class:`RuledSurface` for flank milling (exact)."""
+    return RuledSurface.from_curves(*liu_directrices(), name="liu")
+
+
+def _directrix(value, d1, d2):
+    """A directrix ``f(u, order) -> (..., order + 1, 3)`` from vectorised maps of u (mm)."""
+
+    def f(u, order=2):
+        u = np.asarray(u, dtype=float)
+        with np.errstate(invalid="ignore", divide="ignore"):  # NaN outside a directrix's domain
+            return np.stack([value(u), d1(u), d2(u)][: order + 1], axis=-2)
+
+    return f
+
+
+def _eq18_directrices():
+    """Eq. (18)'s directrices with their first and second derivatives, exact (the one definition)."""
+    k = 0.5 * np.pi
+
+    def c0(u):
+        return np.stack([30 * u ** 2 + 10 * u + 30, 100 * np.sqrt(u) - 50, 70 - 30 * u ** 2], axis=-1)
+
+    def c0_d1(u):  # sqrt(u): derivatives are infinite at u = 0; clamp to u >= 1e-12 so they stay finite
+        return np.stack([60 * u + 10, 50 / np.sqrt(np.maximum(u, 1e-12)), -60 * u], axis=-1)
+
+    def c0_d2(u):
+        return np.stack([60 + 0 * u, -25 * np.maximum(u, 1e-12) ** -1.5, -60 + 0 * u], axis=-1)
+
+    def c1(u):
+        return np.stack([50 * u ** 2 + 20, 40 - 60 * np.sin(k * u), -60 + 20 * u ** 2], axis=-1)
+
+    def c1_d1(u):
+        return np.stack([100 * u, -60 * k * np.cos(k * u), 40 * u], axis=-1)
+
+    def c1_d2(u):
+        return np.stack([100 + 0 * u, 60 * k * k * np.sin(k * u), 40 + 0 * u], axis=-1)
+
+    return _directrix(c0, c0_d1, c0_d2), _directrix(c1, c1_d1, c1_d2)
+
+
+def eq18_ruled() -> RuledSurface:
+    """Redonnet et al. eq. (18) as a :class:`RuledSurface`, evaluated exactly:
+    C0 = (30u^2 + 10u + 30, 100 sqrt(u) - 50, 70 - 30u^2), C1 = (50u^2 + 20, 40 - 60 sin(pi u / 2), -60 + 20u^2),
+    u in [0, 1]."""
+    c0, c1 = _eq18_directrices()
+    return RuledSurface(c0, c1, (0.0, 1.0), "eq18")
 
 
 def eq18_directrix_maps():
     """The two directrices of Redonnet et al. eq. (18) as exact vectorised maps of u in [0, 1]."""
-
-    def c0(u):
-        u = np.asarray(u, dtype=float)
-        return np.stack([30 * u ** 2 + 10 * u + 30, 100 * np.sqrt(u) - 50, 70 - 30 * u ** 2], axis=-1)
-
-    def c1(u):
-        u = np.asarray(u, dtype=float)
-        return np.stack([50 * u ** 2 + 20, 40 - 60 * np.sin(0.5 * np.pi * u), -60 + 20 * u ** 2], axis=-1)
-
-    return c0, c1
+    c0, c1 = _eq18_directrices()
+    return (lambda u: c0(u, 0)[..., 0, :]), (lambda u: c1(u, 0)[..., 0, :])
 
 
 @dataclass(frozen=True)
@@ -127,13 +181,3 @@ def propeller_blade(span: float = 400.0, hub_radius: float = 60.0) -> BSplineSur
     pts = np.stack([np.broadcast_to(rho, y.shape), y, z], axis=-1)
     return builders.interpolate_grid(pts, 3, 3, params_u=np.linspace(0, 1, nu), params_v=np.linspace(0, 1, nv),
                                      name="propeller_blade")
-
-
-EXAMPLES = {
-    "bezier5": bezier5_patch,
-    "blade": propeller_blade,
-    "hypar": hyperbolic_paraboloid,
-    "liu": liu_surface,
-    "eq18": lambda: eq18_surface().surface,
-}
-"""Example surfaces by name, for the CLI's ``--example``."""
