@@ -19,12 +19,13 @@ import numpy as np
 from .errors import InputError, ToleranceError
 from .geometry.basis import collocation_matrix
 from .geometry.bspline import BSplineSurface
+from .results import Result
 
 GridMap = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
-@dataclass(frozen=True)
-class SurfaceFit:
+@dataclass(frozen=True, eq=False)
+class SurfaceFit(Result):
     """A fitted surface with its measured error (mm), never a tolerance it did not measure.
 
     ``max_error`` is the largest distance ``|fit(u, v) - f(u, v)|`` over ``n_check`` points the
@@ -104,7 +105,8 @@ def fit_surface(f: GridMap, bounds, *, tolerance: float, degree=(3, 3), max_pole
         Knots where the map is less smooth (e.g. the knots of the surface it is derived
         from), kept in the fit with these multiplicities (C^(degree - mult) there).
     progress : callable, optional
-        Called as ``progress(iteration, n_poles, max_error)`` after each refinement.
+        :data:`~machsurf_cad.results.Progress`: ``progress(iteration, None, "<poles> poles, error <e> mm")``
+        after each refinement (the total is not known in advance).
 
     Examples
     --------
@@ -167,7 +169,7 @@ def fit_surface(f: GridMap, bounds, *, tolerance: float, degree=(3, 3), max_pole
         max_err = float(max(err.max(), err_g.max()))
         history.append((nu, nv, max_err))
         if progress is not None:
-            progress(it, nu * nv, max_err)
+            progress(it, None, f"{nu * nv} poles, error {max_err:.3g} mm")
         if max_err <= tolerance:
             if err.max() >= err_g.max():
                 i, j = np.unravel_index(np.argmax(err), err.shape)

@@ -43,6 +43,7 @@ from .cutters import Cutter, parse_cutter
 from .errors import DegenerateGeometryError, InputError
 from .geometry.bspline import BSplineSurface, unit_normals
 from .geometry.face import Face
+from .results import Result
 
 _S_FLAT_DEG = 1e-9  # slopes below this are a flat spot: R_eff is infinite
 
@@ -131,8 +132,8 @@ def stepover(scallop: float, r_eff, rho) -> tuple[np.ndarray, np.ndarray]:
 
 
 # ----------------------------------------------------------------------------- maps
-@dataclass(frozen=True)
-class DirectionMap:
+@dataclass(frozen=True, eq=False)
+class DirectionMap(Result):
     """Maps for one machining direction ``theta_deg`` (feed projection angle with machine X)."""
 
     theta_deg: float
@@ -169,8 +170,8 @@ class DirectionMap:
         return out
 
 
-@dataclass(frozen=True)
-class ReffMaps:
+@dataclass(frozen=True, eq=False)
+class ReffMaps(Result):
     """Effective-radius maps over a face on a ``grid x grid`` parameter grid (mm, degrees)."""
 
     face: Face
@@ -203,7 +204,7 @@ class ReffMaps:
             "R_mm": R, "r_mm": r, "R_t_mm": R - r, "axes": self.axes, "lead_deg": self.lead_deg,
             "tilt_deg": self.tilt_deg, "scallop_mm": self.scallop, "grid": [int(self.us.size), int(self.vs.size)],
             "directions": [d.figures(self.inside, self.area_weights, self.R_ball) for d in self.directions],
-            "time_s": self.time_s, "timings_s": self.timings,
+            "time_s": {**self.timings, "total_s": self.time_s},
         }
         if self.best_theta_deg is not None:
             vals = self.best_theta_deg[self.inside]
@@ -303,7 +304,7 @@ def reff_maps(face, tool, *, directions=(0.0,), grid: int = 256, compare="ball",
     inside = face.contains_uv(U, V) if face.is_trimmed else np.ones(U.shape, bool)
     t = time.perf_counter()
     d = face.surface.derivatives_grid(us, vs, 2 if scallop is not None else 1)
-    timings["evaluate"] = time.perf_counter() - t
+    timings["evaluate_s"] = time.perf_counter() - t
     n = unit_normals(d.su, d.sv, face.surface.scale, U, V, check=False)
     bad = ~np.isfinite(n).all(axis=-1) & inside
     if np.any(bad):
@@ -320,7 +321,7 @@ def reff_maps(face, tool, *, directions=(0.0,), grid: int = 256, compare="ball",
     t = time.perf_counter()
     for theta in dirs:
         maps.append(_direction_map(theta, forms, cutter, comp, scallop, axes, lead, tilt, inside))
-    timings["maps"] = time.perf_counter() - t
+    timings["maps_s"] = time.perf_counter() - t
     best_t = best_v = None
     if len(maps) > 1:
         crit = np.stack([m.stepover if scallop is not None else m.r_eff for m in maps])

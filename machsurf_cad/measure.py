@@ -24,12 +24,13 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .errors import InputError
+from .results import Result
 from .geometry.bspline import BSplineSurface
 from .geometry.face import Face
 
 
-@dataclass(frozen=True)
-class Projection:
+@dataclass(frozen=True, eq=False)
+class Projection(Result):
     """Closest points on a surface: parameters ``uv`` (n, 2), ``foot`` (n, 3), ``normal`` (n, 3)."""
 
     uv: np.ndarray
@@ -39,8 +40,8 @@ class Projection:
     converged: np.ndarray
 
 
-@dataclass(frozen=True)
-class DeviationResult:
+@dataclass(frozen=True, eq=False)
+class DeviationResult(Result):
     """Signed distances (mm) of candidate points to a reference and their statistics.
 
     ``signed[i]`` is the distance of ``points[i]`` to the reference, positive on the side of
@@ -78,11 +79,15 @@ class DeviationResult:
         return self.max_abs <= self.tolerance
 
     def report(self) -> dict:
-        """JSON-friendly figures (mm)."""
-        out = dict(self.stats)
+        """JSON-ready figures with unit-suffixed keys (``max_abs_mm``, ``rms_mm``, ``worst_xyz_mm``...)."""
+        out = {(k + "_mm" if k in _MM_KEYS else k): v for k, v in self.stats.items()}
         out["tolerance_mm"] = self.tolerance
         out["within_tolerance"] = self.within_tolerance
         return out
+
+
+_MM_KEYS = {"max_abs", "max", "min", "mean", "mean_abs", "rms", "p50_abs", "p95_abs", "p99_abs", "worst_xyz",
+            "worst_signed"}
 
 
 def project_points(surface: BSplineSurface, points, *, seed_samples: int | None = None, max_iter: int = 50,
@@ -91,7 +96,7 @@ def project_points(surface: BSplineSurface, points, *, seed_samples: int | None 
 
     Newton's method on ``|S(u, v) - p|^2`` from the nearest of ``seed_samples^2`` reference
     samples (default: 6 per knot span, at least 64 per direction), with an active set for
-    the box bounds so feet on the boundary are exact too. ``progress(done, total)`` is
+    the box bounds so feet on the boundary are exact too. ``progress(done, total, message)`` is
     called after each chunk of points.
     """
     p = np.asarray(points, dtype=float).reshape(-1, 3)
@@ -113,12 +118,12 @@ def project_points(surface: BSplineSurface, points, *, seed_samples: int | None 
         for a in range(0, p.shape[0], chunk):
             parts.append(_newton(surface, p[a:a + chunk], uv[a:a + chunk].copy(), max_iter, uv_tol))
             if progress is not None:
-                progress(min(p.shape[0], a + chunk), p.shape[0])
+                progress(min(p.shape[0], a + chunk), p.shape[0], "closest points")
         return Projection(*(np.concatenate([getattr(q, k) for q in parts]) for k in
                             ("uv", "foot", "normal", "on_boundary", "converged")))
     res = _newton(surface, p, uv, max_iter, uv_tol)
     if progress is not None:
-        progress(p.shape[0], p.shape[0])
+        progress(p.shape[0], p.shape[0], "closest points")
     return res
 
 
@@ -201,7 +206,7 @@ def deviation(reference, candidate, *, samples: int = 200, tolerance: float | No
     triangles : array_like, optional
         Mesh connectivity of candidate points (kept for rendering).
     progress : callable, optional
-        ``progress(done, total)`` after each chunk of projected points.
+        :data:`~machsurf_cad.results.Progress` called after each chunk of projected points.
     """
     ref_surface = reference.surface if isinstance(reference, Face) else reference
     flip = -1.0 if isinstance(reference, Face) and reference.reversed else 1.0

@@ -1,7 +1,9 @@
 """Progress bars on a terminal, silence elsewhere (tqdm when available; optional).
 
-Algorithms take an optional ``progress`` callable and stay free of any UI; the CLI passes
-one of these. Nothing is shown when stderr is not a terminal (CI, pipes, FreeCAD).
+Algorithms take an optional :data:`~machsurf_cad.results.Progress` callable,
+``progress(done, total, message)``, and stay free of any UI; the CLI passes a :class:`Bar`
+(callable with that signature). Nothing is shown when stderr is not a terminal (CI, pipes,
+FreeCAD, which passes its own callable).
 """
 
 from __future__ import annotations
@@ -22,44 +24,29 @@ def enabled() -> bool:
 
 
 class Bar:
-    """A bar with a known total (``update(done)``) or an open-ended one (``step(text)``)."""
+    """A terminal bar; call it as ``bar(done, total, message)`` (total ``None`` when unknown)."""
 
     def __init__(self, desc: str, total: int | None = None):
-        self._bar = _tqdm()(desc=desc, total=total, leave=False, file=sys.stderr) if enabled() else None
+        tq = _tqdm()
+        self._bar = tq(desc=desc, total=total, leave=False, file=sys.stderr) if (enabled() and tq) else None
         self._done = 0
 
-    def update(self, done: int, total: int | None = None):
+    def __call__(self, done: int, total: int | None = None, message: str = "") -> None:
         if self._bar is None:
             return
         if total is not None and self._bar.total != total:
             self._bar.total = total
-        self._bar.update(done - self._done)
+        self._bar.update(max(0, done - self._done))
         self._done = done
+        if message:
+            self._bar.set_postfix_str(message, refresh=False)
 
-    def step(self, text: str = ""):
-        if self._bar is None:
-            return
-        self._bar.update(1)
-        if text:
-            self._bar.set_postfix_str(text)
-
-    def close(self):
+    def close(self) -> None:
         if self._bar is not None:
             self._bar.close()
 
-    def __enter__(self):
+    def __enter__(self) -> "Bar":
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc) -> None:
         self.close()
-
-
-def fit_progress(desc: str):
-    """A ``progress(iteration, n_poles, max_error)`` callback for :func:`machsurf_cad.approx.fit_surface`."""
-    bar = Bar(desc)
-
-    def cb(it, n_poles, err):
-        bar.step(f"{n_poles} poles, error {err:.3g} mm")
-
-    cb.close = bar.close
-    return cb

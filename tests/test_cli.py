@@ -47,8 +47,8 @@ def test_inspect_step_candidate_and_tolerance_exit_code(tmp_path):
     rep = json.loads((tmp_path / "ok" / "report.json").read_text())
     dev = rep["deviation"]
     # translating by 0.02 mm in z: the normal distance is 0.02 * n_z, at most 0.02 mm
-    assert 0.018 < dev["max_abs"] <= 0.02 + 1e-9
-    assert f"{dev['max_abs']:.6g}" in ok.stdout
+    assert 0.018 < dev["max_abs_mm"] <= 0.02 + 1e-9
+    assert f"{dev['max_abs_mm']:.6g}" in ok.stdout
     assert (tmp_path / "ok" / "deviation.png").stat().st_size > 10000
     bad = run("inspect", nominal, shifted, "--tol", "0.01", "--samples", "40", "--no-render", "-o", tmp_path / "bad")
     assert bad.returncode == 2 and "NOT met" in bad.stdout
@@ -63,7 +63,7 @@ def test_inspect_stl_candidate(tmp_path):
     r = run("inspect", BLOCK, stl, "--no-render", "-o", tmp_path / "o")
     assert r.returncode == 0, r.stderr
     dev = json.loads((tmp_path / "o" / "report.json").read_text())["deviation"]
-    assert dev["max_abs"] < 0.05 * 1.2 and dev["n_points"] > 1000
+    assert dev["max_abs_mm"] < 0.05 * 1.2 and dev["n_points"] > 1000
 
 
 @pytest.mark.parametrize("case", ["missing", "empty", "corrupt", "noface", "index", "suffix"])
@@ -108,7 +108,7 @@ def test_machining_surface_command_with_toolpath(tmp_path):
     assert f"{rep['S1']['max_error_mm']:.3g}" in r.stdout
     assert rep["loops"]["found"] is False
     assert rep["alpha_max_deg_for_tolerance"] == pytest.approx(np.degrees(np.arctan(0.002 / 10)))
-    assert rep["S1_deviation_map"]["max_abs"] <= 0.001
+    assert rep["S1_deviation_map"]["max_abs_mm"] <= 0.001
     faces = read_step_faces(out / "machining_surface.step")
     assert [f.name for f in faces] == ["S1_guiding", "S2_orientation"]
     assert rep["toolpath"]["chordal_error_measured_mm"] <= 0.01
@@ -193,10 +193,19 @@ def test_flank_command(tmp_path):
     assert e["max_abs_mm"] < 0.05
     w = rep["whole"]
     assert w["envelope_fit"]["max_error_mm"] <= 1e-3 and w["n_rules"] >= 9
-    assert w["deviation_from_envelope"]["max_abs"] < 0.5
+    assert w["deviation_from_envelope"]["max_abs_mm"] < 0.5
     rows = (out / "toolpath.csv").read_text().splitlines()
-    assert len(rows) == w["n_rules"] + 1
-    assert sum(ln.startswith("GOTO/") for ln in (out / "toolpath.apt").read_text().splitlines()) == w["n_rules"] + 1
+    assert len(rows) == 1 + w["n_rules"] + 2  # header, one cut position per rule, approach from and retract to clearance
+    apt = (out / "toolpath.apt").read_text().splitlines()
+    assert sum(ln.startswith("GOTO/") for ln in apt) == w["n_rules"] + 2
+    assert "CUTTER/20.0000,0.0000,10.0000,0.0000,0.0000,0.0000," in "\n".join(apt)  # same convention as every tool
+    from machsurf_cad import Move, read_apt
+
+    tp = read_apt(out / "toolpath.apt")
+    assert [Move(m).name for m in tp.move[[0, 1, 2, -1]]] == ["RAPID", "APPROACH", "CUT", "RETRACT"]
+    # approach from and retract to 5 mm along the tool axis, on the shank side
+    assert np.allclose(tp.tip[0] - tp.tip[1], 5.0 * tp.axis[1], atol=2e-5)
+    assert np.allclose(tp.tip[-1] - tp.tip[-2], 5.0 * tp.axis[-2], atol=2e-5)
     for name in ("envelope.step", "envelope.stl", "deviation.png"):
         assert (out / name).is_file()
     # the whole surface is not within 0.01 mm with R = 10: exit 2, outputs still written

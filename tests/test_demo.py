@@ -21,15 +21,15 @@ def test_demo_outputs_and_figures(tmp_path):
     rep = json.loads((out / "report.json").read_text())
     for f in rep["files"]:
         assert (out / f).is_file(), f
-    assert rep["step_round_trip"]["max_abs"] < 1e-7
+    assert rep["step_round_trip"]["max_abs_mm"] < 1e-7
     stl = rep["stl"]["deviation"]
-    assert stl["max_abs"] < 2 * rep["stl"]["linear_deflection_mm"]
+    assert stl["max_abs_mm"] < 2 * rep["stl"]["linear_deflection_mm"]
     assert stl["n_points"] > 10 * rep["stl"]["triangles"] / 4
-    assert f"{stl['max_abs']:.4g}" in r.stdout
+    assert f"{stl['max_abs_mm']:.4g}" in r.stdout
     assert 100 < rep["nominal"]["min_radius_of_curvature_mm"] < 1e4
     ms = rep["machining_surface"]
     assert ms["S1"]["max_error_mm"] <= 1e-3 and ms["S2"]["max_error_mm"] <= 1e-3
-    assert rep["S1_deviation_map"]["max_abs"] <= 1e-3 and not ms["loops"]["found"]
+    assert rep["S1_deviation_map"]["max_abs_mm"] <= 1e-3 and not ms["loops"]["found"]
     assert rep["toolpath"]["chordal_error_measured_mm"] <= 0.01
     # the picture comes after its numbers: a rendered image, not a blank frame
     from PIL import Image

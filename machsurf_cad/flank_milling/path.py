@@ -16,13 +16,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..cam.toolpath import ToolPath
 from ..errors import InputError
 from .ruled import RuledSurface
 from .settings import NoAdmissibleSetting, Setting, interference, tool_setting
+from ..results import Result
 
 
-@dataclass(frozen=True)
-class FlankPath:
+@dataclass(frozen=True, eq=False)
+class FlankPath(Result):
     """Settings along the surface and the CL data derived from them."""
 
     surface: RuledSurface
@@ -40,6 +42,20 @@ class FlankPath:
     step_tolerance: float
     discontinuities: tuple = ()
 
+    def toolpath(self, cutter=None, *, clearance: float = 5.0) -> ToolPath:
+        """The settings as one 5-axis pass of the one :class:`~machsurf_cad.cam.ToolPath` type: tips on
+        the axis below the C0 end (``overhang`` mm beyond the surface), axes towards C1 (tip to shank),
+        CC at the rule contact M2 where the setting has one, approach and retract along the axis."""
+        from ..cutters import FlatEndMill
+
+        c = cutter if cutter is not None else FlatEndMill(2 * self.R, self.length)
+        cc = np.array([s.contacts.get("M2", [np.nan] * 3) for s in self.settings], float).reshape(-1, 3)
+        extras = {"u": self.u, "gamma_deg": np.array([s.gamma_deg for s in self.settings]),
+                  "h0_mm": np.array([s.h0 for s in self.settings])}
+        return ToolPath.from_passes([self.tip], [self.axis], cc=[cc], extras=[extras], clearance=clearance, cutter=c,
+                                    name=f"flank_{self.kind}", info={"setting": self.kind, "n_rules": len(self.settings),
+                                                                     "step_tolerance_mm": self.step_tolerance})
+
     def report(self) -> dict:
         return {"setting": self.kind, "R_mm": self.R, "side": self.side, "n_rules": len(self.settings),
                 "u": self.u.tolist(), "tool_length_mm": self.length, "step_tolerance_mm": self.step_tolerance,
@@ -48,14 +64,7 @@ class FlankPath:
 
 
 def _tip_and_length(s: Setting, overhang: float):
-    fr = s.frame
-    t0 = float((fr.p0 - s.q) @ s.a)
-    t1 = float((fr.p1 - s.q) @ s.a)
-    lo, hi = min(t0, t1), max(t0, t1)
-    sign = 1.0 if t1 >= t0 else -1.0  # axis oriented from the C0 end towards C1
-    a = sign * s.a
-    start = t0 - sign * overhang
-    return s.q + start * s.a, a, (hi - lo) + 2 * overhang
+    return s.placement(overhang)
 
 
 def flank_path(surface: RuledSurface, R: float, kind: str = "optimum", *, side: int = 1, tolerance: float = 0.01,
@@ -103,7 +112,7 @@ def flank_path(surface: RuledSurface, R: float, kind: str = "optimum", *, side: 
             if err > tolerance:
                 jumps.append({"u": float(m), "axis_jump_mm": float(err)})
             if progress is not None:
-                progress(i, len(us))
+                progress(i, len(us), "settings along the surface")
             i += 1
     sets = tuple(setting(u) for u in us)
     tips, axes, lengths = zip(*(_tip_and_length(s, overhang) for s in sets))
@@ -122,39 +131,34 @@ def flank_path(surface: RuledSurface, R: float, kind: str = "optimum", *, side: 
 def envelope_map(path: FlankPath):
     """The exact envelope map ``X(a, t)`` of the cylinder along the (spline-interpolated) motion.
 
-    Returns ``(f, bounds)`` with ``f(as_, ts) -> (len(as_), len(ts), 3)``: ``a`` along the axis
-    from the tip (mm), ``t`` the rule parameter u.
+    The envelope is the sweep package's eq. (21) (:class:`~machsurf_cad.sweep.Envelope`) for the
+    cylinder's sphere family (r' = 0), on the sheet facing the surface. Returns ``(f, bounds)``
+    with ``f(as_, ts) -> (len(as_), len(ts), 3)``: ``a`` along the axis from the tip (mm), ``t``
+    the rule parameter u.
     """
     from scipy.interpolate import CubicSpline
+
+    from ..cutters import FlatEndMill
+    from ..sweep.core import Envelope, Motion
 
     if len(path.settings) < 4:
         raise InputError("the envelope needs at least 4 rules")
     P = CubicSpline(path.u, path.tip, axis=0)
     A = CubicSpline(path.u, path.axis, axis=0)
-    R = path.R
-    surf = path.surface
-
-    def f(as_, ts):
-        as_ = np.asarray(as_, float)
-        ts = np.asarray(ts, float)
-        p, dp = P(ts), P(ts, 1)
-        a_raw, da_raw = A(ts), A(ts, 1)
-        na = np.linalg.norm(a_raw, axis=-1, keepdims=True)
-        a = a_raw / na
-        da = da_raw / na - a * np.einsum("ij,ij->i", a, da_raw / na)[:, None]
-        S = p[None, :, :] + as_[:, None, None] * a[None, :, :]
-        S_a = np.broadcast_to(a[None, :, :], S.shape)
-        S_t = dp[None, :, :] + as_[:, None, None] * da[None, :, :]
-        n = np.cross(S_a, S_t)
-        n /= np.linalg.norm(n, axis=-1, keepdims=True)
-        # orient towards the surface: the rule at t lies on the -side*normal side of the tool
-        mid = surf.evaluate(ts, np.full(ts.shape, 0.5))
-        to_surf = mid[None, :, :] - S
-        sgn = np.sign(np.einsum("...i,...i->...", n, to_surf))
-        sgn = np.where(sgn == 0, 1.0, sgn)
-        return S + R * sgn[..., None] * n
-
-    return f, (0.0, path.length, float(path.u[0]), float(path.u[-1]))
+    dP, dA = P.derivative(), A.derivative()
+    motion = Motion(P, A, (float(path.u[0]), float(path.u[-1])), "flank motion (cubic splines through the settings)",
+                    dP, dA)
+    cutter = FlatEndMill(2 * path.R, path.length)
+    seg = cutter.sweep_segment()
+    # the sheet facing the surface: the rules lie on that side of the tool (checked at every rule)
+    ts = path.u
+    probe = Envelope(motion, cutter, seg, 1)
+    n, _ = probe.normals(np.full(ts.shape, 0.5 * path.length), ts)
+    S, _, _, _, _, _ = probe.frame(np.full(ts.shape, 0.5 * path.length), ts)
+    to_surf = path.surface.evaluate(ts, np.full(ts.shape, 0.5)) - S
+    side = 1 if float(np.sum(np.sign(np.einsum("ij,ij->i", n, to_surf)))) >= 0 else -1
+    env = Envelope(motion, cutter, seg, side, (0.0, path.length), "flank_envelope")
+    return env.grid, (0.0, path.length, float(path.u[0]), float(path.u[-1]))
 
 
 def envelope_surface(path: FlankPath, tolerance: float = 1e-3, max_poles: int = 40000):

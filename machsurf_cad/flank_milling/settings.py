@@ -32,6 +32,7 @@ import numpy as np
 
 from ..errors import InputError, MachsurfError
 from .ruled import RuledSurface
+from ..results import Result
 
 
 class NoAdmissibleSetting(MachsurfError):
@@ -40,8 +41,8 @@ class NoAdmissibleSetting(MachsurfError):
     exit_code = 1
 
 
-@dataclass(frozen=True)
-class RuleFrame:
+@dataclass(frozen=True, eq=False)
+class RuleFrame(Result):
     """The rule at ``u_p`` and its frame (paper's reference R1), unit vectors; mm."""
 
     u_p: float
@@ -80,8 +81,8 @@ def rule_frame(surface: RuledSurface, u_p: float, side: int = 1) -> RuleFrame:
     return RuleFrame(float(u_p), p0, p1, h_p, z1, y1, x1, n0, n1, alpha0, side)
 
 
-@dataclass(frozen=True)
-class Setting:
+@dataclass(frozen=True, eq=False)
+class Setting(Result):
     """A cylinder position: axis point ``q`` and unit direction ``a``, radius ``R`` (mm, degrees)."""
 
     kind: str
@@ -97,6 +98,16 @@ class Setting:
     @property
     def h1(self) -> float:
         return self.frame.h_p - self.h0
+
+    def placement(self, overhang: float = 0.0) -> tuple[np.ndarray, np.ndarray, float]:
+        """``(tip, axis, length)`` of the cylinder covering the rule: the tip on the axis level with the
+        C0 end minus ``overhang`` (mm), the unit axis towards C1 (tip to shank), the length (mm)."""
+        fr = self.frame
+        t0 = float((fr.p0 - self.q) @ self.a)
+        t1 = float((fr.p1 - self.q) @ self.a)
+        sign = 1.0 if t1 >= t0 else -1.0
+        start = t0 - sign * overhang
+        return self.q + start * self.a, sign * self.a, abs(t1 - t0) + 2 * overhang
 
     def report(self) -> dict:
         return {
@@ -281,8 +292,8 @@ def optimum_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 
                     "tangency_slope_residual": max(abs(r0[3]), abs(r1[3]))})
 
 
-@dataclass(frozen=True)
-class Interference:
+@dataclass(frozen=True, eq=False)
+class Interference(Result):
     """Error profile along the rule (mm): ``e[i]`` at ``v[i]``, negative = gouge, positive = undercut."""
 
     v: np.ndarray

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import DegenerateGeometryError, InputError
 from .basis import basis_derivatives, collocation_matrix, find_spans, greville
+from ..results import Result
 
 _CHUNK = 1 << 14  # best of 2^13..2^16 on the benchmark machine (fits the caches)
 _THREADS = max(1, min(4, os.cpu_count() or 1))
@@ -239,8 +240,8 @@ def _rational_curve_derivs(cw: np.ndarray, order: int) -> np.ndarray:
     return out
 
 
-@dataclass(frozen=True)
-class SurfaceDerivatives:
+@dataclass(frozen=True, eq=False)
+class SurfaceDerivatives(Result):
     """Point and partial derivatives of a surface (mm per unit parameter), each shape ``(..., 3)``."""
 
     point: np.ndarray

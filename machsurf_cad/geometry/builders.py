@@ -15,6 +15,7 @@ import numpy as np
 from ..errors import InputError, ToleranceError
 from .basis import collocation_matrix
 from .bspline import BSplineCurve, BSplineSurface, elevate_and_merge
+from ..results import Result
 
 
 # ----------------------------------------------------------------------------- curves
@@ -68,8 +69,8 @@ def _averaged_knots(params: np.ndarray, degree: int) -> tuple[np.ndarray, np.nda
     return knots, mults
 
 
-@dataclass(frozen=True)
-class CurveFit:
+@dataclass(frozen=True, eq=False)
+class CurveFit(Result):
     """A B-spline curve fitted to an exact map, with the error measured on unseen points (mm)."""
 
     curve: BSplineCurve

@@ -17,10 +17,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .bspline import BSplineSurface, _cross, unit_normals
+from ..results import Result
 
 
-@dataclass(frozen=True)
-class LocalProperties:
+@dataclass(frozen=True, eq=False)
+class LocalProperties(Result):
     """Local differential properties at a set of ``(u, v)`` points (mm, 1/mm)."""
 
     u: np.ndarray

@@ -16,10 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import MachsurfError
+from ..results import Result
 
 
-@dataclass(frozen=True)
-class LoopRegion:
+@dataclass(frozen=True, eq=False)
+class LoopRegion(Result):
     """A set of flagged parameter samples: where, how many, how bad."""
 
     kind: str
@@ -44,8 +45,8 @@ class LoopRegion:
                 "worst_xyz": list(self.worst_xyz), "worst_value": self.worst_value}
 
 
-@dataclass(frozen=True)
-class LoopReport:
+@dataclass(frozen=True, eq=False)
+class LoopReport(Result):
     regions: tuple
     grid: tuple
     mask: np.ndarray | None = None

@@ -35,6 +35,7 @@ from ..geometry.differential import local_properties_grid
 from ..geometry.face import Face
 from .loops import LoopError, LoopReport, fold_mask, region_from_mask
 from .strategies import AxisField, FixedAxis, IsoFeed, LeadTilt, LocalFrame, PlanesFeed, parse_strategy
+from ..results import Result
 
 _SIN_MIN_AXIS_TO_NORMAL = 1e-6  # |u x n| below this: v undefined (axis along the normal)
 _MIN_AXIS_ELEVATION_DEG = 1.0   # the axis must stay this far above the tangent plane
@@ -193,8 +194,8 @@ def recover_axis(k: np.ndarray, cl: np.ndarray, n: np.ndarray, *, ball_length: f
     return u / np.linalg.norm(u, axis=-1, keepdims=True)
 
 
-@dataclass(frozen=True)
-class MachiningSurface:
+@dataclass(frozen=True, eq=False)
+class MachiningSurface(Result):
     """S1 (and S2 for 5 axes) as certified B-spline faces, trimmed like the nominal face.
 
     Attributes hold the fitted faces, their fits (with measured errors), the loop report and
@@ -292,7 +293,7 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
     tip : bool
         3 axes only: S1 at the tool tip (``... - r u``) instead of the torus-centre plane.
     progress : callable, optional
-        Passed to :func:`~machsurf_cad.approx.fit_surface` (``progress(it, n_poles, err)``).
+        :data:`~machsurf_cad.results.Progress`, passed to :func:`~machsurf_cad.approx.fit_surface`.
 
     Examples
     --------
@@ -322,7 +323,7 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
     timings = {}
     # loops first: they are cheap to find, and a looped map is also hard to fit
     report = detect_loops(maps, loop_grid)
-    timings["loops"] = time.perf_counter() - t0
+    timings["loops_s"] = time.perf_counter() - t0
     if report.found and loops == "error":
         raise LoopError("machining surface has loops (the tool would gouge): "
                         + "; ".join(r_.describe() for r_ in report.regions)
@@ -332,13 +333,13 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
     brk = derived_breaks(face.surface, degree, derivative_loss=1)
     s1_fit = fit_surface(maps.s1, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles, name="S1_guiding",
                          breaks=brk, progress=progress)
-    timings["fit_S1"] = time.perf_counter() - t1
+    timings["fit_S1_s"] = time.perf_counter() - t1
     s2_fit = None
     if axes == 5:
         t2 = time.perf_counter()
         s2_fit = fit_surface(maps.s2, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles,
                              name="S2_orientation", breaks=brk, progress=progress)
-        timings["fit_S2"] = time.perf_counter() - t2
+        timings["fit_S2_s"] = time.perf_counter() - t2
     trimmed = face
     if report.found and loops == "trim":
         from .loops import hole_loops
@@ -354,7 +355,7 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
         lever = L if em.is_ball else Rt
         a_tol = math.degrees(math.atan(2 * tolerance / lever))
         a_meas = math.degrees(math.atan((s1_fit.max_error + s2_fit.max_error) / lever))
-    timings["total"] = time.perf_counter() - t0
+    timings["total_s"] = time.perf_counter() - t0
     return MachiningSurface(face, cutter, axes, strat, float(tolerance), s1, s1_fit, s2, s2_fit, report, L, tip,
                             axis_err, a_tol, a_meas, timings)
 

@@ -17,52 +17,12 @@ import math
 
 import numpy as np
 
+from ..cam.chordal import chord_error, douglas_peucker
 from ..cam.toolpath import ToolPath
 from ..errors import InputError
 from ..geometry.bspline import unit_normals
 from .strategies import IsoFeed, PlanesFeed
 from .surfaces import MachiningSurface, recover_axis
-
-
-def _douglas_peucker(pts: np.ndarray, tol: float) -> np.ndarray:
-    """Indices of points kept so that every point is within ``tol`` of its chord."""
-    n = pts.shape[0]
-    if n <= 2:
-        return np.arange(n)
-    keep = np.zeros(n, bool)
-    keep[0] = keep[-1] = True
-    stack = [(0, n - 1)]
-    while stack:
-        a, b = stack.pop()
-        if b - a < 2:
-            continue
-        seg = pts[b] - pts[a]
-        L2 = float(seg @ seg)
-        rel = pts[a + 1:b] - pts[a]
-        if L2 > 0:
-            t = np.clip(rel @ seg / L2, 0, 1)
-            d = np.linalg.norm(rel - t[:, None] * seg, axis=1)
-        else:
-            d = np.linalg.norm(rel, axis=1)
-        i = int(np.argmax(d))
-        if d[i] > tol:
-            m = a + 1 + i
-            keep[m] = True
-            stack += [(a, m), (m, b)]
-    return np.nonzero(keep)[0]
-
-
-def _chord_error(dense: np.ndarray, kept_idx: np.ndarray) -> float:
-    err = 0.0
-    for a, b in zip(kept_idx[:-1], kept_idx[1:]):
-        if b - a < 2:
-            continue
-        seg = dense[b] - dense[a]
-        L2 = float(seg @ seg)
-        rel = dense[a + 1:b] - dense[a]
-        t = np.clip(rel @ seg / L2, 0, 1) if L2 > 0 else np.zeros(len(rel))
-        err = max(err, float(np.linalg.norm(rel - t[:, None] * seg, axis=1).max()))
-    return err
 
 
 def tool_paths(ms: MachiningSurface, *, stepover: float, chordal_tolerance: float = 0.01, strategy=None,
@@ -139,8 +99,8 @@ def tool_paths(ms: MachiningSurface, *, stepover: float, chordal_tolerance: floa
             if uv.shape[0] < 2:
                 continue
             p = _positions(ms, uv)
-            idx = _douglas_peucker(p["tip"], chordal_tolerance)
-            chord_err = max(chord_err, _chord_error(p["tip"], idx))
+            idx = douglas_peucker(p["tip"], chordal_tolerance)
+            chord_err = max(chord_err, chord_error(p["tip"], idx))
             axis_err = max(axis_err, p["axis_err"])
             if zigzag and len(tips) % 2 == 1:
                 idx = idx[::-1]

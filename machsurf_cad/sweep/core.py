@@ -26,6 +26,7 @@ import numpy as np
 
 from ..cutters import Cutter, SphereFamilySegment, parse_cutter
 from ..errors import DegenerateGeometryError, InputError
+from ..results import Result
 
 _FD = np.array([1.0, -8.0, 0.0, 8.0, -1.0]) / 12.0  # 5-point first-derivative stencil, O(h^4)
 
@@ -157,8 +158,8 @@ class Motion:
         return cls(tip, axis, t_range, label)
 
 
-@dataclass(frozen=True)
-class Envelope:
+@dataclass(frozen=True, eq=False)
+class Envelope(Result):
     """Envelope of one pass: exact map ``X(a, t)`` and normals ``n(a, t)``; ``a`` in mm (or phi in
     degrees for a ball), ``t`` the motion parameter."""
 
@@ -170,6 +171,7 @@ class Envelope:
     name: str = "pass"
 
     def __post_init__(self):
+        super().__post_init__()
         if self.side not in (1, -1):
             raise InputError("side must be +1 or -1")
         if not self.a_range:

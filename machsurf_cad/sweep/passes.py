@@ -9,10 +9,11 @@ import numpy as np
 
 from ..approx import SurfaceFit, fit_surface
 from .core import Envelope, fold_check, next_pass, seam_report
+from ..results import Result
 
 
-@dataclass(frozen=True)
-class PassChain:
+@dataclass(frozen=True, eq=False)
+class PassChain(Result):
     """N passes, each joined to the previous one; fits and seam figures (mm, degrees)."""
 
     passes: tuple
@@ -95,7 +96,7 @@ def build_chain(first: Envelope, n_passes: int = 2, *, continuity: str = "g1", t
     seams = tuple(seam_report(a, b) for a, b in zip(envs[:-1], envs[1:]))
     seams_f = tuple(fitted_seam(a, b) for a, b in zip(fits[:-1], fits[1:]))
     return PassChain(tuple(envs), tuple(fits), seams, seams_f, tuple(folds), continuity,
-                     {"build": t_build, "fit": t_fit})
+                     {"build_s": t_build, "fit_s": t_fit})
 
 
 def max_theta(first: Envelope, *, continuity: str = "g1", step_deg: float = 5.0) -> float:

@@ -34,7 +34,7 @@ try:
     png = os.path.join(os.path.dirname(out_path), "freecad_gui.png")
     view.saveImage(png, 1200, 900, "White")
     result["png"] = png
-    from freecad.machsurf.commands import ExportStepCommand
+    from freecad.machsurf.gui.commands import ExportStepCommand
 
     step = os.path.join(os.path.dirname(out_path), "freecad_export.step")
     ExportStepCommand().Activated(step)

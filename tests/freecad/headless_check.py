@@ -79,6 +79,7 @@ try:
     # save, reopen, recompute
     path = os.path.join(os.path.dirname(out_path), "machsurf_test.FCStd")
     ms_name = ms.Name
+    ms.removeProperty("Loops")  # as a document saved before the property existed
     doc.saveAs(path)
     FreeCAD.closeDocument(doc.Name)
     doc2 = FreeCAD.openDocument(path)
@@ -86,7 +87,8 @@ try:
     ms2.Tool = "bull:D=16,r=3"
     doc2.recompute()
     step("reopen", valid=ms2.isValid(), max_s1=ms2.MaxErrorS1, n_faces=len(ms2.Shape.Faces),
-         proxy=type(ms2.Proxy).__name__)
+         proxy=type(ms2.Proxy).__name__, proxy_module=type(ms2.Proxy).__module__, loops=str(ms2.Loops),
+         loops_enum=list(ms2.getEnumerationsOfProperty("Loops")))
     # delete the source and recompute: a message and an invalid feature, nothing else broken
     doc2.removeObject("Block")
     doc2.recompute()

@@ -7,9 +7,6 @@ knots, multiplicities, poles, weights). Lengths in mm, angles in degrees.
 import sys
 from pathlib import Path
 
-__version__ = "0.1.0"
-
-
 def ensure_core():
     """Make ``machsurf_cad`` importable: installed, or the repository this add-on is linked from."""
     try:
@@ -26,3 +23,5 @@ def ensure_core():
 
 
 ensure_core()
+
+from machsurf_cad import __version__  # noqa: E402  (one version, the core's)

@@ -1,22 +1,3 @@
-"""The machsurf workbench: toolbar and menu, one command per feature, export (GUI only)."""
+"""FreeCAD's entry point for the GUI: the workbench lives in :mod:`freecad.machsurf.gui`."""
 
-import FreeCADGui as Gui
-
-from . import commands
-
-
-class MachsurfWorkbench(Gui.Workbench):
-    MenuText = "machsurf"
-    ToolTip = "Free-form machining geometry: machining surfaces, effective radius, flank milling, envelopes"
-    Icon = commands.ICON
-
-    def Initialize(self):
-        commands.register()
-        self.appendToolbar("machsurf", commands.NAMES)
-        self.appendMenu("machsurf", commands.NAMES)
-
-    def GetClassName(self):
-        return "Gui::PythonWorkbench"
-
-
-Gui.addWorkbench(MachsurfWorkbench())
+from .gui import workbench  # noqa: F401

@@ -5,7 +5,7 @@ import os
 import FreeCAD
 import FreeCADGui as Gui
 
-ICON = os.path.join(os.path.dirname(__file__), "resources", "machsurf.svg")
+ICON = os.path.join(os.path.dirname(os.path.dirname(__file__)), "resources", "machsurf.svg")
 NAMES = ["Machsurf_MachiningSurface", "Machsurf_EffectiveRadius", "Machsurf_FlankSetting", "Machsurf_Envelope",
          "Machsurf_ExportStep"]
 
@@ -29,7 +29,8 @@ class _FeatureCommand:
         return FreeCAD.ActiveDocument is not None
 
     def Activated(self):
-        from . import features
+        from ..app import features
+        from .view import attach
 
         src = _selected_face() if self.needs_face else None
         if self.needs_face and src is None:
@@ -38,6 +39,7 @@ class _FeatureCommand:
         doc = FreeCAD.ActiveDocument
         doc.openTransaction(self.text)
         obj = features.make(self.kind, doc, src)
+        attach(obj)
         doc.commitTransaction()
         doc.recompute()
         if src is not None:

@@ -15,9 +15,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError
+from ..errors import InputError
+from .base import JobOutcome, Say, Staging, finish
+from .specs import DemoJob
 
-DEFAULT_PART = Path(__file__).resolve().parent.parent / "example_parts" / "freeform_block.step"
+DEFAULT_PART = Path(__file__).resolve().parents[2] / "example_parts" / "freeform_block.step"
 STL_DEFLECTION_MM = 0.01
 STL_ANGLE_DEG = 5.0
 MS_TOL_MM = 1e-3
@@ -27,23 +29,22 @@ def default_part_path(work_dir: Path) -> Path:
     """The embedded example part; rebuilt with the kernel when the checkout does not hold it."""
     if DEFAULT_PART.is_file():
         return DEFAULT_PART
-    from .occ.parts import write_freeform_block
+    from ..occ.parts import write_freeform_block
 
     path = work_dir / "freeform_block.step"
     write_freeform_block(path)
     return path
 
 
-def run_demo(out: Path, say=print) -> int:
-    from .cli import Staging, _write_json
-    from .cutters import parse_cutter
-    from .measure import deviation
-    from .geometry import local_properties
-    from .meshsample import subdivide
-    from .occ import read_step_faces, read_stl, write_step, write_stl
-    from .occ.solids import cutter_solid
-    from .occ.step import write_step_shape
-    from .viz import render_deviation
+def run_demo(spec: DemoJob, out, say: Say, progress=None) -> JobOutcome:
+    from ..cutters import parse_cutter
+    from ..geometry import local_properties
+    from ..measure import deviation
+    from ..meshsample import subdivide
+    from ..occ import read_step_faces, read_stl, write_step, write_stl
+    from ..occ.solids import cutter_solid
+    from ..occ.step import write_step_shape
+    from ..viz import render_deviation
 
     t0 = time.perf_counter()
     with Staging(out) as st:
@@ -86,10 +87,7 @@ def run_demo(out: Path, say=print) -> int:
             f"(name '{back.name}', {len(back.loops)} loop(s))")
         pts, tris = read_stl(stl_path)
         spts, stris = subdivide(pts, tris, 2)
-        from .progress import Bar
-
-        with Bar("measuring the STL") as bar:
-            mesh_dev = deviation(nominal, spts, tolerance=STL_DEFLECTION_MM, triangles=stris, progress=bar.update)
+        mesh_dev = deviation(nominal, spts, tolerance=STL_DEFLECTION_MM, triangles=stris, progress=progress)
         s = mesh_dev.stats
         say(f"STL ({tris.shape[0]} triangles, deflection {STL_DEFLECTION_MM} mm): max |deviation| = "
             f"{s['max_abs']:.4g} mm, RMS {s['rms']:.3g} mm over {s['n_points']} points inside the triangles")
@@ -97,9 +95,10 @@ def run_demo(out: Path, say=print) -> int:
                          title="STL mesh vs exact free-form face", tolerance=STL_DEFLECTION_MM)
 
         # machining surfaces: 5-axis filleted end mill, lead 10 deg along planes parallel to yOz
-        from .machining import machining_surface
-        from .machining.surfaces import fit_deviation
-        from .machining.toolpath import tool_paths, write_apt, write_csv
+        from ..cam import write_apt, write_csv
+        from ..machining import machining_surface
+        from ..machining.surfaces import fit_deviation
+        from ..machining.toolpath import tool_paths
 
         ms = machining_surface(nominal, "bull:D=16,r=3", axes=5, strategy="planes:x", lead=10.0, tilt=0.0,
                                tolerance=MS_TOL_MM)
@@ -108,18 +107,18 @@ def run_demo(out: Path, say=print) -> int:
         tp = tool_paths(ms, stepover=4.0, chordal_tolerance=0.01)
         render_deviation(ms_dev, st.path("deviation_S1.png"), vtp_path=st.path("deviation_S1.vtp"),
                          title="S1 (bull D16 r3, lead 10 deg) fit vs exact offset; paths of K on S1",
-                         tolerance=MS_TOL_MM, extra_lines=[(p.k, "darkgreen") for p in tp.passes if len(p.k) > 1])
+                         tolerance=MS_TOL_MM, extra_lines=[(p.extras["K"], "darkgreen") for p in tp.cutting_passes()
+                                                   if p.n_positions > 1])
         write_csv(st.path("toolpath.csv"), tp)
-        write_apt(st.path("toolpath.apt"), tp, ms)
+        write_apt(st.path("toolpath.apt"), tp)
         say(f"machining surfaces (bull:D=16,r=3, 5 axes, lead 10 deg): S1 {ms.s1_fit.surface.shape[0]}x"
             f"{ms.s1_fit.surface.shape[1]} poles, max error {ms.s1_fit.max_error:.3g} mm; S2 "
             f"{ms.s2_fit.surface.shape[0]}x{ms.s2_fit.surface.shape[1]} poles, max error {ms.s2_fit.max_error:.3g} mm "
             f"(tol {MS_TOL_MM} mm); loops: {'none' if not ms.loops.found else len(ms.loops.regions)}; "
             f"axis error {ms.axis_error_deg:.3g} deg")
-        say(f"tool path: {len(tp.passes)} passes, {tp.n_points} CL points, chordal error "
-            f"{tp.chordal_error_measured:.3g} mm")
+        say(f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions, chordal error "
+            f"{tp.info['chordal_error_measured_mm']:.3g} mm")
         report = {
-            "command": "demo", "units": {"length": "mm", "angle": "deg"},
             "part": str(part), "n_faces": len(faces),
             "nominal": {"index": nominal.index, "name": nominal.name, "type": nominal.source_type,
                         "degrees": [nominal.surface.degree_u, nominal.surface.degree_v],
@@ -132,15 +131,14 @@ def run_demo(out: Path, say=print) -> int:
             "machining_surface": ms.report(),
             "S1_deviation_map": ms_dev.report(),
             "toolpath": tp.report(),
-            "files": ["freeform_top.step", "freeform_top.stl", "cutter_ball_D10.step", "deviation_stl.png",
-                      "deviation_stl.vtp", "machining_surface.step", "deviation_S1.png", "deviation_S1.vtp",
-                      "toolpath.csv", "toolpath.apt", "report.json"],
-            "time_s": time.perf_counter() - t0,
+            "time_s": {"total_s": time.perf_counter() - t0},
         }
-        _write_json(st.path("report.json"), report)
         (st.dir / "freeform_block.step").unlink(missing_ok=True)
-    say(f"outputs in {out}/: " + ", ".join(report["files"]))
-    return 0
+        if "freeform_block.step" in st.files:
+            st.files.remove("freeform_block.step")
+        outcome = finish(st, "demo", report, result=ms)
+    say(f"outputs in {out}/: " + ", ".join(outcome.files))
+    return outcome
 
 
-__all__ = ["run_demo", "default_part_path"]
+__all__ = ["run_demo", "default_part_path", "DEFAULT_PART"]

@@ -1,0 +1,201 @@
+"""``flank()``: everything ``machsurf flank`` computes, as one result (mm, degrees, seconds)."""
+
+from __future__ import annotations
+
+import math  # noqa: F401  (used by the doctest)
+import time
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from ..cam.toolpath import ToolPath
+from ..errors import InputError
+from ..results import Progress, Result
+from .path import FlankPath
+from .ruled import RuledSurface
+from .settings import SETTINGS, Interference, NoAdmissibleSetting, Setting, interference, tool_setting
+
+SettingKind = Literal["standard-tangent", "standard-distributed", "optimum", "minimax"]
+"""The tool settings: the paper's standard (tangent to C0, or error shared), optimum (three
+tangencies) and minimax (beyond the paper)."""
+
+
+def compare_settings(surface: RuledSurface, u_p: float, R: float, *, side: int = 1) -> dict:
+    """Max gouge / undercut (mm) of every setting on one rule; ``admissible: False`` where one does not exist."""
+    out: dict[str, dict] = {}
+    for kind in SETTINGS:
+        try:
+            e = interference(surface, tool_setting(surface, u_p, R, kind, side=side))
+            out[kind] = {"max_gouge_mm": e.max_gouge, "max_undercut_mm": e.max_undercut, "max_abs_mm": e.max_abs}
+        except NoAdmissibleSetting as exc:
+            out[kind] = {"admissible": False, "reason": str(exc)}
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class FlankResult(Result):
+    """Setting on one rule, its interference and every setting compared there; optionally the whole
+    surface (settings, :class:`ToolPath`, certified envelope, nominal-vs-envelope deviation), the
+    paper's parameter study and the radius range."""
+
+    surface: RuledSurface
+    cutter: Any
+    rule: float
+    u_p: float
+    setting: Setting
+    interference: Interference
+    comparison: dict
+    path: FlankPath | None = None
+    toolpath: ToolPath | None = None
+    envelope: Any = None
+    envelope_deviation: Any = None
+    study: dict | None = None
+    radius_range: dict | None = None
+    time_s: dict | None = None
+
+    @property
+    def R(self) -> float:
+        return self.cutter.D / 2
+
+    @property
+    def whole_error_mm(self) -> float | None:
+        """Largest gouge or undercut over the whole surface (mm), None without ``whole``."""
+        return None if self.path is None else max(self.path.max_gouge, self.path.max_undercut)
+
+    def report(self) -> dict:
+        rep: dict = {"surface": self.surface.name, "tool": self.cutter.to_dict(), "R_mm": self.R, "rule": self.rule,
+                     "u_p": self.u_p, "setting": self.setting.report(), "interference": self.interference.report(),
+                     "all_settings_on_this_rule": self.comparison, "time_s": dict(self.time_s or {})}
+        if self.path is not None:
+            rep["whole"] = {**self.path.report(), "toolpath": self.toolpath.report() if self.toolpath else None,
+                            "envelope_fit": self.envelope.report() if self.envelope is not None else None,
+                            "deviation_from_envelope": (self.envelope_deviation.report()
+                                                        if self.envelope_deviation is not None else None)}
+        if self.study is not None:
+            rep["study"] = self.study
+        if self.radius_range is not None:
+            rep["radius_range"] = self.radius_range
+        return rep
+
+
+def _as_ruled(surface, ruled_tolerance: float) -> RuledSurface:
+    if isinstance(surface, RuledSurface):
+        return surface
+    from ..geometry.bspline import BSplineSurface
+    from ..geometry.face import Face
+
+    if isinstance(surface, Face):
+        return RuledSurface.from_surface(surface.surface, tolerance=ruled_tolerance, name=surface.name)
+    if isinstance(surface, BSplineSurface):
+        return RuledSurface.from_surface(surface, tolerance=ruled_tolerance)
+    raise InputError("flank milling needs a RuledSurface, a B-spline surface or a Face")
+
+
+def flank(surface, tool, *, rule: float = 0.5, setting: SettingKind = "optimum", side: int = 1, whole: bool = False,
+          tolerance: float = 0.01, envelope_tolerance: float = 1e-3, study: bool = False,
+          radius_range: float | None = None, ruled_tolerance: float = 1e-6, clearance: float = 5.0,
+          progress: Progress | None = None) -> FlankResult:
+    """Flank milling of a ruled surface by a cylindrical cutter (Redonnet et al.), as ``machsurf flank``.
+
+    Parameters
+    ----------
+    surface : RuledSurface, BSplineSurface or Face
+        The ruled surface; a B-spline face is checked to be ruled within ``ruled_tolerance`` mm.
+    tool : str or Cutter
+        A cylindrical cutter, ``"cyl:D=20"`` (a flat end mill), or a radius in mm.
+    rule : float
+        Rule position as a fraction of the u range, in [0, 1].
+    setting : {"standard-tangent", "standard-distributed", "optimum", "minimax"}
+        The tool setting.
+    side : {1, -1}
+        +1: tool on the side of ``S_u x S_v``.
+    whole : bool
+        Also the settings on the whole surface (step from ``tolerance`` mm), the tool path, the swept
+        envelope fitted within ``envelope_tolerance`` mm and the nominal's deviation from it.
+    study : bool
+        Also the paper's parameter study (figs 9 and 10, hyperbolic paraboloid).
+    radius_range : float, optional
+        Also the smallest and largest tool radius keeping the whole surface within this many mm.
+    clearance : float
+        Approach and retract distance along the axis of the tool path, mm.
+    progress : Progress, optional
+        ``progress(done, total, message)`` along the whole surface.
+
+    Returns
+    -------
+    FlankResult
+
+    Raises
+    ------
+    InputError
+        Not a cylindrical cutter, rule outside [0, 1], side not +-1, a non-ruled face.
+    NoAdmissibleSetting
+        The setting does not exist on that rule (e.g. the optimum beyond R = h_p / (2 sin alpha0)).
+
+    Examples
+    --------
+    >>> from machsurf_cad import examples, flank
+    >>> res = flank(examples.hypar_ruled(), "cyl:D=20", rule=0.5, setting="standard-distributed")
+    >>> abs(res.interference.max_abs - 10 * (1 - math.cos(math.radians(30)))) < 1e-9  # R (1 - cos alpha0)
+    True
+    """
+    from ..cutters import FlatEndMill, parse_cutter
+
+    t0 = time.perf_counter()
+    if isinstance(tool, (int, float)):
+        cutter = FlatEndMill(2.0 * float(tool))
+    else:
+        cutter = parse_cutter(tool) if isinstance(tool, str) else tool
+        if not isinstance(cutter, FlatEndMill):
+            raise InputError("flank milling needs a cylindrical cutter: cyl:D=.. (or flat:D=..)")
+    if not 0.0 <= rule <= 1.0:
+        raise InputError(f"rule {rule:g} is outside [0, 1] (fraction of the u range)")
+    if side not in (1, -1):
+        raise InputError("side must be +1 or -1")
+    if setting not in SETTINGS:
+        raise InputError(f"unknown setting {setting!r}; use one of {', '.join(SETTINGS)}")
+    surf = _as_ruled(surface, ruled_tolerance)
+    R = cutter.D / 2
+    lo, hi = surf.u_range
+    u_p = lo + rule * (hi - lo)
+    st = tool_setting(surf, u_p, R, setting, side=side)
+    times = {"setting_s": time.perf_counter() - t0}
+    e = interference(surf, st)
+    comparison = compare_settings(surf, u_p, R, side=side)
+    path = tp = env = dev = None
+    if whole:
+        from .path import envelope_deviation, envelope_surface, flank_path
+
+        t1 = time.perf_counter()
+        path = flank_path(surf, R, setting, side=side, tolerance=tolerance, progress=progress)
+        tp = path.toolpath(FlatEndMill(cutter.D, max(cutter.length, path.length)), clearance=clearance)
+        env = envelope_surface(path, tolerance=envelope_tolerance)
+        dev = envelope_deviation(path, env.surface)
+        times["whole_s"] = time.perf_counter() - t1
+    data = None
+    if study:
+        from .study import parameter_study
+
+        t1 = time.perf_counter()
+        data = parameter_study()
+        times["study_s"] = time.perf_counter() - t1
+    rr = None
+    if radius_range is not None:
+        from .path import radius_range as _radius_range
+
+        t1 = time.perf_counter()
+        rr = _radius_range(surf, radius_range, kind=setting, side=side)
+        times["radius_range_s"] = time.perf_counter() - t1
+    times["total_s"] = time.perf_counter() - t0
+    return FlankResult(surf, cutter, float(rule), float(u_p), st, e, comparison, path, tp, env, dev, data, rr, times)
+
+
+def mean_normal(surface: RuledSurface, side: int = 1) -> np.ndarray:
+    """The surface's mean unit normal on the tool side (for views along it)."""
+    lo, hi = surface.u_range
+    n = surface.normal(np.linspace(lo, hi, 9), np.full(9, 0.5)).mean(axis=0) * side
+    return n / np.linalg.norm(n)
+
+
+__all__ = ["flank", "FlankResult", "compare_settings", "SettingKind", "mean_normal"]

@@ -1,0 +1,90 @@
+"""One orchestration layer: a job spec in, a :class:`JobOutcome` (report, exit code, files) out.
+
+The CLI, the demo, the FreeCAD workbench and the batch runner all call :func:`run_job`; the
+CLI only turns arguments into a spec and prints.
+
+Examples
+--------
+>>> from machsurf_cad.jobs import FlankJob, run_job
+>>> import tempfile
+>>> with tempfile.TemporaryDirectory() as d:
+...     out = run_job(FlankJob(example="hypar", tool="cyl:D=20", setting="standard-distributed", render=False),
+...                   d + "/flank")
+>>> out.exit_code, round(out.report["interference"]["max_abs_mm"], 6)
+(0, 1.339746)
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable
+
+from ..results import Progress
+from .base import EXIT_INPUT, EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, quiet
+from .specs import (SPECS, DemoJob, EnvelopeJob, FlankJob, InfoJob, InspectJob, JobSpec, MachiningSurfaceJob,
+                    ReffJob)
+
+
+def _runner(spec: JobSpec) -> Callable:
+    if isinstance(spec, InfoJob):
+        from .run_inspect import run_info
+
+        return run_info
+    if isinstance(spec, InspectJob):
+        from .run_inspect import run_inspect
+
+        return run_inspect
+    if isinstance(spec, MachiningSurfaceJob):
+        from .run_machining import run_machining_surface
+
+        return run_machining_surface
+    if isinstance(spec, ReffJob):
+        from .run_reff import run_reff
+
+        return run_reff
+    if isinstance(spec, FlankJob):
+        from .run_flank import run_flank
+
+        return run_flank
+    if isinstance(spec, EnvelopeJob):
+        from .run_envelope import run_envelope
+
+        return run_envelope
+    if isinstance(spec, DemoJob):
+        from .run_demo import run_demo
+
+        return run_demo
+    raise TypeError(f"not a job spec: {spec!r}")
+
+
+def run_job(spec: JobSpec, out, *, say: Say = quiet, progress: Progress | None = None) -> JobOutcome:
+    """Run one job and write its outputs into the folder ``out`` (staged: nothing half-written).
+
+    Parameters
+    ----------
+    spec : JobSpec
+        :class:`InfoJob`, :class:`InspectJob`, :class:`MachiningSurfaceJob`, :class:`ReffJob`,
+        :class:`FlankJob`, :class:`EnvelopeJob` or :class:`DemoJob`.
+    out : str or Path
+        Output folder; ``report.json`` there holds every figure the job prints.
+    say : callable, optional
+        Receives each printed line (the CLI passes ``print``).
+    progress : Progress, optional
+        ``progress(done, total, message)`` for long stages.
+
+    Returns
+    -------
+    JobOutcome
+        ``exit_code`` 2 when a stated tolerance is not met, else 0.
+
+    Raises
+    ------
+    MachsurfError
+        Bad input (:class:`~machsurf_cad.errors.InputError`, exit code 1 at the CLI) or a tolerance
+        the fit could not reach (:class:`~machsurf_cad.errors.ToleranceError`, exit code 2).
+    """
+    return _runner(spec)(spec, Path(out), say, progress)
+
+
+__all__ = ["run_job", "JobOutcome", "JobSpec", "InfoJob", "InspectJob", "MachiningSurfaceJob", "ReffJob", "FlankJob",
+           "EnvelopeJob", "DemoJob", "SPECS", "Staging", "Say", "EXIT_OK", "EXIT_INPUT", "EXIT_TOLERANCE"]

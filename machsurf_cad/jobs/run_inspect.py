@@ -1,0 +1,90 @@
+"""The ``info`` and ``inspect`` jobs."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from ..errors import InputError
+from .base import EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, finish
+from .specs import InfoJob, InspectJob
+
+
+def run_info(spec: InfoJob, out, say: Say, progress=None) -> JobOutcome:
+    from ..occ import read_step_faces
+
+    t0 = time.perf_counter()
+    faces = read_step_faces(spec.part)
+    rows = []
+    say(f"{spec.part}: {len(faces)} face(s)")
+    say(f"{'idx':>3}  {'name':<16} {'type':<18} {'deg':>5} {'poles':>9} {'trim':>4} {'area mm2':>11}  uv bounds")
+    for f in faces:
+        s = f.surface
+        rows.append({
+            "index": f.index, "name": f.name, "source_type": f.source_type,
+            "degree_u": s.degree_u, "degree_v": s.degree_v, "poles_u": s.shape[0], "poles_v": s.shape[1],
+            "rational": s.is_rational, "trimmed": f.is_trimmed, "n_loops": len(f.loops),
+            "uv_bounds": list(f.uv_bounds), "area_mm2": f.area, "reversed": f.reversed,
+        })
+        say(f"{f.index:>3}  {f.name[:16]:<16} {f.source_type[:18]:<18} {s.degree_u:>2},{s.degree_v:<2} "
+            f"{s.shape[0]:>4}x{s.shape[1]:<4} {'yes' if f.is_trimmed else 'no':>4} {f.area:>11.2f}  "
+            f"[{f.uv_bounds[0]:.4g}, {f.uv_bounds[1]:.4g}] x [{f.uv_bounds[2]:.4g}, {f.uv_bounds[3]:.4g}]")
+    report = {"part": str(spec.part), "n_faces": len(faces), "faces": rows,
+              "time_s": {"total_s": time.perf_counter() - t0}}
+    with Staging(out) as st:
+        outcome = finish(st, "info", report)
+    say(f"report: {Path(out) / 'report.json'}")
+    return outcome
+
+
+def _mesh_candidate(path: Path):
+    from ..meshsample import subdivide
+    from ..occ import read_stl
+
+    pts, tris = read_stl(path)
+    return subdivide(pts, tris, 2)
+
+
+def run_inspect(spec: InspectJob, out, say: Say, progress=None) -> JobOutcome:
+    from ..measure import deviation
+    from ..occ import read_step_face, read_step_faces
+
+    t0 = time.perf_counter()
+    nominal = read_step_face(spec.nominal, spec.face)
+    cand_path = Path(spec.candidate)
+    suffix = cand_path.suffix.lower()
+    if suffix == ".stl":
+        pts, tris = _mesh_candidate(cand_path)
+        result = deviation(nominal, pts, tolerance=spec.tol, triangles=tris, progress=progress)
+        cand_desc = f"STL mesh {cand_path.name} ({tris.shape[0] // 16} triangles, sampled inside triangles)"
+    elif suffix in (".step", ".stp"):
+        cands = read_step_faces(cand_path)
+        idx = spec.candidate_face if spec.candidate_face is not None else spec.face
+        if not 0 <= idx < len(cands):
+            raise InputError(f"candidate face index {idx} out of range: {cand_path} has {len(cands)} face(s)")
+        result = deviation(nominal, cands[idx], samples=spec.samples, tolerance=spec.tol, progress=progress)
+        cand_desc = f"STEP face {idx} '{cands[idx].name}' of {cand_path.name}"
+    else:
+        raise InputError(f"candidate must be .step/.stp or .stl, got {cand_path.name}")
+    rep = result.report()
+    say(f"nominal: face {nominal.index} '{nominal.name}' of {spec.nominal}")
+    say(f"candidate: {cand_desc}")
+    say(f"points measured: {rep['n_points']}")
+    say(f"max |deviation| = {rep['max_abs_mm']:.6g} mm  (max {rep['max_mm']:.6g}, min {rep['min_mm']:.6g})")
+    say(f"mean = {rep['mean_mm']:.6g} mm  RMS = {rep['rms_mm']:.6g} mm  p95 |dev| = {rep['p95_abs_mm']:.6g} mm")
+    say(f"worst at xyz = ({', '.join(f'{x:.4f}' for x in rep['worst_xyz_mm'])}) mm, "
+        f"uv = ({rep['worst_uv'][0]:.6f}, {rep['worst_uv'][1]:.6f})")
+    if spec.tol is not None:
+        say(f"tolerance {spec.tol:g} mm: {'met' if result.within_tolerance else 'NOT met'}")
+    code = EXIT_TOLERANCE if (spec.tol is not None and not result.within_tolerance) else EXIT_OK
+    with Staging(out) as st:
+        if spec.render:
+            from ..viz import render_deviation
+
+            render_deviation(result, st.path("deviation.png"), vtp_path=st.path("deviation.vtp"),
+                             title=f"{cand_path.name} vs {nominal.name}", tolerance=spec.tol)
+        report = {"nominal": str(spec.nominal), "face": nominal.index, "candidate": str(spec.candidate),
+                  "candidate_desc": cand_desc, "deviation": rep, "time_s": {"total_s": time.perf_counter() - t0}}
+        outcome = finish(st, "inspect", report, code, result)
+    say(f"outputs in {out}/: {', '.join(outcome.files)}")
+    return outcome

@@ -1,0 +1,65 @@
+"""The ``machining-surface`` job: S1/S2 as certified faces, their deviation map, optionally a tool path."""
+
+from __future__ import annotations
+
+import time
+
+from .base import JobOutcome, Say, Staging, face_input, finish, write_toolpath
+from .specs import MachiningSurfaceJob
+
+
+def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> JobOutcome:
+    from ..cutters import parse_cutter
+    from ..machining import machining_surface
+    from ..machining.surfaces import fit_deviation
+
+    t0 = time.perf_counter()
+    cutter = parse_cutter(spec.tool)
+    face, desc = face_input(spec.part, spec.example, spec.face)
+    ms = machining_surface(face, cutter, axes=spec.axes, strategy=spec.strategy, lead=spec.lead, tilt=spec.tilt,
+                           axis=spec.axis, tolerance=spec.tol, loops=spec.loops, max_poles=spec.max_poles,
+                           tip=spec.tip, degree=(spec.degree, spec.degree), progress=progress)
+    t_fit = time.perf_counter() - t0
+    rep = ms.report()
+    say(f"nominal: {desc}")
+    say(f"tool: {cutter.spec()} (r = {rep['r_mm']:g} mm, R_t = {rep['R_t_mm']:g} mm), {ms.axes} axes, "
+        f"{rep['strategy']}")
+    for key in ("S1", "S2"):
+        f = rep[key]
+        if f is None:
+            continue
+        say(f"{f['name']}: degree {f['degrees'][0]}x{f['degrees'][1]}, {f['poles'][0]}x{f['poles'][1]} poles, "
+            f"max error {f['max_error_mm']:.3g} mm (tol {spec.tol:g}) on {f['n_check_points']} unseen points")
+    if ms.axes == 5:
+        say(f"axis orientation: alpha_max = {rep['alpha_max_deg_for_tolerance']:.4g} deg for the tolerance, "
+            f"{rep['alpha_max_deg_for_measured_errors']:.4g} deg for the measured errors; measured axis error "
+            f"{rep['axis_error_deg_measured']:.4g} deg")
+    say("loops: " + ("none" if not ms.loops.found else "; ".join(r.describe() for r in ms.loops.regions)))
+    tp = None
+    with Staging(out) as st:
+        from ..occ import write_step, write_stl
+        from ..viz import render_deviation
+
+        write_step(st.path("machining_surface.step"), ms.faces())
+        for f in ms.faces():
+            write_stl(st.path(f"{f.name}.stl"), [f], linear_deflection=spec.stl_deflection)
+        dev = fit_deviation(ms, "S1")
+        loops_pts = [(r.xyz, "magenta", f"{r.kind} loop ({r.surface})") for r in ms.loops.regions]
+        render_deviation(dev, st.path("deviation_S1.png"), vtp_path=st.path("deviation_S1.vtp"),
+                         title=f"S1 fit vs exact offset ({cutter.spec()})", tolerance=spec.tol,
+                         extra_points=loops_pts)
+        rep["S1_deviation_map"] = dev.report()
+        if spec.toolpath:
+            from ..machining.toolpath import tool_paths
+
+            tp = tool_paths(ms, stepover=spec.stepover, chordal_tolerance=spec.chordal, clearance=spec.clearance)
+            write_toolpath(st, tp, spec)
+            rep["toolpath"] = tp.report()
+            say(f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions ({tp.n_positions} with approach and "
+                f"retract), chordal error {tp.info['chordal_error_measured_mm']:.3g} mm (tol {spec.chordal:g})"
+                + (", MULTAX (axis not +Z)" if tp.is_multiaxis else ""))
+        rep["nominal"] = desc
+        rep["time_s"] = {"fit_s": t_fit, "total_s": time.perf_counter() - t0}
+        outcome = finish(st, "machining-surface", rep, result=ms)
+    say(f"outputs in {out}/: {', '.join(outcome.files)}")
+    return outcome

@@ -1,0 +1,238 @@
+"""Job specs: one frozen dataclass per command, built from CLI arguments or from Python (mm, degrees).
+
+A spec holds exactly what a command line holds (file paths, example names, cutter strings,
+numbers), so it can be written to JSON, sent to another process and run there by
+:func:`machsurf_cad.run_job`. Field names are the CLI's option names with ``-`` as ``_``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields
+from typing import Literal, Optional
+
+from ..errors import InputError
+
+LoopPolicy = Literal["error", "flag", "trim"]
+Continuity = Literal["g0", "g1"]
+Setting = Literal["standard-tangent", "standard-distributed", "optimum", "minimax"]
+
+
+def _positive(name: str, v, allow_none: bool = False) -> None:
+    if v is None and allow_none:
+        return
+    if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+        raise InputError(f"{name} must be > 0, got {v!r}")
+
+
+def _choice(name: str, v, choices) -> None:
+    if v not in choices:
+        raise InputError(f"{name} must be one of {', '.join(map(str, choices))}, got {v!r}")
+
+
+@dataclass(frozen=True)
+class _Post:
+    """Tool-path output options shared by the path-writing jobs."""
+
+    clearance: float = 5.0
+    feed: float = 1000.0
+    plunge_feed: float = 300.0
+    spindle: float = 10000.0
+    tool_number: int = 1
+
+    def _check_post(self) -> None:
+        for n in ("clearance", "feed", "plunge_feed", "spindle"):
+            _positive(n, getattr(self, n))
+        if int(self.tool_number) < 1:
+            raise InputError("tool_number must be >= 1")
+
+
+@dataclass(frozen=True)
+class JobSpec:
+    """Base of job specs; ``command`` is the CLI command name."""
+
+    command = ""
+
+    def to_dict(self) -> dict:
+        return {"command": self.command, **asdict(self)}
+
+    @classmethod
+    def from_mapping(cls, data: dict) -> "JobSpec":
+        """Build from a mapping with these field names (unknown keys are an error)."""
+        names = {f.name for f in fields(cls)}
+        unknown = set(data) - names - {"command"}
+        if unknown:
+            raise InputError(f"{cls.command}: unknown option(s) {', '.join(sorted(unknown))}")
+        return cls(**{k: v for k, v in data.items() if k in names})
+
+
+@dataclass(frozen=True)
+class InfoJob(JobSpec):
+    """Every face of a STEP part: types, degrees, poles, trimming, areas, uv bounds."""
+
+    part: str = ""
+    command = "info"
+
+    def __post_init__(self) -> None:
+        if not self.part:
+            raise InputError("info needs a STEP file")
+
+
+@dataclass(frozen=True)
+class InspectJob(JobSpec):
+    """Signed deviation of a candidate (STEP face or STL) from a nominal STEP face."""
+
+    nominal: str = ""
+    candidate: str = ""
+    face: int = 0
+    candidate_face: Optional[int] = None
+    tol: Optional[float] = None
+    samples: int = 200
+    render: bool = True
+    command = "inspect"
+
+    def __post_init__(self) -> None:
+        _positive("tol (mm)", self.tol, allow_none=True)
+        if int(self.samples) < 2:
+            raise InputError("samples must be >= 2")
+
+
+@dataclass(frozen=True)
+class MachiningSurfaceJob(_Post, JobSpec):
+    """Guiding S1 and orientation S2 surfaces (Table 1 of Tournier et al.) and optionally a tool path."""
+
+    part: Optional[str] = None
+    example: Optional[str] = None
+    face: int = 0
+    tool: str = "ball:D=10"
+    axes: int = 5
+    strategy: str = "planes:x"
+    lead: float = 0.0
+    tilt: float = 0.0
+    axis: Optional[tuple] = None
+    tip: bool = False
+    tol: float = 1e-3
+    degree: int = 3
+    max_poles: int = 40000
+    loops: LoopPolicy = "error"
+    stl_deflection: float = 0.01
+    toolpath: bool = False
+    stepover: float = 2.0
+    chordal: float = 0.01
+    command = "machining-surface"
+
+    def __post_init__(self) -> None:
+        _choice("axes", self.axes, (3, 5))
+        _choice("loops", self.loops, ("error", "flag", "trim"))
+        for n in ("tol", "stl_deflection", "stepover", "chordal"):
+            _positive(n + " (mm)", getattr(self, n))
+        if self.axis is not None and len(self.axis) != 3:
+            raise InputError("axis must be x,y,z")
+        self._check_post()
+
+
+@dataclass(frozen=True)
+class ReffJob(JobSpec):
+    """Effective cutter radius (relation (30)) and step-over (31) maps over a face."""
+
+    part: Optional[str] = None
+    example: Optional[str] = None
+    face: int = 0
+    tool: str = "bull:D=10,r=2"
+    compare: str = "ball"
+    direction: str = "0"
+    grid: int = 256
+    scallop: Optional[float] = None
+    axes: int = 3
+    lead: float = 0.0
+    tilt: float = 0.0
+    render: bool = True
+    command = "reff"
+
+    def __post_init__(self) -> None:
+        _choice("axes", self.axes, (3, 5))
+        _positive("scallop (mm)", self.scallop, allow_none=True)
+
+
+@dataclass(frozen=True)
+class FlankJob(_Post, JobSpec):
+    """Flank milling settings of a cylindrical cutter on a ruled surface (Redonnet et al.)."""
+
+    part: Optional[str] = None
+    example: Optional[str] = None
+    face: int = 0
+    fit_ruled: Optional[float] = None
+    tool: str = "cyl:D=20"
+    rule: float = 0.5
+    setting: Setting = "optimum"
+    side: int = 1
+    whole: bool = False
+    tol: float = 0.01
+    envelope_tol: float = 1e-3
+    study: bool = False
+    radius_range: Optional[float] = None
+    render: bool = True
+    command = "flank"
+
+    def __post_init__(self) -> None:
+        _choice("setting", self.setting, ("standard-tangent", "standard-distributed", "optimum", "minimax"))
+        _choice("side", self.side, (1, -1))
+        if not 0.0 <= self.rule <= 1.0:
+            raise InputError(f"rule {self.rule:g} is outside [0, 1] (fraction of the u range)")
+        _positive("tol (mm)", self.tol)
+        _positive("envelope_tol (mm)", self.envelope_tol)
+        _positive("radius_range (mm)", self.radius_range, allow_none=True)
+        _positive("fit_ruled (mm)", self.fit_ruled, allow_none=True)
+        self._check_post()
+
+
+@dataclass(frozen=True)
+class EnvelopeJob(_Post, JobSpec):
+    """Swept envelopes of a rotational tool and G1/G0 adjacent passes (Aranda Bassegoda, eq. (21))."""
+
+    tool: str = "cyl:D=10"
+    path: Optional[str] = None
+    example: Optional[str] = None
+    passes: int = 2
+    continuity: Continuity = "g1"
+    theta: str = "0"
+    side: int = 1
+    tol: float = 1e-3
+    theta_scan: bool = True
+    render: bool = True
+    chordal: float = 0.01
+    command = "envelope"
+
+    def __post_init__(self) -> None:
+        _choice("continuity", self.continuity, ("g0", "g1"))
+        _choice("side", self.side, (1, -1))
+        if int(self.passes) < 1:
+            raise InputError("passes must be >= 1")
+        _positive("tol (mm)", self.tol)
+        _positive("chordal (mm)", self.chordal)
+        self._check_post()
+
+    def thetas(self) -> list[float]:
+        try:
+            th = [float(x) for x in str(self.theta).split(",")]
+        except ValueError:
+            raise InputError(f"theta must be degrees, e.g. 0 or 0,15,-10; got {self.theta!r}") from None
+        for t in th:
+            if not -180 < t < 180:
+                raise InputError(f"theta {t:g} deg is outside (-180, 180)")
+        return th
+
+
+@dataclass(frozen=True)
+class DemoJob(JobSpec):
+    """The main job on the embedded example part (``make demo``)."""
+
+    command = "demo"
+
+
+SPECS: dict[str, type[JobSpec]] = {c.command: c for c in (InfoJob, InspectJob, MachiningSurfaceJob, ReffJob, FlankJob,
+                                                           EnvelopeJob, DemoJob)}
+"""Spec type by command name."""
+
+__all__ = ["JobSpec", "InfoJob", "InspectJob", "MachiningSurfaceJob", "ReffJob", "FlankJob", "EnvelopeJob", "DemoJob",
+           "SPECS", "LoopPolicy", "Continuity", "Setting"]
