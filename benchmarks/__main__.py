@@ -37,18 +37,31 @@ def main(argv=None) -> int:
     bench_offset.print_rows(offset_rows)
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump({"python": sys.version.split()[0], "machine": platform.machine(), "rows": rows, "offset_fit": offset_rows}, fh,
-                      indent=2)
+            json.dump(
+                {
+                    "python": sys.version.split()[0],
+                    "machine": platform.machine(),
+                    "rows": rows,
+                    "offset_fit": offset_rows,
+                },
+                fh,
+                indent=2,
+            )
     return 0
 
 
 def _print_row(r, header):
     if header:
-        print(f"{'benchmark':<46} {'n':>9} {'machsurf s':>11} {'reference s':>12} {'reference':<22} {'speed-up':>9} "
-              f"{'max diff':>10}")
+        print(
+            f"{'benchmark':<46} {'n':>9} {'machsurf s':>11} {'reference s':>12} {'reference':<22} {'speed-up':>9} "
+            f"{'max diff':>10}"
+        )
         print("-" * 126)
-    print(f"{r['name']:<46} {r['n']:>9} {r['ours_s']:>11.3f} {r['ref_s']:>12.3f} {r['ref']:<22} "
-          f"{r['ref_s'] / r['ours_s']:>8.1f}x {r['max_diff']:>10.2e}", flush=True)
+    print(
+        f"{r['name']:<46} {r['n']:>9} {r['ours_s']:>11.3f} {r['ref_s']:>12.3f} {r['ref']:<22} "
+        f"{r['ref_s'] / r['ours_s']:>8.1f}x {r['max_diff']:>10.2e}",
+        flush=True,
+    )
 
 
 if __name__ == "__main__":

@@ -7,8 +7,8 @@ import time
 
 import numpy as np
 
-from machsurf_cad.sweep import make_envelope
 from machsurf_cad.examples import sine_motion
+from machsurf_cad.sweep import make_envelope
 from machsurf_cad.sweep.passes import fit_pass
 
 
@@ -30,7 +30,12 @@ def envelope_rows(quick=False):
         m = env.motion
         err = 0.0
         for tk in t[::20]:
-            T, A, dT, dA = m.T(np.array([tk]))[0], m.A(np.array([tk]))[0], m.dT(np.array([tk]))[0], m.dA(np.array([tk]))[0]
+            T, A, dT, dA = (
+                m.T(np.array([tk]))[0],
+                m.A(np.array([tk]))[0],
+                m.dT(np.array([tk]))[0],
+                m.dA(np.array([tk]))[0],
+            )
             aa = np.linspace(*env.a_range, 400)
             ph = np.linspace(0, 2 * np.pi, 2000)
             ref = np.array([1.0, 0, 0]) if abs(A[0]) < 0.9 else np.array([0, 1.0, 0])
@@ -39,7 +44,8 @@ def envelope_rows(quick=False):
             e2 = np.cross(A, e1)
             g = env.segment.grazing_points(aa)  # (rho, z) on the profile
             P = (T + g[:, 1, None] * A)[:, None, :] + g[:, 0, None, None] * (
-                np.cos(ph)[None, :, None] * e1 + np.sin(ph)[None, :, None] * e2)
+                np.cos(ph)[None, :, None] * e1 + np.sin(ph)[None, :, None] * e2
+            )
             c = T + aa[:, None] * A
             nrm = P - c[:, None, :]
             vel = dT + np.cross(np.cross(A, dA), P - T)  # rigid motion: translation + rotation of the axis
@@ -49,6 +55,14 @@ def envelope_rows(quick=False):
             exact = env.points(aa, np.full(400, tk))
             err = max(err, float(np.linalg.norm(brute - exact, axis=1).max()))
         t_b = (time.perf_counter() - t0) * 20  # 10 positions measured, scaled to 200
-        rows.append({"name": f"envelope 200^2 + fit 1e-3, {tool.split(',')[0]} ({fit.n_poles} poles)", "n": 40000,
-                     "ours_s": best, "ref_s": t_b, "ref": "brute grazing search*", "max_diff": err})
+        rows.append(
+            {
+                "name": f"envelope 200^2 + fit 1e-3, {tool.split(',')[0]} ({fit.n_poles} poles)",
+                "n": 40000,
+                "ours_s": best,
+                "ref_s": t_b,
+                "ref": "brute grazing search*",
+                "max_diff": err,
+            }
+        )
     return rows

@@ -7,9 +7,9 @@ import time
 import numpy as np
 
 from machsurf_cad import examples
-from machsurf_cad.measure import project_points
 from machsurf_cad.geometry import builders, local_properties_grid
 from machsurf_cad.geometry.bspline import unit_normals
+from machsurf_cad.measure import project_points
 
 
 def _surface(rational: bool):
@@ -63,8 +63,14 @@ def _eval_d1_normals(rational: bool, quick: bool):
     t_occ, (Po, No) = _time(occt)
     diff = max(np.abs(P - Po).max(), np.abs(N - No).max())
     kind = "rational" if rational else "non-rational"
-    return {"name": f"point+d1+normal, scattered, bicubic {kind}", "n": n, "ours_s": t_ours, "ref_s": t_occ,
-            "ref": "OCCT D1 per point", "max_diff": float(diff)}
+    return {
+        "name": f"point+d1+normal, scattered, bicubic {kind}",
+        "n": n,
+        "ours_s": t_ours,
+        "ref_s": t_occ,
+        "ref": "OCCT D1 per point",
+        "max_diff": float(diff),
+    }
 
 
 def eval_nonrational(quick=False):
@@ -107,8 +113,14 @@ def grid_d1_normals(quick=False):
 
     t_occ, (Po, No) = _time(occt)
     diff = max(np.abs(P - Po).max(), np.abs(N - No).max())
-    return {"name": f"point+d1+normal, {m}^2 grid, bicubic rational", "n": m * m, "ours_s": t_ours, "ref_s": t_occ,
-            "ref": "OCCT D1 per point", "max_diff": float(diff)}
+    return {
+        "name": f"point+d1+normal, {m}^2 grid, bicubic rational",
+        "n": m * m,
+        "ours_s": t_ours,
+        "ref_s": t_occ,
+        "ref": "OCCT D1 per point",
+        "max_diff": float(diff),
+    }
 
 
 def curvatures(quick=False):
@@ -135,8 +147,14 @@ def curvatures(quick=False):
 
     t_occ, k = _time(occt)
     diff = max(np.abs(p.k1.ravel() - k[:, 0]).max(), np.abs(p.k2.ravel() - k[:, 1]).max())
-    return {"name": f"principal curvatures, {m}^2 grid, blade", "n": uf.size, "ours_s": t_ours, "ref_s": t_occ,
-            "ref": "GeomLProp_SLProps", "max_diff": float(diff)}
+    return {
+        "name": f"principal curvatures, {m}^2 grid, blade",
+        "n": uf.size,
+        "ours_s": t_ours,
+        "ref_s": t_occ,
+        "ref": "GeomLProp_SLProps",
+        "max_diff": float(diff),
+    }
 
 
 def projection(quick=False):
@@ -168,8 +186,14 @@ def projection(quick=False):
 
     t_occ, dist_occ = _time(occt)
     ok = np.isfinite(dist_occ)
-    return {"name": "closest point on surface, blade", "n": n, "ours_s": t_ours, "ref_s": t_occ,
-            "ref": "GeomAPI_ProjectPoint", "max_diff": float(np.abs(dist[ok] - dist_occ[ok]).max())}
+    return {
+        "name": "closest point on surface, blade",
+        "n": n,
+        "ours_s": t_ours,
+        "ref_s": t_occ,
+        "ref": "GeomAPI_ProjectPoint",
+        "max_diff": float(np.abs(dist[ok] - dist_occ[ok]).max()),
+    }
 
 
 BENCHMARKS = [eval_nonrational, eval_rational, grid_d1_normals, curvatures, projection]

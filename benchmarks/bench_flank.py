@@ -27,8 +27,11 @@ def _brute(s, st, n_u=2000, n_v=101):
 
 def flank_rows(quick=False):
     rows = []
-    for name, s, u_p, R in (("liu", examples.liu_ruled(), 11.507, 10.0), ("hypar a30 h80", examples.hypar_ruled(), 0.5, 40.0),
-                            ("eq18", examples.eq18_ruled(), 0.4, 10.0)):
+    for name, s, u_p, R in (
+        ("liu", examples.liu_ruled(), 11.507, 10.0),
+        ("hypar a30 h80", examples.hypar_ruled(), 0.5, 40.0),
+        ("eq18", examples.eq18_ruled(), 0.4, 10.0),
+    ):
         optimum_setting(s, u_p, R)
         best = np.inf
         for _ in range(10):
@@ -39,12 +42,28 @@ def flank_rows(quick=False):
         t = time.perf_counter()
         b = _brute(s, st)
         t_b = time.perf_counter() - t
-        rows.append({"name": f"optimum setting + interference, {name}", "n": 1, "ours_s": best, "ref_s": t_b,
-                     "ref": "brute-force band", "max_diff": float(np.abs(b - e.e).max())})
+        rows.append(
+            {
+                "name": f"optimum setting + interference, {name}",
+                "n": 1,
+                "ours_s": best,
+                "ref_s": t_b,
+                "ref": "brute-force band",
+                "max_diff": float(np.abs(b - e.e).max()),
+            }
+        )
     n = 100 if quick else 500
     t = time.perf_counter()
     flank_path(examples.liu_ruled(), 10.0, "optimum", n_rules=n)
     t_path = time.perf_counter() - t
-    rows.append({"name": f"{n}-rule optimum path, liu (per-rule brute ref)", "n": n, "ours_s": t_path,
-                 "ref_s": n * rows[0]["ref_s"], "ref": "brute-force band", "max_diff": 0.0})
+    rows.append(
+        {
+            "name": f"{n}-rule optimum path, liu (per-rule brute ref)",
+            "n": n,
+            "ours_s": t_path,
+            "ref_s": n * rows[0]["ref_s"],
+            "ref": "brute-force band",
+            "max_diff": 0.0,
+        }
+    )
     return rows

@@ -60,7 +60,21 @@ def reff_rows(quick=False):
     per_point = (time.perf_counter() - t) / (n_ref * n_ref)
     occ_full = per_point * g * g
     diff = float(np.nanmax(np.abs(vals - d.stepover[np.ix_(idx, idx)])))
-    return [{"name": f"R_eff + step-over map {g}^2, blade (warm)", "n": g * g, "ours_s": best, "ref_s": occ_full,
-             "ref": "SLProps per point*", "max_diff": diff},
-            {"name": f"R_eff + step-over map {g}^2, blade (cold)", "n": g * g, "ours_s": cold, "ref_s": occ_full,
-             "ref": "SLProps per point*", "max_diff": diff}]
+    return [
+        {
+            "name": f"R_eff + step-over map {g}^2, blade (warm)",
+            "n": g * g,
+            "ours_s": best,
+            "ref_s": occ_full,
+            "ref": "SLProps per point*",
+            "max_diff": diff,
+        },
+        {
+            "name": f"R_eff + step-over map {g}^2, blade (cold)",
+            "n": g * g,
+            "ours_s": cold,
+            "ref_s": occ_full,
+            "ref": "SLProps per point*",
+            "max_diff": diff,
+        },
+    ]

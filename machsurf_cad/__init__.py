@@ -19,50 +19,148 @@ True
 (True, 'bull:D=28,r=4')
 """
 
+from ._version import __version__
 from .approx import SurfaceFit, fit_surface
 from .cam import Move, PostOptions, ToolPath, read_apt, read_csv, write_apt, write_csv, write_json
-from .cutters import (APTCutter, BallEndMill, BullNoseEndMill, ConicalCutter, Cutter, DrumCutter, EndMillRadii,
-                      FlatEndMill, Shank, cutter_from_apt, parse_cutter)
+from .cutters import (
+    APTCutter,
+    BallEndMill,
+    BullNoseEndMill,
+    ConicalCutter,
+    Cutter,
+    DrumCutter,
+    EndMillRadii,
+    FlatEndMill,
+    Shank,
+    cutter_from_apt,
+    parse_cutter,
+)
 from .effradius import DirectionMap, ReffMaps, effective_radius, reff_maps, stepover
 from .errors import DegenerateGeometryError, InputError, MachsurfError, ToleranceError
 from .examples import EXAMPLES, example
-from .flank_milling import (FlankPath, FlankResult, Interference, NoAdmissibleSetting, RuledSurface, Setting, flank,
-                            flank_path)
+from .flank_milling import (
+    FlankPath,
+    FlankResult,
+    Interference,
+    NoAdmissibleSetting,
+    RuledSurface,
+    Setting,
+    flank,
+    flank_path,
+)
 from .geometry import BSplineCurve, BSplineSurface, builders, local_properties
 from .geometry.face import Face
-from .jobs import (DemoJob, EnvelopeJob, FlankJob, InfoJob, InspectJob, JobOutcome, JobSpec, MachiningSurfaceJob,
-                   ReffJob, run_job)
-from .machining import AxisField, FixedAxis, IsoFeed, LeadTilt, LoopError, MachiningSurface, PlanesFeed
-from .machining import machining_surface
+from .jobs import (
+    DemoJob,
+    EnvelopeJob,
+    FlankJob,
+    InfoJob,
+    InspectJob,
+    JobOutcome,
+    JobSpec,
+    MachiningSurfaceJob,
+    ReffJob,
+    run_job,
+)
+from .machining import (
+    AxisField,
+    FixedAxis,
+    IsoFeed,
+    LeadTilt,
+    LoopError,
+    MachiningSurface,
+    PlanesFeed,
+    machining_surface,
+)
 from .machining.toolpath import tool_paths
 from .measure import DeviationResult, deviation, project_points
 from .results import Progress
 from .sweep import Envelope, EnvelopeResult, Motion, PassChain, envelope
-
-from ._version import __version__
 
 reff = reff_maps
 """Effective cutter radius and step-over maps over a face (the ``reff`` command); same as :func:`reff_maps`."""
 
 __all__ = [
     # entry points
-    "machining_surface", "tool_paths", "reff", "reff_maps", "effective_radius", "stepover", "flank", "flank_path",
-    "envelope", "deviation", "project_points", "fit_surface", "run_job", "example", "parse_cutter", "cutter_from_apt",
-    "local_properties", "builders",
+    "machining_surface",
+    "tool_paths",
+    "reff",
+    "reff_maps",
+    "effective_radius",
+    "stepover",
+    "flank",
+    "flank_path",
+    "envelope",
+    "deviation",
+    "project_points",
+    "fit_surface",
+    "run_job",
+    "example",
+    "parse_cutter",
+    "cutter_from_apt",
+    "local_properties",
+    "builders",
     # tool paths
-    "ToolPath", "Move", "PostOptions", "write_apt", "write_csv", "write_json", "read_apt", "read_csv",
+    "ToolPath",
+    "Move",
+    "PostOptions",
+    "write_apt",
+    "write_csv",
+    "write_json",
+    "read_apt",
+    "read_csv",
     # job specs and outcome
-    "JobSpec", "InfoJob", "InspectJob", "MachiningSurfaceJob", "ReffJob", "FlankJob", "EnvelopeJob", "DemoJob",
+    "JobSpec",
+    "InfoJob",
+    "InspectJob",
+    "MachiningSurfaceJob",
+    "ReffJob",
+    "FlankJob",
+    "EnvelopeJob",
+    "DemoJob",
     "JobOutcome",
     # results
-    "MachiningSurface", "ReffMaps", "DirectionMap", "FlankResult", "FlankPath", "Setting", "Interference",
-    "EnvelopeResult", "PassChain", "Envelope", "DeviationResult", "SurfaceFit",
+    "MachiningSurface",
+    "ReffMaps",
+    "DirectionMap",
+    "FlankResult",
+    "FlankPath",
+    "Setting",
+    "Interference",
+    "EnvelopeResult",
+    "PassChain",
+    "Envelope",
+    "DeviationResult",
+    "SurfaceFit",
     # inputs and values
-    "BSplineCurve", "BSplineSurface", "Face", "RuledSurface", "Motion", "EXAMPLES", "Cutter", "BallEndMill",
-    "FlatEndMill", "BullNoseEndMill", "ConicalCutter", "DrumCutter", "APTCutter", "Shank", "EndMillRadii",
-    "FixedAxis", "LeadTilt", "AxisField", "PlanesFeed", "IsoFeed", "Progress",
+    "BSplineCurve",
+    "BSplineSurface",
+    "Face",
+    "RuledSurface",
+    "Motion",
+    "EXAMPLES",
+    "Cutter",
+    "BallEndMill",
+    "FlatEndMill",
+    "BullNoseEndMill",
+    "ConicalCutter",
+    "DrumCutter",
+    "APTCutter",
+    "Shank",
+    "EndMillRadii",
+    "FixedAxis",
+    "LeadTilt",
+    "AxisField",
+    "PlanesFeed",
+    "IsoFeed",
+    "Progress",
     # errors
-    "MachsurfError", "InputError", "DegenerateGeometryError", "ToleranceError", "LoopError", "NoAdmissibleSetting",
+    "MachsurfError",
+    "InputError",
+    "DegenerateGeometryError",
+    "ToleranceError",
+    "LoopError",
+    "NoAdmissibleSetting",
     "__version__",
 ]
 

@@ -11,8 +11,8 @@ the error reached. This engine is shared by the machining surfaces and the envel
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
@@ -48,10 +48,15 @@ class SurfaceFit(Result):
     def report(self) -> dict:
         s = self.surface
         return {
-            "tolerance_mm": self.tolerance, "max_error_mm": self.max_error, "rms_error_mm": self.rms_error,
-            "n_check_points": self.n_check, "worst_uv": list(self.worst_uv),
-            "degrees": [s.degree_u, s.degree_v], "poles": [int(s.shape[0]), int(s.shape[1])],
-            "n_poles": self.n_poles, "knot_spans": [int(s.knots_u.size - 1), int(s.knots_v.size - 1)],
+            "tolerance_mm": self.tolerance,
+            "max_error_mm": self.max_error,
+            "rms_error_mm": self.rms_error,
+            "n_check_points": self.n_check,
+            "worst_uv": list(self.worst_uv),
+            "degrees": [s.degree_u, s.degree_v],
+            "poles": [int(s.shape[0]), int(s.shape[1])],
+            "n_poles": self.n_poles,
+            "knot_spans": [int(s.knots_u.size - 1), int(s.knots_v.size - 1)],
             "iterations": len(self.history),
         }
 
@@ -86,9 +91,20 @@ def _lstsq(b: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     return sol
 
 
-def fit_surface(f: GridMap, bounds, *, tolerance: float, degree=(3, 3), max_poles: int = 40000,
-                initial_spans=(4, 4), max_iter: int = 40, check_grid: int = 101, name: str = "",
-                breaks=None, progress=None) -> SurfaceFit:
+def fit_surface(
+    f: GridMap,
+    bounds,
+    *,
+    tolerance: float,
+    degree=(3, 3),
+    max_poles: int = 40000,
+    initial_spans=(4, 4),
+    max_iter: int = 40,
+    check_grid: int = 101,
+    name: str = "",
+    breaks=None,
+    progress=None,
+) -> SurfaceFit:
     """Fit ``f`` over ``bounds = (u0, u1, v0, v1)`` within ``tolerance`` (max-norm distance, mm).
 
     Parameters
@@ -96,7 +112,7 @@ def fit_surface(f: GridMap, bounds, *, tolerance: float, degree=(3, 3), max_pole
     f : callable
         Vectorised map on tensor grids: ``f(us, vs)`` returns shape ``(len(us), len(vs), 3)``.
     tolerance : float
-        Required max |fit - f| in mm, measured on points the fit never saw.
+        Required max-norm error ``|fit - f|`` in mm, measured on points the fit never saw.
     degree : (int, int)
         Degrees along u and v (default bicubic; interior knots are simple, so C^(degree-1)).
     max_poles : int
@@ -177,15 +193,15 @@ def fit_surface(f: GridMap, bounds, *, tolerance: float, degree=(3, 3), max_pole
             else:
                 i, j = np.unravel_index(np.argmax(err_g), err_g.shape)
                 worst = (float(gu[i]), float(gv[j]))
-            rms = float(np.sqrt((np.sum(err ** 2) + np.sum(err_g ** 2)) / (err.size + err_g.size)))
+            rms = float(np.sqrt((np.sum(err**2) + np.sum(err_g**2)) / (err.size + err_g.size)))
             return SurfaceFit(surf, float(tolerance), max_err, rms, int(err.size + err_g.size), worst, tuple(history))
         # refine: split every knot span that holds a point above tolerance, per direction
         k_u, k_v = cu.size, cv.size
         bad_u = np.zeros(bu.size - 1, bool)
         bad_v = np.zeros(bv.size - 1, bool)
         e4 = err.reshape(bu.size - 1, k_u, bv.size - 1, k_v)
-        bad_u |= (e4.max(axis=(1, 2, 3)) > tolerance)
-        bad_v |= (e4.max(axis=(0, 1, 3)) > tolerance)
+        bad_u |= e4.max(axis=(1, 2, 3)) > tolerance
+        bad_v |= e4.max(axis=(0, 1, 3)) > tolerance
         iu = np.clip(np.searchsorted(bu, gu, side="right") - 1, 0, bu.size - 2)
         iv = np.clip(np.searchsorted(bv, gv, side="right") - 1, 0, bv.size - 2)
         gi, gj = np.nonzero(err_g > tolerance)
@@ -197,11 +213,15 @@ def fit_surface(f: GridMap, bounds, *, tolerance: float, degree=(3, 3), max_pole
         if new_u * new_v > max_poles:
             raise ToleranceError(
                 f"surface fit did not reach {tolerance:g} mm within {max_poles} poles "
-                f"(reached {max_err:.3g} mm with {nu}x{nv} poles)", max_err)
+                f"(reached {max_err:.3g} mm with {nu}x{nv} poles)",
+                max_err,
+            )
         bu = _split(bu, bad_u)
         bv = _split(bv, bad_v)
-    raise ToleranceError(f"surface fit did not reach {tolerance:g} mm in {max_iter} refinements "
-                         f"(reached {history[-1][2]:.3g} mm)", history[-1][2])
+    raise ToleranceError(
+        f"surface fit did not reach {tolerance:g} mm in {max_iter} refinements (reached {history[-1][2]:.3g} mm)",
+        history[-1][2],
+    )
 
 
 def _directional(bad_u, bad_v, e4, tol):

@@ -99,8 +99,12 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--tol", type=float, default=1e-3, help="fit tolerance, max-norm mm (default 0.001)")
     m.add_argument("--degree", type=int, default=3, help="fit degree in u and v (default 3)")
     m.add_argument("--max-poles", type=int, default=40000, help="pole budget per surface (default 40000)")
-    m.add_argument("--loops", choices=["error", "flag", "trim"], default="error",
-                   help="on loops: error (default), flag (export and report) or trim (cut interior regions away)")
+    m.add_argument(
+        "--loops",
+        choices=["error", "flag", "trim"],
+        default="error",
+        help="on loops: error (default), flag (export and report) or trim (cut interior regions away)",
+    )
     m.add_argument("--stl-deflection", type=float, default=0.01, help="STL linear deflection, mm (default 0.01)")
     m.add_argument("--toolpath", action="store_true", help="also write the tool path (CSV, APT CLDATA, JSON)")
     m.add_argument("--stepover", type=float, default=2.0, help="distance between passes, mm (default 2)")
@@ -126,22 +130,31 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--fit-ruled", type=float, default=None, help="accept a non-ruled face within this many mm")
     f.add_argument("--tool", default="cyl:D=20", help="cylindrical cutter, e.g. cyl:D=80 (mm)")
     f.add_argument("--rule", type=float, default=0.5, help="rule position as a fraction of the u range [0, 1]")
-    f.add_argument("--setting", default="optimum",
-                   choices=["standard-tangent", "standard-distributed", "optimum", "minimax"])
+    f.add_argument(
+        "--setting", default="optimum", choices=["standard-tangent", "standard-distributed", "optimum", "minimax"]
+    )
     f.add_argument("--side", type=int, default=1, help="+1: tool on the side of S_u x S_v, -1: the other")
     f.add_argument("--whole", action="store_true", help="settings on the whole surface: tool path, envelope, map")
     f.add_argument("--tol", type=float, default=0.01, help="whole-surface tolerance and rule step criterion, mm")
     f.add_argument("--envelope-tol", type=float, default=1e-3, help="envelope fit tolerance, mm")
     f.add_argument("--study", action="store_true", help="the paper's parameter study plots (figs 9 and 10)")
-    f.add_argument("--radius-range", type=float, default=None, metavar="TOL",
-                   help="smallest and largest R keeping the whole surface within TOL mm")
+    f.add_argument(
+        "--radius-range",
+        type=float,
+        default=None,
+        metavar="TOL",
+        help="smallest and largest R keeping the whole surface within TOL mm",
+    )
     f.add_argument("--no-render", dest="render", action="store_false", help="numbers and files, no pictures")
     _post(f)
     f.add_argument("-o", "--out", default="out/flank", help="output folder")
 
     v = sub.add_parser("envelope", help="swept envelopes of a rotational tool and G1/G0 adjacent passes")
-    v.add_argument("--tool", required=True, help="cyl:D=.. | cone:D=..,angle=.. | drum:D=..,Rp=..,L=.. | "
-                                                 "barrel:... | ball:D=.. (mm, degrees)")
+    v.add_argument(
+        "--tool",
+        required=True,
+        help="cyl:D=.. | cone:D=..,angle=.. | drum:D=..,Rp=..,L=.. | barrel:... | ball:D=.. (mm, degrees)",
+    )
     v.add_argument("--path", help="JSON path file: {points: [[x,y,z]...], axes: [[i,j,k]...]} (tip points, mm)")
     v.add_argument("--example", help="example motion instead of --path: sine (default), line, helix")
     v.add_argument("--passes", type=int, default=2, help="number of passes (default 2)")
@@ -150,16 +163,21 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--side", type=int, default=1, help="envelope sheet: +1 (side of S_a x S_t) or -1")
     v.add_argument("--tol", type=float, default=1e-3, help="fit tolerance per pass, mm (default 0.001)")
     v.add_argument("--chordal", type=float, default=0.01, help="chordal tolerance of the tool path, mm (default 0.01)")
-    v.add_argument("--no-theta-scan", dest="theta_scan", action="store_false",
-                   help="skip the scan of the admissible theta range")
+    v.add_argument(
+        "--no-theta-scan", dest="theta_scan", action="store_false", help="skip the scan of the admissible theta range"
+    )
     v.add_argument("--no-render", dest="render", action="store_false", help="skip the zebra picture")
     _post(v)
     v.add_argument("-o", "--out", default="out/envelope", help="output folder")
     return p
 
 
-_BAR_TITLES = {"inspect": "measuring deviation", "machining-surface": "fitting S1/S2", "flank": "settings along the "
-               "surface", "demo": "measuring the STL"}
+_BAR_TITLES = {
+    "inspect": "measuring deviation",
+    "machining-surface": "fitting S1/S2",
+    "flank": "settings along the surface",
+    "demo": "measuring the STL",
+}
 
 
 def main(argv=None) -> int:

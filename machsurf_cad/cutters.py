@@ -32,7 +32,6 @@ import numpy as np
 
 from .errors import InputError
 
-
 _AXIS_CUTOFF_DEG = 1.0
 """Sphere families of arcs stop where the profile normal is this close (degrees) to the axis."""
 
@@ -98,7 +97,7 @@ class SphereFamilySegment:
         if self.kind == "point":
             return np.full_like(a, self.radius)
         sigma = 1.0 if self.convex else -1.0
-        return sigma * self.radius + math.copysign(1.0, self.rho_c) * np.sqrt(self.rho_c ** 2 + (a - self.z_c) ** 2)
+        return sigma * self.radius + math.copysign(1.0, self.rho_c) * np.sqrt(self.rho_c**2 + (a - self.z_c) ** 2)
 
     def r_a(self, a) -> np.ndarray:
         """Derivative ``dr/da`` (dimensionless)."""
@@ -107,7 +106,7 @@ class SphereFamilySegment:
             return np.full_like(a, math.sin(math.radians(self.angle_deg)))
         if self.kind == "point":
             return np.zeros_like(a)
-        return math.copysign(1.0, self.rho_c) * (a - self.z_c) / np.sqrt(self.rho_c ** 2 + (a - self.z_c) ** 2)
+        return math.copysign(1.0, self.rho_c) * (a - self.z_c) / np.sqrt(self.rho_c**2 + (a - self.z_c) ** 2)
 
     def grazing_points(self, a) -> np.ndarray:
         """Profile points ``(rho, z)`` where the sphere at ``a`` touches the tool (not for "point")."""
@@ -265,7 +264,7 @@ class Cutter:
             out = np.maximum(out, _segment_rho_at(seg, h))
         return out
 
-    def offset(self, d: float) -> "Cutter":
+    def offset(self, d: float) -> Cutter:
         """The cutter grown by ``d`` mm normal to its surface (OpenCAMLib's ``offsetCutter``):
         ball D -> ball D + 2d, flat D -> bull (D + 2d, r = d), bull (D, r) -> bull (D + 2d, r + d)."""
         raise InputError(f"the offset of {self.spec()} is not a cutter of this library (ball, flat or bull only)")
@@ -336,7 +335,7 @@ def _segment_z_at(seg, rho: np.ndarray, lowest: bool) -> np.ndarray:
 def _arc_points_at_rho(seg, rho):
     dx = rho - seg.rho_c
     inside = np.abs(dx) <= seg.radius + 1e-12
-    dz = np.sqrt(np.clip(seg.radius ** 2 - dx * dx, 0, None))
+    dz = np.sqrt(np.clip(seg.radius**2 - dx * dx, 0, None))
     best = np.full(rho.shape, np.inf)
     for sgn in (-1.0, 1.0):
         z = seg.z_c + sgn * dz
@@ -349,8 +348,11 @@ def _arc_points_at_rho(seg, rho):
 def _angle_in(ang, a0, a1):
     lo, hi = min(a0, a1), max(a0, a1)
     ang = np.asarray(ang)
-    return ((ang >= lo - 1e-9) & (ang <= hi + 1e-9)) | ((ang + 360 >= lo - 1e-9) & (ang + 360 <= hi + 1e-9)) | (
-        (ang - 360 >= lo - 1e-9) & (ang - 360 <= hi + 1e-9))
+    return (
+        ((ang >= lo - 1e-9) & (ang <= hi + 1e-9))
+        | ((ang + 360 >= lo - 1e-9) & (ang + 360 <= hi + 1e-9))
+        | ((ang - 360 >= lo - 1e-9) & (ang - 360 <= hi + 1e-9))
+    )
 
 
 def _segment_rho_at(seg, h: np.ndarray) -> np.ndarray:
@@ -363,7 +365,7 @@ def _segment_rho_at(seg, h: np.ndarray) -> np.ndarray:
         return np.where((h >= lo - 1e-12) & (h <= hi + 1e-12), r, 0.0)
     dz = h - seg.z_c
     inside = np.abs(dz) <= seg.radius + 1e-12
-    dr = np.sqrt(np.clip(seg.radius ** 2 - dz * dz, 0, None))
+    dr = np.sqrt(np.clip(seg.radius**2 - dz * dz, 0, None))
     best = np.zeros(h.shape)
     for sgn in (-1.0, 1.0):
         r = seg.rho_c + sgn * dr
@@ -459,7 +461,7 @@ class BallEndMill(Cutter):
     def end_mill_radii(self, purpose: str) -> EndMillRadii:
         return EndMillRadii(self.D / 2, 0.0, self.D / 2)
 
-    def offset(self, d: float) -> "Cutter":
+    def offset(self, d: float) -> Cutter:
         return BallEndMill(self.D + 2 * _num("d", d), self.length, self.shank, self.holder)
 
     def apt_parameters(self):
@@ -502,7 +504,7 @@ class FlatEndMill(Cutter):
     def end_mill_radii(self, purpose: str) -> EndMillRadii:
         return EndMillRadii(0.0, self.D / 2, self.D / 2)
 
-    def offset(self, d: float) -> "Cutter":
+    def offset(self, d: float) -> Cutter:
         d = _num("d", d)
         return BullNoseEndMill(self.D + 2 * d, d, self.length, self.shank, self.holder) if d > 0 else self
 
@@ -552,7 +554,7 @@ class BullNoseEndMill(Cutter):
     def end_mill_radii(self, purpose: str) -> EndMillRadii:
         return EndMillRadii(self.r, self.D / 2 - self.r, self.D / 2)
 
-    def offset(self, d: float) -> "Cutter":
+    def offset(self, d: float) -> Cutter:
         d = _num("d", d)
         return BullNoseEndMill(self.D + 2 * d, self.r + d, self.length, self.shank, self.holder)
 
@@ -641,7 +643,7 @@ class DrumCutter(Cutter):
 
     def _end_radius(self) -> float:
         h = self.length / 2
-        sag = self.R_p - math.sqrt(self.R_p ** 2 - h ** 2)
+        sag = self.R_p - math.sqrt(self.R_p**2 - h**2)
         return self.D / 2 - sag if not self.concave else self.D / 2 + sag
 
     def profile(self):
@@ -727,8 +729,10 @@ class APTCutter(Cutter):
         return (self.D, self.r, self.e, self.f, self.alpha, self.beta, self.h)
 
     def spec(self):
-        return (f"apt:D={self.D:g},r={self.r:g},e={self.e:g},f={self.f:g},alpha={self.alpha:g},"
-                f"beta={self.beta:g},h={self.h:g}")
+        return (
+            f"apt:D={self.D:g},r={self.r:g},e={self.e:g},f={self.f:g},alpha={self.alpha:g},"
+            f"beta={self.beta:g},h={self.h:g}"
+        )
 
 
 def _length(length, D) -> float:

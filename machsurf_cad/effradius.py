@@ -115,8 +115,10 @@ def stepover(scallop: float, r_eff, rho) -> tuple[np.ndarray, np.ndarray]:
         raise InputError("scallop height must be > 0 mm")
     R, rho = np.broadcast_arrays(np.asarray(r_eff, dtype=float), np.asarray(rho, dtype=float))
     if np.any(np.isfinite(R) & (h >= 2 * R)):
-        raise InputError(f"scallop height {h:g} mm is not smaller than the effective diameter (min 2 R_eff = "
-                         f"{2 * float(np.nanmin(R)):g} mm)")
+        raise InputError(
+            f"scallop height {h:g} mm is not smaller than the effective diameter (min 2 R_eff = "
+            f"{2 * float(np.nanmin(R)):g} mm)"
+        )
     flat = ~np.isfinite(rho)
     rr = np.where(flat, 1.0, rho)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -159,12 +161,14 @@ class DirectionMap(Result):
         if self.stepover is not None:
             ok = np.isfinite(self.stepover) & np.isfinite(self.stepover_ball) & inside
             so, sb = self.stepover[ok], self.stepover_ball[ok]
-            out.update({
-                "stepover_mean_mm": float(np.average(so, weights=w[ok])) if ok.any() else None,
-                "stepover_ball_mean_mm": float(np.average(sb, weights=w[ok])) if ok.any() else None,
-                "n_unreachable": int(np.count_nonzero(~self.reachable & inside)),
-                "n_infinite_stepover": int(np.count_nonzero(np.isinf(self.stepover) & inside)),
-            })
+            out.update(
+                {
+                    "stepover_mean_mm": float(np.average(so, weights=w[ok])) if ok.any() else None,
+                    "stepover_ball_mean_mm": float(np.average(sb, weights=w[ok])) if ok.any() else None,
+                    "n_unreachable": int(np.count_nonzero(~self.reachable & inside)),
+                    "n_infinite_stepover": int(np.count_nonzero(np.isinf(self.stepover) & inside)),
+                }
+            )
             if ok.any():
                 out["stepover_ratio_mean"] = out["stepover_mean_mm"] / out["stepover_ball_mean_mm"]
         return out
@@ -200,9 +204,16 @@ class ReffMaps(Result):
         em = self.cutter.end_mill_radii(_PURPOSE)
         R, r = em.R, em.r
         rep = {
-            "tool": self.cutter.to_dict(), "compare": None if self.compare is None else self.compare.to_dict(),
-            "R_mm": R, "r_mm": r, "R_t_mm": R - r, "axes": self.axes, "lead_deg": self.lead_deg,
-            "tilt_deg": self.tilt_deg, "scallop_mm": self.scallop, "grid": [int(self.us.size), int(self.vs.size)],
+            "tool": self.cutter.to_dict(),
+            "compare": None if self.compare is None else self.compare.to_dict(),
+            "R_mm": R,
+            "r_mm": r,
+            "R_t_mm": R - r,
+            "axes": self.axes,
+            "lead_deg": self.lead_deg,
+            "tilt_deg": self.tilt_deg,
+            "scallop_mm": self.scallop,
+            "grid": [int(self.us.size), int(self.vs.size)],
             "directions": [d.figures(self.inside, self.area_weights, self.R_ball) for d in self.directions],
             "time_s": {**self.timings, "total_s": self.time_s},
         }
@@ -210,8 +221,9 @@ class ReffMaps(Result):
             vals = self.best_theta_deg[self.inside]
             rep["best_direction"] = {
                 "criterion": "stepover" if self.scallop else "r_eff",
-                "histogram_deg": {f"{t.theta_deg:g}": int(np.count_nonzero(np.isclose(vals, t.theta_deg)))
-                                  for t in self.directions},
+                "histogram_deg": {
+                    f"{t.theta_deg:g}": int(np.count_nonzero(np.isclose(vals, t.theta_deg))) for t in self.directions
+                },
             }
         return rep
 
@@ -251,8 +263,18 @@ def parse_directions(text) -> list[float]:
     return vals
 
 
-def reff_maps(face, tool, *, directions=(0.0,), grid: int = 256, compare="ball", scallop: float | None = None,
-              axes: int = 3, lead: float = 0.0, tilt: float = 0.0) -> ReffMaps:
+def reff_maps(
+    face,
+    tool,
+    *,
+    directions=(0.0,),
+    grid: int = 256,
+    compare="ball",
+    scallop: float | None = None,
+    axes: int = 3,
+    lead: float = 0.0,
+    tilt: float = 0.0,
+) -> ReffMaps:
     """Effective radius (and step-over) maps of ``tool`` over a face, for machining directions.
 
     Parameters
@@ -279,12 +301,14 @@ def reff_maps(face, tool, *, directions=(0.0,), grid: int = 256, compare="ball",
     timings = {}
     face = _as_face(face)
     cutter = parse_cutter(tool) if isinstance(tool, str) else tool
-    em = cutter.end_mill_radii(_PURPOSE)
-    R, r = em.R, em.r
+    R = cutter.end_mill_radii(_PURPOSE).R
     comp = None
     if compare is not None:
-        comp = parse_cutter(f"ball:D={cutter.D:g}") if compare == "ball" else (
-            parse_cutter(compare) if isinstance(compare, str) else compare)
+        comp = (
+            parse_cutter(f"ball:D={cutter.D:g}")
+            if compare == "ball"
+            else (parse_cutter(compare) if isinstance(compare, str) else compare)
+        )
         comp.end_mill_radii(_PURPOSE)
     if axes not in (3, 5):
         raise InputError("axes must be 3 or 5")
@@ -311,7 +335,9 @@ def reff_maps(face, tool, *, directions=(0.0,), grid: int = 256, compare="ball",
         i = np.argwhere(bad)[0]
         raise DegenerateGeometryError(
             f"surface normal undefined at {int(bad.sum())} sample(s), e.g. (u, v) = ({U[tuple(i)]:.4g}, "
-            f"{V[tuple(i)]:.4g}): singular point", {"uv": np.stack([U[bad], V[bad]], 1)[:20].tolist()})
+            f"{V[tuple(i)]:.4g}): singular point",
+            {"uv": np.stack([U[bad], V[bad]], 1)[:20].tolist()},
+        )
     _check_singular(face, us, vs, n, inside)
     if face.reversed:
         n = -n
@@ -329,8 +355,25 @@ def reff_maps(face, tool, *, directions=(0.0,), grid: int = 256, compare="ball",
         idx = np.argmax(crit, axis=0)
         best_t = np.asarray(dirs)[idx]
         best_v = np.take_along_axis(crit, idx[None], 0)[0]
-    return ReffMaps(face, cutter, comp, axes, float(lead), float(tilt), scallop, us, vs, d.point, inside, area,
-                    tuple(maps), best_t, best_v, time.perf_counter() - t0, timings)
+    return ReffMaps(
+        face,
+        cutter,
+        comp,
+        axes,
+        float(lead),
+        float(tilt),
+        scallop,
+        us,
+        vs,
+        d.point,
+        inside,
+        area,
+        tuple(maps),
+        best_t,
+        best_v,
+        time.perf_counter() - t0,
+        timings,
+    )
 
 
 def _check_singular(face: Face, us, vs, n, inside) -> None:
@@ -338,8 +381,12 @@ def _check_singular(face: Face, us, vs, n, inside) -> None:
     than 60 degrees between neighbouring samples (a singular point inside)."""
     u0, u1, v0, v1 = face.uv_bounds
     s = face.surface
-    edges = [(np.full(vs.size, u0), vs), (np.full(vs.size, u1), vs), (us, np.full(us.size, v0)),
-             (us, np.full(us.size, v1))]
+    edges = [
+        (np.full(vs.size, u0), vs),
+        (np.full(vs.size, u1), vs),
+        (us, np.full(us.size, v0)),
+        (us, np.full(us.size, v1)),
+    ]
     for eu, ev in edges:
         nn = s.normals(eu, ev, check=False)
         bad = ~np.isfinite(nn).all(axis=-1)
@@ -350,19 +397,22 @@ def _check_singular(face: Face, us, vs, n, inside) -> None:
             raise DegenerateGeometryError(
                 f"surface normal undefined at {int(bad.sum())} point(s) of the domain's edge, e.g. (u, v) = "
                 f"({eu[i]:.4g}, {ev[i]:.4g}): collapsed edge (singular point)",
-                {"uv": np.stack([eu[bad], ev[bad]], 1)[:20].tolist()})
+                {"uv": np.stack([eu[bad], ev[bad]], 1)[:20].tolist()},
+            )
     cos_lim = math.cos(math.radians(60.0))
     for axis in (0, 1):
         a = np.take(n, np.arange(n.shape[axis] - 1), axis=axis)
         b = np.take(n, np.arange(1, n.shape[axis]), axis=axis)
-        ok = np.take(inside, np.arange(n.shape[axis] - 1), axis=axis) & np.take(inside, np.arange(1, n.shape[axis]),
-                                                                                 axis=axis)
+        ok = np.take(inside, np.arange(n.shape[axis] - 1), axis=axis) & np.take(
+            inside, np.arange(1, n.shape[axis]), axis=axis
+        )
         jump = (_dot(a, b) < cos_lim) & ok
         if np.any(jump):
             i, j = np.argwhere(jump)[0]
             raise DegenerateGeometryError(
                 f"the surface normal turns by more than 60 deg between neighbouring samples near (u, v) = "
-                f"({us[i]:.4g}, {vs[j]:.4g}): singular point or crease; refine the grid or split the face")
+                f"({us[i]:.4g}, {vs[j]:.4g}): singular point or crease; refine the grid or split the face"
+            )
 
 
 def _dot(a, b):
@@ -387,8 +437,10 @@ def _direction_map(theta, fm: _Forms, cutter, comp, scallop, axes, lead, tilt, i
     nz = n[..., 2]
     vertical = ~(np.abs(nz) > 1e-12)
     if np.any(vertical & inside):
-        raise DegenerateGeometryError(f"the face has vertical spots (normal horizontal) at {int((vertical & inside).sum())} "
-                                      "sample(s): a feed direction by its XY projection is undefined there")
+        raise DegenerateGeometryError(
+            f"the face has vertical spots (normal horizontal) at {int((vertical & inside).sum())} "
+            "sample(s): a feed direction by its XY projection is undefined there"
+        )
     # feed: the tangent direction whose projection on XY is along theta
     ct, st = math.cos(th), math.sin(th)
     with np.errstate(divide="ignore", invalid="ignore"):

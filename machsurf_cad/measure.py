@@ -24,9 +24,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .errors import InputError
-from .results import Result
 from .geometry.bspline import BSplineSurface
 from .geometry.face import Face
+from .results import Result
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,7 +73,7 @@ class DeviationResult(Result):
 
     @property
     def within_tolerance(self) -> bool | None:
-        """True/False when a tolerance was given (max |deviation| <= tolerance), else None."""
+        """True/False when a tolerance was given (max abs deviation <= tolerance), else None."""
         if self.tolerance is None:
             return None
         return self.max_abs <= self.tolerance
@@ -86,12 +86,30 @@ class DeviationResult(Result):
         return out
 
 
-_MM_KEYS = {"max_abs", "max", "min", "mean", "mean_abs", "rms", "p50_abs", "p95_abs", "p99_abs", "worst_xyz",
-            "worst_signed"}
+_MM_KEYS = {
+    "max_abs",
+    "max",
+    "min",
+    "mean",
+    "mean_abs",
+    "rms",
+    "p50_abs",
+    "p95_abs",
+    "p99_abs",
+    "worst_xyz",
+    "worst_signed",
+}
 
 
-def project_points(surface: BSplineSurface, points, *, seed_samples: int | None = None, max_iter: int = 50,
-                   uv_tol: float = 1e-14, progress=None) -> Projection:
+def project_points(
+    surface: BSplineSurface,
+    points,
+    *,
+    seed_samples: int | None = None,
+    max_iter: int = 50,
+    uv_tol: float = 1e-14,
+    progress=None,
+) -> Projection:
     """Closest points on ``surface`` (inside its parameter box) of many 3-D points.
 
     Newton's method on ``|S(u, v) - p|^2`` from the nearest of ``seed_samples^2`` reference
@@ -116,11 +134,15 @@ def project_points(surface: BSplineSurface, points, *, seed_samples: int | None 
     if p.shape[0] > chunk:
         parts = []
         for a in range(0, p.shape[0], chunk):
-            parts.append(_newton(surface, p[a:a + chunk], uv[a:a + chunk].copy(), max_iter, uv_tol))
+            parts.append(_newton(surface, p[a : a + chunk], uv[a : a + chunk].copy(), max_iter, uv_tol))
             if progress is not None:
                 progress(min(p.shape[0], a + chunk), p.shape[0], "closest points")
-        return Projection(*(np.concatenate([getattr(q, k) for q in parts]) for k in
-                            ("uv", "foot", "normal", "on_boundary", "converged")))
+        return Projection(
+            *(
+                np.concatenate([getattr(q, k) for q in parts])
+                for k in ("uv", "foot", "normal", "on_boundary", "converged")
+            )
+        )
     res = _newton(surface, p, uv, max_iter, uv_tol)
     if progress is not None:
         progress(p.shape[0], p.shape[0], "closest points")
@@ -186,8 +208,9 @@ def _newton(surface: BSplineSurface, p: np.ndarray, uv: np.ndarray, max_iter: in
     return Projection(uv, d.point, n, on_b, converged)
 
 
-def deviation(reference, candidate, *, samples: int = 200, tolerance: float | None = None,
-              triangles=None, progress=None) -> DeviationResult:
+def deviation(
+    reference, candidate, *, samples: int = 200, tolerance: float | None = None, triangles=None, progress=None
+) -> DeviationResult:
     """Signed deviation of ``candidate`` from ``reference`` (mm).
 
     Parameters
@@ -232,9 +255,19 @@ def deviation(reference, candidate, *, samples: int = 200, tolerance: float | No
     proj = project_points(ref_surface, pts, progress=progress)
     signed = signed_distances(pts, proj, flip)
     stats = deviation_stats(signed, pts, proj.uv, proj.on_boundary, proj.converged)
-    return DeviationResult(pts, signed, proj.uv, proj.foot, proj.on_boundary, grid_shape,
-                           None if triangles is None else np.asarray(triangles), tolerance, stats, grid_points,
-                           grid_index)
+    return DeviationResult(
+        pts,
+        signed,
+        proj.uv,
+        proj.foot,
+        proj.on_boundary,
+        grid_shape,
+        None if triangles is None else np.asarray(triangles),
+        tolerance,
+        stats,
+        grid_points,
+        grid_index,
+    )
 
 
 def signed_distances(pts: np.ndarray, proj: Projection, flip: float = 1.0) -> np.ndarray:
@@ -261,7 +294,7 @@ def deviation_stats(signed: np.ndarray, pts: np.ndarray, uv: np.ndarray, on_boun
         "min": float(signed.min()),
         "mean": float(signed.mean()),
         "mean_abs": float(a.mean()),
-        "rms": float(np.sqrt(np.mean(signed ** 2))),
+        "rms": float(np.sqrt(np.mean(signed**2))),
         "p50_abs": float(np.percentile(a, 50)),
         "p95_abs": float(np.percentile(a, 95)),
         "p99_abs": float(np.percentile(a, 99)),

@@ -21,11 +21,15 @@ def subdivide(points: np.ndarray, triangles: np.ndarray, levels: int = 1) -> tup
         mids = 0.5 * (pts[uniq[:, 0]] + pts[uniq[:, 1]])
         base = pts.shape[0]
         m = tris.shape[0]
-        m01, m12, m20 = (base + inv[k * m:(k + 1) * m] for k in range(3))
+        m01, m12, m20 = (base + inv[k * m : (k + 1) * m] for k in range(3))
         a, b, c = tris[:, 0], tris[:, 1], tris[:, 2]
-        tris = np.concatenate([
-            np.stack([a, m01, m20], 1), np.stack([m01, b, m12], 1),
-            np.stack([m20, m12, c], 1), np.stack([m01, m12, m20], 1),
-        ])
+        tris = np.concatenate(
+            [
+                np.stack([a, m01, m20], 1),
+                np.stack([m01, b, m12], 1),
+                np.stack([m20, m12, c], 1),
+                np.stack([m01, m12, m20], 1),
+            ]
+        )
         pts = np.concatenate([pts, mids])
     return pts, tris

@@ -15,12 +15,13 @@ from __future__ import annotations
 import dataclasses
 import json
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable, Optional
+from typing import Any
 
 import numpy as np
 
-Progress = Callable[[int, Optional[int], str], None]
+Progress = Callable[[int, int | None, str], None]
 """``progress(done, total, message)``: ``done`` work units of ``total`` (``None`` if unknown)."""
 
 
@@ -66,7 +67,7 @@ class Stopwatch:
         self._t0 = time.perf_counter()
         self.stages: dict[str, float] = {}
 
-    def __call__(self, stage: str) -> "_Stage":
+    def __call__(self, stage: str) -> _Stage:
         return _Stage(self, stage)
 
     def report(self) -> dict:

@@ -22,5 +22,6 @@ needs_pyvista = pytest.mark.skipif(not HAS_PYVISTA, reason="pyvista is not insta
 def rng():
     return np.random.default_rng(12345)
 
+
 # scripts run inside FreeCAD's own Python by tests/test_freecad.py, not by pytest
 collect_ignore_glob = ["freecad/*"]

@@ -36,7 +36,7 @@ def test_bezier_basis_is_bernstein():
     spans = find_spans(t, p, 6, x)
     b = basis_derivatives(t, p, spans, x, 1)
     for i in range(6):
-        bern = comb(p, i) * x ** i * (1 - x) ** (p - i)
+        bern = comb(p, i) * x**i * (1 - x) ** (p - i)
         assert np.abs(b[:, 0, i] - bern).max() < 1e-14
 
 

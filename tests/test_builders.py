@@ -17,14 +17,16 @@ def test_bezier_patch_matches_bernstein_brute_force(rng):
     ref = np.zeros((100, 3))
     for i in range(6):
         for j in range(4):
-            b = comb(5, i) * u ** i * (1 - u) ** (5 - i) * comb(3, j) * v ** j * (1 - v) ** (3 - j)
+            b = comb(5, i) * u**i * (1 - u) ** (5 - i) * comb(3, j) * v**j * (1 - v) ** (3 - j)
             ref += b[:, None] * poles[i, j]
     assert np.abs(s.evaluate(u, v) - ref).max() < 1e-13 * np.abs(poles).max() * 10
 
 
 def test_interpolation_passes_through_grid(rng):
-    pts = rng.normal(size=(8, 6, 3)) + np.stack(np.meshgrid(np.arange(8) * 10.0, np.arange(6) * 10.0, [0],
-                                                            indexing="ij"), -1)[:, :, 0, :]
+    pts = (
+        rng.normal(size=(8, 6, 3))
+        + np.stack(np.meshgrid(np.arange(8) * 10.0, np.arange(6) * 10.0, [0], indexing="ij"), -1)[:, :, 0, :]
+    )
     pu, pv = np.linspace(0, 1, 8), np.linspace(0, 1, 6)
     s = builders.interpolate_grid(pts, 3, 3, pu, pv)
     assert np.abs(s.evaluate_grid(pu, pv) - pts).max() < 1e-11
@@ -54,7 +56,7 @@ def test_liu_surface_closed_form(rng):
     u = rng.uniform(0, 23.014, 200)
     v = rng.uniform(0, 1, 200)
     c0 = np.stack([u, np.full_like(u, 20.429), 0 * u], 1)
-    c1 = np.stack([u, 0.0382 * u ** 2, np.full_like(u, 33.995)], 1)
+    c1 = np.stack([u, 0.0382 * u**2, np.full_like(u, 33.995)], 1)
     ref = (1 - v)[:, None] * c0 + v[:, None] * c1
     assert np.abs(s.evaluate(u, v) - ref).max() < 1e-11
     assert s.bounds[:2] == (0.0, 23.014)

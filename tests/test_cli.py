@@ -7,7 +7,6 @@ import sys
 
 import numpy as np
 import pytest
-
 from conftest import ROOT, needs_kernel, needs_pyvista
 
 pytestmark = needs_kernel
@@ -16,8 +15,15 @@ BLOCK = ROOT / "example_parts" / "freeform_block.step"
 
 def run(*args, cwd=None):
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    return subprocess.run([sys.executable, "-m", "machsurf_cad", *map(str, args)], capture_output=True, text=True,
-                          cwd=cwd, env=env, stdin=subprocess.DEVNULL, timeout=600)
+    return subprocess.run(
+        [sys.executable, "-m", "machsurf_cad", *map(str, args)],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        timeout=600,
+    )
 
 
 def test_info_reports_every_face(tmp_path):
@@ -100,8 +106,28 @@ def test_machining_surface_command_with_toolpath(tmp_path):
     from machsurf_cad.occ import read_step_faces
 
     out = tmp_path / "ms"
-    r = run("machining-surface", "--example", "bezier5", "--tool", "bull:D=28,r=4", "--axes", "5", "--strategy",
-            "planes:x", "--lead", "20", "--tilt", "0", "--tol", "0.001", "--toolpath", "--stepover", "5", "-o", out)
+    r = run(
+        "machining-surface",
+        "--example",
+        "bezier5",
+        "--tool",
+        "bull:D=28,r=4",
+        "--axes",
+        "5",
+        "--strategy",
+        "planes:x",
+        "--lead",
+        "20",
+        "--tilt",
+        "0",
+        "--tol",
+        "0.001",
+        "--toolpath",
+        "--stepover",
+        "5",
+        "-o",
+        out,
+    )
     assert r.returncode == 0, r.stderr
     rep = json.loads((out / "report.json").read_text())
     assert rep["S1"]["max_error_mm"] <= 0.001 and rep["S2"]["max_error_mm"] <= 0.001
@@ -126,8 +152,21 @@ def test_machining_surface_command_errors(tmp_path):
     assert not out.exists()
     # unreachable tolerance -> exit 2
     out = tmp_path / "tol"
-    r = run("machining-surface", "--example", "bezier5", "--tool", "bull:D=28,r=4", "--lead", "20", "--tol", "1e-9",
-            "--max-poles", "300", "-o", out)
+    r = run(
+        "machining-surface",
+        "--example",
+        "bezier5",
+        "--tool",
+        "bull:D=28,r=4",
+        "--lead",
+        "20",
+        "--tol",
+        "1e-9",
+        "--max-poles",
+        "300",
+        "-o",
+        out,
+    )
     assert r.returncode == 2 and "reached" in r.stderr
     assert not out.exists()
     # a cone is not a Table-1 cutter
@@ -157,8 +196,22 @@ def test_degenerate_surface_is_a_one_line_error(tmp_path):
 @needs_pyvista
 def test_reff_command_report_and_maps(tmp_path):
     out = tmp_path / "reff"
-    r = run("reff", "--example", "blade", "--tool", "bull:D=10,r=2", "--compare", "ball", "--direction=-45,0,45,90",
-            "--grid", "64", "--scallop", "0.01", "-o", out)
+    r = run(
+        "reff",
+        "--example",
+        "blade",
+        "--tool",
+        "bull:D=10,r=2",
+        "--compare",
+        "ball",
+        "--direction=-45,0,45,90",
+        "--grid",
+        "64",
+        "--scallop",
+        "0.01",
+        "-o",
+        out,
+    )
     assert r.returncode == 0, r.stderr
     rep = json.loads((out / "report.json").read_text())
     assert [d["theta_deg"] for d in rep["directions"]] == [-45, 0, 45, 90]
@@ -183,8 +236,24 @@ def test_reff_command_bad_input(tmp_path):
 @needs_pyvista
 def test_flank_command(tmp_path):
     out = tmp_path / "flank"
-    r = run("flank", "--example", "liu", "--tool", "cyl:D=20", "--rule", "0.5", "--setting", "optimum", "--side", "+1",
-            "--whole", "--tol", "0.5", "-o", out)
+    r = run(
+        "flank",
+        "--example",
+        "liu",
+        "--tool",
+        "cyl:D=20",
+        "--rule",
+        "0.5",
+        "--setting",
+        "optimum",
+        "--side",
+        "+1",
+        "--whole",
+        "--tol",
+        "0.5",
+        "-o",
+        out,
+    )
     assert r.returncode == 0, r.stderr
     rep = json.loads((out / "report.json").read_text())
     st, e = rep["setting"], rep["interference"]
@@ -195,7 +264,9 @@ def test_flank_command(tmp_path):
     assert w["envelope_fit"]["max_error_mm"] <= 1e-3 and w["n_rules"] >= 9
     assert w["deviation_from_envelope"]["max_abs_mm"] < 0.5
     rows = (out / "toolpath.csv").read_text().splitlines()
-    assert len(rows) == 1 + w["n_rules"] + 2  # header, one cut position per rule, approach from and retract to clearance
+    assert (
+        len(rows) == 1 + w["n_rules"] + 2
+    )  # header, one cut position per rule, approach from and retract to clearance
     apt = (out / "toolpath.apt").read_text().splitlines()
     assert sum(ln.startswith("GOTO/") for ln in apt) == w["n_rules"] + 2
     assert "CUTTER/20.0000,0.0000,10.0000,0.0000,0.0000,0.0000," in "\n".join(apt)  # same convention as every tool
@@ -230,8 +301,23 @@ def test_envelope_command(tmp_path):
     from machsurf_cad.occ import read_step_faces
 
     out = tmp_path / "env"
-    r = run("envelope", "--tool", "cone:D=10,angle=10", "--example", "sine", "--passes", "3", "--continuity", "g1",
-            "--theta", "0", "--tol", "0.001", "-o", out)
+    r = run(
+        "envelope",
+        "--tool",
+        "cone:D=10,angle=10",
+        "--example",
+        "sine",
+        "--passes",
+        "3",
+        "--continuity",
+        "g1",
+        "--theta",
+        "0",
+        "--tol",
+        "0.001",
+        "-o",
+        out,
+    )
     assert r.returncode == 0, r.stderr
     rep = json.loads((out / "report.json").read_text())
     assert len(rep["passes"]) == 3 and len(rep["seams"]) == 2

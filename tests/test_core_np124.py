@@ -7,12 +7,12 @@ import numpy as np
 
 from machsurf_cad import examples
 from machsurf_cad.cutters import parse_cutter
-from machsurf_cad.measure import deviation
 from machsurf_cad.geometry import builders, insert_knot_surface, local_properties
+from machsurf_cad.measure import deviation
 
 
 def test_core_does_not_load_kernel_or_pyvista():
-    import machsurf_cad  # noqa: F401
+    import machsurf_cad
     import machsurf_cad.measure  # noqa: F401
 
     assert "OCP" not in sys.modules or "machsurf_cad.occ" in sys.modules

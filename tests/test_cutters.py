@@ -5,12 +5,19 @@ import math
 import numpy as np
 import pytest
 
-from machsurf_cad.cutters import (ArcSegment, BallEndMill, BullNoseEndMill, ConicalCutter, LineSegment,
-                                  parse_cutter)
+from machsurf_cad.cutters import ArcSegment, BallEndMill, BullNoseEndMill, ConicalCutter, LineSegment, parse_cutter
 from machsurf_cad.errors import InputError
 
-SPECS = ["ball:D=10", "flat:D=16", "bull:D=20,r=4", "cone:D=10,angle=6", "cone:D=10,angle=-8",
-         "drum:D=20,Rp=40,L=20", "barrel:D=20,Rp=40,L=20", "apt:D=20,r=4,e=6,f=4,alpha=10,beta=5,h=60"]
+SPECS = [
+    "ball:D=10",
+    "flat:D=16",
+    "bull:D=20,r=4",
+    "cone:D=10,angle=6",
+    "cone:D=10,angle=-8",
+    "drum:D=20,Rp=40,L=20",
+    "barrel:D=20,Rp=40,L=20",
+    "apt:D=20,r=4,e=6,f=4,alpha=10,beta=5,h=60",
+]
 
 
 @pytest.mark.parametrize("spec", SPECS)
@@ -26,11 +33,20 @@ def test_names_and_paper_mapping():
     assert parse_cutter("ball:D=10") == BallEndMill(10.0)
 
 
-@pytest.mark.parametrize("text, word", [
-    ("bull:D=10,r=6", "r = 6"), ("ball:D=-3", "D must be > 0"), ("ball:D=nan", "finite"),
-    ("wobble:D=3", "unknown cutter kind"), ("ball:X=3", "unknown parameter 'X'"), ("bull:D=10", "needs parameters: r"),
-    ("ball", "kind:K=V"), ("cone:D=10,angle=95", "angle"), ("flat:D=abc", "must be a number"),
-])
+@pytest.mark.parametrize(
+    "text, word",
+    [
+        ("bull:D=10,r=6", "r = 6"),
+        ("ball:D=-3", "D must be > 0"),
+        ("ball:D=nan", "finite"),
+        ("wobble:D=3", "unknown cutter kind"),
+        ("ball:X=3", "unknown parameter 'X'"),
+        ("bull:D=10", "needs parameters: r"),
+        ("ball", "kind:K=V"),
+        ("cone:D=10,angle=95", "angle"),
+        ("flat:D=abc", "must be a number"),
+    ],
+)
 def test_bad_cutters_raise_naming_the_parameter(text, word):
     with pytest.raises(InputError, match=word.replace("(", r"\(")):
         parse_cutter(text)

@@ -6,7 +6,6 @@ import subprocess
 import sys
 
 import numpy as np
-
 from conftest import ROOT, needs_kernel, needs_pyvista
 
 pytestmark = [needs_kernel, needs_pyvista]
@@ -15,8 +14,14 @@ pytestmark = [needs_kernel, needs_pyvista]
 def test_demo_outputs_and_figures(tmp_path):
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     out = tmp_path / "out"
-    r = subprocess.run([sys.executable, "-m", "machsurf_cad", "demo", "-o", str(out)], capture_output=True,
-                       text=True, env=env, stdin=subprocess.DEVNULL, timeout=600)
+    r = subprocess.run(
+        [sys.executable, "-m", "machsurf_cad", "demo", "-o", str(out)],
+        capture_output=True,
+        text=True,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        timeout=600,
+    )
     assert r.returncode == 0, r.stderr
     rep = json.loads((out / "report.json").read_text())
     for f in rep["files"]:

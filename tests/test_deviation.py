@@ -2,11 +2,11 @@
 
 import numpy as np
 import pytest
-
 from helpers import random_surface
-from machsurf_cad.measure import deviation, project_points
+
 from machsurf_cad.geometry import builders
 from machsurf_cad.geometry.face import Face
+from machsurf_cad.measure import deviation, project_points
 
 
 def test_plane_vs_offset_plane():
@@ -95,7 +95,7 @@ def test_statistics_are_consistent(rng):
     d = deviation(ref, pts)
     z = pts[:, 2]
     assert d.stats["max"] == pytest.approx(z.max()) and d.stats["min"] == pytest.approx(z.min())
-    assert d.stats["rms"] == pytest.approx(np.sqrt(np.mean(z ** 2)))
+    assert d.stats["rms"] == pytest.approx(np.sqrt(np.mean(z**2)))
     assert d.stats["p95_abs"] == pytest.approx(np.percentile(np.abs(z), 95))
     w = int(np.argmax(np.abs(z)))
     assert d.stats["worst_xyz"] == pytest.approx(pts[w].tolist())

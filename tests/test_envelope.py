@@ -6,12 +6,17 @@ import numpy as np
 import pytest
 
 from machsurf_cad.errors import DegenerateGeometryError, InputError
-from machsurf_cad.sweep import Motion, fold_check, make_envelope, next_pass, seam_report
 from machsurf_cad.examples import helix_motion, sine_motion
+from machsurf_cad.sweep import Motion, fold_check, make_envelope, next_pass, seam_report
 from machsurf_cad.sweep.passes import build_chain, max_theta
 
-TOOLS = ["cyl:D=10,L=20", "cone:D=10,angle=10,L=20", "cone:D=12,angle=-8,L=15", "drum:D=20,Rp=40,L=20",
-         "barrel:D=20,Rp=40,L=20"]
+TOOLS = [
+    "cyl:D=10,L=20",
+    "cone:D=10,angle=10,L=20",
+    "cone:D=12,angle=-8,L=15",
+    "drum:D=20,Rp=40,L=20",
+    "barrel:D=20,Rp=40,L=20",
+]
 
 
 def _tool_distance(env, X, t):

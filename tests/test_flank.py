@@ -6,10 +6,17 @@ import math
 import numpy as np
 import pytest
 
-from machsurf_cad.errors import InputError
-from machsurf_cad.flank_milling import (NoAdmissibleSetting, RuledSurface, interference, minimax_setting, optimum_setting,
-                                rule_frame, standard_setting)
 from machsurf_cad import examples
+from machsurf_cad.errors import InputError
+from machsurf_cad.flank_milling import (
+    NoAdmissibleSetting,
+    RuledSurface,
+    interference,
+    minimax_setting,
+    optimum_setting,
+    rule_frame,
+    standard_setting,
+)
 from machsurf_cad.geometry import BSplineCurve, builders
 
 
@@ -42,11 +49,15 @@ def test_closed_forms_on_straight_directrices():
 
 
 def test_tangency_conditions_hold_at_the_solution():
-    for s, u_p, R in ((examples.liu_ruled(), 11.507, 10.0), (examples.hypar_ruled(), 0.5, 40.0), (examples.eq18_ruled(), 0.4, 10.0)):
+    for s, u_p, R in (
+        (examples.liu_ruled(), 11.507, 10.0),
+        (examples.hypar_ruled(), 0.5, 40.0),
+        (examples.eq18_ruled(), 0.4, 10.0),
+    ):
         st = optimum_setting(s, u_p, R)
         q, a = st.q, st.a
 
-        def dist(p):
+        def dist(p, q=q, a=a):
             w = p - q
             return np.linalg.norm(w - (w @ a) * a)
 
@@ -143,8 +154,9 @@ def test_bad_inputs():
     s = examples.hypar_ruled()
     with pytest.raises(InputError, match="outside"):
         optimum_setting(s, 1.5, 10.0)
-    crossing = RuledSurface.from_curves(builders.line_segment([0, 0, 0], [10, 0, 0]),
-                                        builders.line_segment([0, 0, 5], [10, 0, -5]))
+    crossing = RuledSurface.from_curves(
+        builders.line_segment([0, 0, 0], [10, 0, 0]), builders.line_segment([0, 0, 5], [10, 0, -5])
+    )
     with pytest.raises(InputError, match="zero length"):
         standard_setting(crossing, 0.5, 5.0)
     with pytest.raises(InputError, match="not a ruled surface: it deviates by"):

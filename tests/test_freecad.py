@@ -11,7 +11,6 @@ import shutil
 import subprocess
 
 import pytest
-
 from conftest import ROOT
 
 FREECADCMD = shutil.which("freecadcmd") or shutil.which("FreeCADCmd")
@@ -20,8 +19,9 @@ XVFB = shutil.which("xvfb-run")
 
 IN_CI = os.environ.get("CI", "").lower() == "true"  # CI installs FreeCAD and xvfb: there these tests must run
 
-pytestmark = pytest.mark.skipif(FREECADCMD is None and not IN_CI,
-                                reason="FreeCAD is not installed (apt-get install freecad)")
+pytestmark = pytest.mark.skipif(
+    FREECADCMD is None and not IN_CI, reason="FreeCAD is not installed (apt-get install freecad)"
+)
 
 
 def _home(tmp_path):
@@ -34,11 +34,23 @@ def _home(tmp_path):
 def _run(cmd, tmp_path, script, timeout=600):
     assert None not in cmd, f"missing program in {cmd} (CI installs freecad and xvfb)"
     out = tmp_path / "result.json"
-    env = dict(os.environ, HOME=str(_home(tmp_path)), MACHSURF_FC_OUT=str(out), MACHSURF_ROOT=str(ROOT),
-               QTWEBENGINE_DISABLE_SANDBOX="1")
+    env = dict(
+        os.environ,
+        HOME=str(_home(tmp_path)),
+        MACHSURF_FC_OUT=str(out),
+        MACHSURF_ROOT=str(ROOT),
+        QTWEBENGINE_DISABLE_SANDBOX="1",
+    )
     env.pop("PYTHONPATH", None)  # FreeCAD's Python must not pick up the venv's packages
-    subprocess.run(cmd + [str(ROOT / "tests" / "freecad" / script)], cwd=tmp_path, env=env, timeout=timeout,
-                   stdin=subprocess.DEVNULL, capture_output=True, text=True)
+    subprocess.run(
+        cmd + [str(ROOT / "tests" / "freecad" / script)],
+        cwd=tmp_path,
+        env=env,
+        timeout=timeout,
+        stdin=subprocess.DEVNULL,
+        capture_output=True,
+        text=True,
+    )
     assert out.is_file(), "the FreeCAD script wrote no result"
     res = json.loads(out.read_text())
     assert res["ok"], res.get("error")
@@ -83,8 +95,8 @@ def test_gui_command_on_a_selected_face(tmp_path):
     assert r["colours"][0][0] == pytest.approx(r["max_s1"] / 1e-3, abs=1e-6)
     assert all(0 <= c[0] <= 1 and abs(c[0] + c[2] - 1) < 1e-6 for c in r["colours"])
     assert r["step_bytes"] > 10000 and r["step_names"] == ["S1_guiding", "S2_orientation"]
-    from PIL import Image
     import numpy as np
+    from PIL import Image
 
     img = np.asarray(Image.open(r["png"]).convert("RGB"))
     assert img.shape[:2] == (900, 1200) and len(np.unique(img.reshape(-1, 3), axis=0)) > 100

@@ -2,13 +2,18 @@
 
 import numpy as np
 import pytest
+from helpers import random_surface
 
 from machsurf_cad.errors import DegenerateGeometryError, InputError
-from machsurf_cad.geometry import (BSplineCurve, BSplineSurface, builders, insert_knot_curve, insert_knot_surface,
-                                   local_properties)
+from machsurf_cad.geometry import (
+    BSplineCurve,
+    BSplineSurface,
+    builders,
+    insert_knot_curve,
+    insert_knot_surface,
+    local_properties,
+)
 from machsurf_cad.geometry.bspline import elevate_and_merge, refit_curve_in_space
-
-from helpers import random_surface
 
 
 def test_sphere_points_normals_curvatures(rng):
@@ -20,7 +25,7 @@ def test_sphere_points_normals_curvatures(rng):
     # normal su x sv points to the centre for this parameterisation: curvature +1/R
     assert np.abs(p.normal + p.point / R).max() < 1e-12
     assert np.abs(p.k1 - 1 / R).max() < 1e-14 and np.abs(p.k2 - 1 / R).max() < 1e-14
-    assert np.abs(p.gaussian - 1 / R ** 2).max() < 1e-15
+    assert np.abs(p.gaussian - 1 / R**2).max() < 1e-15
 
 
 def test_torus_principal_curvatures_and_directions(rng):

@@ -30,8 +30,7 @@ def test_only_occ_imports_the_kernel_and_only_viz_imports_pyvista():
 
 
 def test_core_avoids_numpy2_only_api():
-    banned = ["np.trapezoid", "np.vecdot", "np.matrix_transpose", "np.unstack", "np.concat(", "np.astype(",
-              "copy=None"]
+    banned = ["np.trapezoid", "np.vecdot", "np.matrix_transpose", "np.unstack", "np.concat(", "np.astype(", "copy=None"]
     for path in PKG.rglob("*.py"):
         text = path.read_text()
         for b in banned:

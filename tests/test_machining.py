@@ -4,8 +4,8 @@ cutter, the paper's example, loops, tool paths, bad input."""
 import math
 
 import numpy as np
-from helpers import assert_points_close
 import pytest
+from helpers import assert_points_close
 
 from machsurf_cad import examples
 from machsurf_cad.cutters import parse_cutter
@@ -41,8 +41,9 @@ def test_sphere_and_cylinder_offsets_are_concentric(rng):
     u, v = _unseen(rng, sph)
     assert np.abs(np.linalg.norm(ms.s1.surface.evaluate(u, v), axis=1) - (R - r)).max() <= TOL
     # ... and as a dome (face reversed: outward normal away from the centre) R + r
-    ms = machining_surface(Face(sph, reversed=True), f"ball:D={2 * r}", axes=5, strategy="planes:z", lead=10,
-                           tolerance=TOL)
+    ms = machining_surface(
+        Face(sph, reversed=True), f"ball:D={2 * r}", axes=5, strategy="planes:z", lead=10, tolerance=TOL
+    )
     assert np.abs(np.linalg.norm(ms.s1.surface.evaluate(u, v), axis=1) - (R + r)).max() <= TOL
     cyl = Face(builders.cylinder_patch(30.0, 60.0, angle_deg=120), reversed=True)
     ms = machining_surface(cyl, "bull:D=20,r=4", axes=5, strategy="iso:u", lead=10, tolerance=TOL)
@@ -312,8 +313,9 @@ def test_tool_paths_avoid_trimmed_loops():
     from machsurf_cad.machining.surfaces import fit_deviation
     from machsurf_cad.machining.toolpath import tool_paths
 
-    ms = machining_surface(_dimpled_plate(), "ball:D=20", axes=5, strategy="planes:x", lead=5, tolerance=0.01,
-                           loops="trim")
+    ms = machining_surface(
+        _dimpled_plate(), "ball:D=20", axes=5, strategy="planes:x", lead=5, tolerance=0.01, loops="trim"
+    )
     tp = tool_paths(ms, stepover=5.0, chordal_tolerance=0.01)
     uv = np.concatenate([p.extras["uv"] for p in tp.cutting_passes()])
     assert ms.s1.contains_uv(uv[:, 0], uv[:, 1]).all()

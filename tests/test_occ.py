@@ -5,9 +5,9 @@ import re
 
 import numpy as np
 import pytest
-
 from conftest import ROOT, needs_kernel
 from helpers import random_surface
+
 from machsurf_cad import examples
 from machsurf_cad.errors import InputError
 from machsurf_cad.geometry import builders, local_properties
@@ -82,9 +82,11 @@ def test_numpy_occt_conversion_round_trip_is_exact(rng):
 def test_step_round_trip_several_named_faces(tmp_path, rng):
     from machsurf_cad.occ import read_step_faces, write_step
 
-    faces = [Face(random_surface(rng, rational=True), name="wavy_rational"),
-             Face(examples.bezier5_patch(), name="bezier5"),
-             Face(builders.torus_patch(40, 10), name="torus")]
+    faces = [
+        Face(random_surface(rng, rational=True), name="wavy_rational"),
+        Face(examples.bezier5_patch(), name="bezier5"),
+        Face(builders.torus_patch(40, 10), name="torus"),
+    ]
     path = write_step(tmp_path / "three.step", faces)
     text = path.read_text()
     assert "B_SPLINE_SURFACE_WITH_KNOTS" in text and "OFFSET_SURFACE" not in text
@@ -196,7 +198,7 @@ def test_cutter_solids_volumes_match_closed_forms():
     # quarter torus corner by Pappus + inner cylinder + upper cylinder
     corner_area = math.pi * r * r / 4
     centroid = Rt + 4 * r / (3 * math.pi)
-    ref = 2 * math.pi * centroid * corner_area + math.pi * Rt ** 2 * r + math.pi * 100 * (50 - r)
+    ref = 2 * math.pi * centroid * corner_area + math.pi * Rt**2 * r + math.pi * 100 * (50 - r)
     assert abs(solid_volume(cutter_solid(bull)) - ref) < 1e-6
     cone = parse_cutter("cone:D=10,angle=6,L=30")
     R1 = 5 + 30 * math.tan(math.radians(6))
@@ -216,9 +218,19 @@ def test_cadquery_face_round_trip(rng):
     assert len(back.loops) == 2
 
 
-@pytest.mark.parametrize("spec", ["ball:D=10", "flat:D=16", "bull:D=20,r=4", "cone:D=10,angle=6", "cone:D=12,angle=-8",
-                                  "drum:D=20,Rp=40,L=20", "barrel:D=20,Rp=40,L=20",
-                                  "apt:D=20,r=4,e=6,f=4,alpha=10,beta=5,h=60"])
+@pytest.mark.parametrize(
+    "spec",
+    [
+        "ball:D=10",
+        "flat:D=16",
+        "bull:D=20,r=4",
+        "cone:D=10,angle=6",
+        "cone:D=12,angle=-8",
+        "drum:D=20,Rp=40,L=20",
+        "barrel:D=20,Rp=40,L=20",
+        "apt:D=20,r=4,e=6,f=4,alpha=10,beta=5,h=60",
+    ],
+)
 def test_every_cutter_solid_is_valid_with_the_profile_volume(spec):
     from machsurf_cad.cutters import parse_cutter
     from machsurf_cad.occ import is_valid

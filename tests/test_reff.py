@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 
+from machsurf_cad.effradius import effective_radius, parse_directions, reff_maps, stepover
 from machsurf_cad.errors import DegenerateGeometryError, InputError
 from machsurf_cad.geometry import builders
 from machsurf_cad.geometry.face import Face
-from machsurf_cad.effradius import effective_radius, parse_directions, reff_maps, stepover
 
 mpmath = pytest.importorskip("mpmath", reason="mpmath gives the extended-precision reference")
 
@@ -56,7 +56,7 @@ def _reference_reff(R, r, S_deg, a_deg, dps=50):
     h = mp.mpf(10) ** -12
     p_m, p_0, p_p = envelope(t_c - h), envelope(t_c), envelope(t_c + h)
     dx, dy = (p_p[0] - p_m[0]) / (2 * h), (p_p[1] - p_m[1]) / (2 * h)
-    ddx, ddy = (p_p[0] - 2 * p_0[0] + p_m[0]) / h ** 2, (p_p[1] - 2 * p_0[1] + p_m[1]) / h ** 2
+    ddx, ddy = (p_p[0] - 2 * p_0[0] + p_m[0]) / h**2, (p_p[1] - 2 * p_0[1] + p_m[1]) / h**2
     kappa = abs(dx * ddy - dy * ddx) / (dx * dx + dy * dy) ** mp.mpf(1.5)
     return float(1 / kappa)
 

@@ -3,5 +3,14 @@
 from .cldata import PostOptions, apt_lines, read_apt, read_csv, write_apt, write_csv, write_json
 from .toolpath import Move, ToolPath
 
-__all__ = ["Move", "ToolPath", "PostOptions", "write_csv", "write_apt", "write_json", "apt_lines", "read_apt",
-           "read_csv"]
+__all__ = [
+    "Move",
+    "ToolPath",
+    "PostOptions",
+    "write_csv",
+    "write_apt",
+    "write_json",
+    "apt_lines",
+    "read_apt",
+    "read_csv",
+]

@@ -20,7 +20,7 @@ def douglas_peucker(pts: np.ndarray, tol: float) -> np.ndarray:
             continue
         seg = pts[b] - pts[a]
         L2 = float(seg @ seg)
-        rel = pts[a + 1:b] - pts[a]
+        rel = pts[a + 1 : b] - pts[a]
         if L2 > 0:
             t = np.clip(rel @ seg / L2, 0, 1)
             d = np.linalg.norm(rel - t[:, None] * seg, axis=1)
@@ -41,7 +41,7 @@ def chord_error(dense: np.ndarray, kept_idx: np.ndarray) -> float:
             continue
         seg = dense[b] - dense[a]
         L2 = float(seg @ seg)
-        rel = dense[a + 1:b] - dense[a]
+        rel = dense[a + 1 : b] - dense[a]
         t = np.clip(rel @ seg / L2, 0, 1) if L2 > 0 else np.zeros(len(rel))
         err = max(err, float(np.linalg.norm(rel - t[:, None] * seg, axis=1).max()))
     return err

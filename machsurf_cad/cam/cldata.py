@@ -78,15 +78,40 @@ def write_csv(path, tp: ToolPath) -> Path:
     counter: dict[int, int] = {}
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(["pass", "index", "move", "tip_x", "tip_y", "tip_z", "i", "j", "k", "cc_x", "cc_y", "cc_z",
-                    "feed_mm_min", *extra_cols])
+        w.writerow(
+            [
+                "pass",
+                "index",
+                "move",
+                "tip_x",
+                "tip_y",
+                "tip_z",
+                "i",
+                "j",
+                "k",
+                "cc_x",
+                "cc_y",
+                "cc_z",
+                "feed_mm_min",
+                *extra_cols,
+            ]
+        )
         for n in range(tp.n_positions):
             p = int(tp.pass_index[n])
             j = counter.get(p, 0)
             counter[p] = j + 1
-            w.writerow([p, j, Move(int(tp.move[n])).name.lower(), *(f"{x:.6f}" for x in tp.tip[n]),
-                        *(f"{x:.9f}" for x in tp.axis[n]), *(_num(x, 6) for x in cc[n]), _num(feed[n], 3),
-                        *(_num(x, 10) for x in X[n])])
+            w.writerow(
+                [
+                    p,
+                    j,
+                    Move(int(tp.move[n])).name.lower(),
+                    *(f"{x:.6f}" for x in tp.tip[n]),
+                    *(f"{x:.9f}" for x in tp.axis[n]),
+                    *(_num(x, 6) for x in cc[n]),
+                    _num(feed[n], 3),
+                    *(_num(x, 10) for x in X[n]),
+                ]
+            )
     return path
 
 
@@ -98,13 +123,23 @@ def _num(x, digits: int) -> str:
 def write_json(path, tp: ToolPath) -> Path:
     """The tool path as JSON: ``report`` plus per-position arrays (mm)."""
     path = Path(path)
-    data = {"report": tp.report(), "tip_mm": tp.tip, "axis": tp.axis,
-            "move": [Move(int(m)).name.lower() for m in tp.move], "pass": tp.pass_index,
-            "cc_mm": None if tp.cc is None else np.where(np.isnan(tp.cc), None, tp.cc).tolist(),
-            "feed_mm_min": None if tp.feed is None else np.where(np.isnan(tp.feed), None, tp.feed).tolist(),
-            "extras": {k: np.asarray(v).tolist() for k, v in tp.extras.items()}}
+    data = {
+        "report": tp.report(),
+        "tip_mm": tp.tip,
+        "axis": tp.axis,
+        "move": [Move(int(m)).name.lower() for m in tp.move],
+        "pass": tp.pass_index,
+        "cc_mm": None if tp.cc is None else _nan_to_none(tp.cc),
+        "feed_mm_min": None if tp.feed is None else _nan_to_none(tp.feed),
+        "extras": {k: np.asarray(v).tolist() for k, v in tp.extras.items()},
+    }
     path.write_text(json.dumps(data, default=json_default) + "\n")
     return path
+
+
+def _nan_to_none(a: np.ndarray) -> list:
+    """Nested lists with NaN as ``None`` (JSON ``null``)."""
+    return np.where(np.isnan(a), np.array(None, dtype=object), a.astype(object)).tolist()
 
 
 def apt_lines(tp: ToolPath, options: PostOptions = PostOptions()) -> list[str]:
@@ -115,11 +150,16 @@ def apt_lines(tp: ToolPath, options: PostOptions = PostOptions()) -> list[str]:
     from .. import __version__
 
     params = tp.cutter.apt_parameters()
-    lines = [f"$$ machsurf_cad {__version__} tool path {tp.name}: {tp.n_passes} pass(es), {tp.n_positions} positions, "
-             f"tool {tp.cutter.spec()}",
-             f"PARTNO/{options.partno}", "UNITS/MM", "CUTTER/" + ",".join(f"{x:.4f}" for x in params),
-             f"LOADTL/{int(options.tool_number)}", f"SPINDL/RPM,{options.spindle_rpm:.4f},CLW",
-             "MULTAX/ON" if multax else "MULTAX/OFF"]
+    lines = [
+        f"$$ machsurf_cad {__version__} tool path {tp.name}: {tp.n_passes} pass(es), {tp.n_positions} positions, "
+        f"tool {tp.cutter.spec()}",
+        f"PARTNO/{options.partno}",
+        "UNITS/MM",
+        "CUTTER/" + ",".join(f"{x:.4f}" for x in params),
+        f"LOADTL/{int(options.tool_number)}",
+        f"SPINDL/RPM,{options.spindle_rpm:.4f},CLW",
+        "MULTAX/ON" if multax else "MULTAX/OFF",
+    ]
     cur_feed = None
     for n in range(tp.n_positions):
         m = int(tp.move[n])
@@ -127,8 +167,11 @@ def apt_lines(tp: ToolPath, options: PostOptions = PostOptions()) -> list[str]:
         if m == Move.RAPID:
             lines.append("RAPID")
         else:
-            f = tp.feed[n] if tp.feed is not None and not math.isnan(tp.feed[n]) else (
-                options.feed_mm_min if m == Move.CUT else options.plunge_mm_min)
+            f = (
+                tp.feed[n]
+                if tp.feed is not None and not math.isnan(tp.feed[n])
+                else (options.feed_mm_min if m == Move.CUT else options.plunge_mm_min)
+            )
             if f != cur_feed:
                 lines.append(f"FEDRAT/{f:.4f},MMPM")
                 cur_feed = f
@@ -241,8 +284,10 @@ def read_apt(path, *, name: str | None = None) -> ToolPath:
         else:
             skipped[word] = skipped.get(word, 0) + 1
     if skipped:
-        warnings.warn(f"{p.name}: skipped APT statements: " + ", ".join(f"{k} x{n}" for k, n in sorted(skipped.items())),
-                      stacklevel=2)
+        warnings.warn(
+            f"{p.name}: skipped APT statements: " + ", ".join(f"{k} x{n}" for k, n in sorted(skipped.items())),
+            stacklevel=2,
+        )
     if not tips:
         raise InputError(f"{p} has no GOTO statement")
     mv = np.array(moves, dtype=np.int8)

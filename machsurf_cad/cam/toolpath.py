@@ -10,9 +10,10 @@ it; :mod:`machsurf_cad.cam.cldata` writes and reads it (CSV, APT CLDATA, JSON).
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -117,8 +118,18 @@ class ToolPath(Result):
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def from_passes(cls, tips: Sequence, axes: Sequence, *, cc: Sequence | None = None, extras: Sequence | None = None,
-                    clearance: float = 5.0, cutter=None, name: str = "toolpath", info=None) -> "ToolPath":
+    def from_passes(
+        cls,
+        tips: Sequence,
+        axes: Sequence,
+        *,
+        cc: Sequence | None = None,
+        extras: Sequence | None = None,
+        clearance: float = 5.0,
+        cutter=None,
+        name: str = "toolpath",
+        info=None,
+    ) -> ToolPath:
         """Cutting passes linked the safe way: rapid to ``clearance`` mm above each pass start along
         its tool axis, approach along the axis, cut, retract ``clearance`` mm along the axis.
 
@@ -169,9 +180,18 @@ class ToolPath(Result):
                 X.setdefault(k, []).extend([pad, v, pad])
         if not T:
             raise InputError("a tool path needs at least one pass with a position")
-        return cls(np.concatenate(T), np.concatenate(A), np.concatenate([np.asarray(x, np.int8) for x in M]),
-                   np.concatenate(P), np.concatenate(C) if cc is not None else None, None, cutter, name,
-                   {k: np.concatenate(v) for k, v in X.items()}, dict(info or {}, clearance_mm=float(clearance)))
+        return cls(
+            np.concatenate(T),
+            np.concatenate(A),
+            np.concatenate([np.asarray(x, np.int8) for x in M]),
+            np.concatenate(P),
+            np.concatenate(C) if cc is not None else None,
+            None,
+            cutter,
+            name,
+            {k: np.concatenate(v) for k, v in X.items()},
+            dict(info or {}, clearance_mm=float(clearance)),
+        )
 
     # ------------------------------------------------------------------ views
     @property
@@ -192,7 +212,7 @@ class ToolPath(Result):
         """True when any axis differs from +Z (then APT needs ``MULTAX/ON`` and i, j, k on GOTOs)."""
         return bool(np.any(np.abs(self.axis - [0.0, 0.0, 1.0]) > 1e-12))
 
-    def cutting_passes(self) -> tuple["ToolPath", ...]:
+    def cutting_passes(self) -> tuple[ToolPath, ...]:
         """Each pass's cutting positions (approach end and cuts) as its own :class:`ToolPath`."""
         out = []
         cutting = (self.move == Move.CUT) | (self.move == Move.APPROACH)
@@ -202,12 +222,21 @@ class ToolPath(Result):
                 out.append(self.subset(sel))
         return tuple(out)
 
-    def subset(self, index) -> "ToolPath":
+    def subset(self, index) -> ToolPath:
         """The positions at ``index`` (an index or boolean array) as a new tool path."""
         idx = np.asarray(index)
-        return ToolPath(self.tip[idx], self.axis[idx], self.move[idx], self.pass_index[idx],
-                        None if self.cc is None else self.cc[idx], None if self.feed is None else self.feed[idx],
-                        self.cutter, self.name, {k: v[idx] for k, v in self.extras.items()}, self.info)
+        return ToolPath(
+            self.tip[idx],
+            self.axis[idx],
+            self.move[idx],
+            self.pass_index[idx],
+            None if self.cc is None else self.cc[idx],
+            None if self.feed is None else self.feed[idx],
+            self.cutter,
+            self.name,
+            {k: v[idx] for k, v in self.extras.items()},
+            self.info,
+        )
 
     def cut_length(self) -> float:
         """Length of the cutting moves of the tool tip, mm."""
@@ -216,10 +245,17 @@ class ToolPath(Result):
 
     def report(self) -> dict:
         lo, hi = (self.tip.min(axis=0), self.tip.max(axis=0)) if self.n_positions else (np.zeros(3), np.zeros(3))
-        return {"name": self.name, "n_positions": self.n_positions, "n_passes": self.n_passes, "n_cut": self.n_cut,
-                "cut_length_mm": self.cut_length(), "multiaxis": self.is_multiaxis,
-                "tip_bbox_mm": [lo.tolist(), hi.tolist()],
-                "tool": None if self.cutter is None else self.cutter.spec(), **self.info}
+        return {
+            "name": self.name,
+            "n_positions": self.n_positions,
+            "n_passes": self.n_passes,
+            "n_cut": self.n_cut,
+            "cut_length_mm": self.cut_length(),
+            "multiaxis": self.is_multiaxis,
+            "tip_bbox_mm": [lo.tolist(), hi.tolist()],
+            "tool": None if self.cutter is None else self.cutter.spec(),
+            **self.info,
+        }
 
 
 __all__ = ["Move", "ToolPath"]

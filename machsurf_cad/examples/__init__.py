@@ -15,14 +15,26 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable, Literal
+from typing import Any, Literal
 
 from ..errors import InputError
 from .motions import helix_motion, line_motion, sine_motion
-from .surfaces import (FittedSurface, bezier5_patch, eq18_directrix_maps, eq18_ruled, eq18_surface,
-                       hypar_directrices, hypar_ruled, hyperbolic_paraboloid, liu_directrices, liu_ruled, liu_surface,
-                       propeller_blade)
+from .surfaces import (
+    FittedSurface,
+    bezier5_patch,
+    eq18_directrix_maps,
+    eq18_ruled,
+    eq18_surface,
+    hypar_directrices,
+    hypar_ruled,
+    hyperbolic_paraboloid,
+    liu_directrices,
+    liu_ruled,
+    liu_surface,
+    propeller_blade,
+)
 
 ExampleView = Literal["surface", "ruled", "motion"]
 
@@ -42,18 +54,31 @@ class Example:
         return [v for v in ("surface", "ruled", "motion") if getattr(self, v) is not None]
 
 
-EXAMPLES: dict[str, Example] = {e.name: e for e in (
-    Example("bezier5", "degree-5 Bezier bump of 100 mm (machining-surface paper's example)", surface=bezier5_patch),
-    Example("blade", "400 mm propeller-blade pressure face (effective-radius paper's case)", surface=propeller_blade),
-    Example("hypar", "hyperbolic paraboloid, alpha0 = 30 deg, h_p = 80 mm (flank paper, section 3.2)",
-            surface=hyperbolic_paraboloid, ruled=hypar_ruled),
-    Example("liu", "Liu's ruled surface, 0 <= u <= 23.014 (flank paper)", surface=liu_surface, ruled=liu_ruled),
-    Example("eq18", "ruled surface of the flank paper's eq. (18) (sqrt(u) directrix; fitted as a B-spline)",
-            surface=lambda: eq18_surface().surface, ruled=eq18_ruled),
-    Example("sine", "100 mm sine-wave tip path, turning axis", motion=sine_motion),
-    Example("line", "straight 100 mm path along X, axis Z", motion=line_motion),
-    Example("helix", "quarter helix of radius 60 mm, axis tilted 15 deg", motion=helix_motion),
-)}
+EXAMPLES: dict[str, Example] = {
+    e.name: e
+    for e in (
+        Example("bezier5", "degree-5 Bezier bump of 100 mm (machining-surface paper's example)", surface=bezier5_patch),
+        Example(
+            "blade", "400 mm propeller-blade pressure face (effective-radius paper's case)", surface=propeller_blade
+        ),
+        Example(
+            "hypar",
+            "hyperbolic paraboloid, alpha0 = 30 deg, h_p = 80 mm (flank paper, section 3.2)",
+            surface=hyperbolic_paraboloid,
+            ruled=hypar_ruled,
+        ),
+        Example("liu", "Liu's ruled surface, 0 <= u <= 23.014 (flank paper)", surface=liu_surface, ruled=liu_ruled),
+        Example(
+            "eq18",
+            "ruled surface of the flank paper's eq. (18) (sqrt(u) directrix; fitted as a B-spline)",
+            surface=lambda: eq18_surface().surface,
+            ruled=eq18_ruled,
+        ),
+        Example("sine", "100 mm sine-wave tip path, turning axis", motion=sine_motion),
+        Example("line", "straight 100 mm path along X, axis Z", motion=line_motion),
+        Example("helix", "quarter helix of radius 60 mm, axis tilted 15 deg", motion=helix_motion),
+    )
+}
 """Every example by name."""
 
 
@@ -81,6 +106,23 @@ def example(name: str, view: ExampleView = "surface"):
     return build()
 
 
-__all__ = ["EXAMPLES", "Example", "example", "bezier5_patch", "propeller_blade", "hyperbolic_paraboloid", "hypar_ruled",
-           "hypar_directrices", "liu_surface", "liu_ruled", "liu_directrices", "eq18_surface", "eq18_ruled",
-           "eq18_directrix_maps", "FittedSurface", "sine_motion", "line_motion", "helix_motion"]
+__all__ = [
+    "EXAMPLES",
+    "Example",
+    "example",
+    "bezier5_patch",
+    "propeller_blade",
+    "hyperbolic_paraboloid",
+    "hypar_ruled",
+    "hypar_directrices",
+    "liu_surface",
+    "liu_ruled",
+    "liu_directrices",
+    "eq18_surface",
+    "eq18_ruled",
+    "eq18_directrix_maps",
+    "FittedSurface",
+    "sine_motion",
+    "line_motion",
+    "helix_motion",
+]

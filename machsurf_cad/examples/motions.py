@@ -11,7 +11,10 @@ def sine_motion() -> Motion:
     """Tip along a 100 mm sine-wave path in the XY plane, axis turning from (0, -0.2, 1) to (0.3, 0.1, 1)."""
     return Motion.interpolated_axis(
         lambda t: np.stack([100 * np.asarray(t), 20 * np.sin(np.pi * np.asarray(t)), 0 * np.asarray(t)], -1),
-        (0.0, -0.2, 1.0), (0.3, 0.1, 1.0), label="sine path, turning axis")
+        (0.0, -0.2, 1.0),
+        (0.3, 0.1, 1.0),
+        label="sine path, turning axis",
+    )
 
 
 def line_motion() -> Motion:
@@ -21,6 +24,7 @@ def line_motion() -> Motion:
 
 def helix_motion() -> Motion:
     """Quarter helix of radius 60 mm, pitch 40 mm, axis tilted 15 deg towards the helix axis."""
+
     def tip(t):
         t = np.asarray(t) * np.pi / 2
         return np.stack([60 * np.cos(t), 60 * np.sin(t), 40 * t / (2 * np.pi)], -1)

@@ -20,8 +20,9 @@ from ..geometry import BSplineCurve, BSplineSurface, builders
 
 
 # ----------------------------------------------------------------------------- flank-milling paper
-def hypar_directrices(alpha0_deg: float = 30.0, h_p: float = 80.0,
-                      k: float | None = None) -> tuple[BSplineCurve, BSplineCurve]:
+def hypar_directrices(
+    alpha0_deg: float = 30.0, h_p: float = 80.0, k: float | None = None
+) -> tuple[BSplineCurve, BSplineCurve]:
     """Directrices of Redonnet et al. section 3.2's hyperbolic paraboloid (exact lines, mm).
 
     ``C0(u) = (k u, k tan(alpha0) (u - 1/2), h_p/2)``, ``C1(u) = (k u, -k tan(alpha0) (u - 1/2), -h_p/2)``,
@@ -78,7 +79,7 @@ def _eq18_directrices():
     k = 0.5 * np.pi
 
     def c0(u):
-        return np.stack([30 * u ** 2 + 10 * u + 30, 100 * np.sqrt(u) - 50, 70 - 30 * u ** 2], axis=-1)
+        return np.stack([30 * u**2 + 10 * u + 30, 100 * np.sqrt(u) - 50, 70 - 30 * u**2], axis=-1)
 
     def c0_d1(u):  # sqrt(u): derivatives are infinite at u = 0; clamp to u >= 1e-12 so they stay finite
         return np.stack([60 * u + 10, 50 / np.sqrt(np.maximum(u, 1e-12)), -60 * u], axis=-1)
@@ -87,7 +88,7 @@ def _eq18_directrices():
         return np.stack([60 + 0 * u, -25 * np.maximum(u, 1e-12) ** -1.5, -60 + 0 * u], axis=-1)
 
     def c1(u):
-        return np.stack([50 * u ** 2 + 20, 40 - 60 * np.sin(k * u), -60 + 20 * u ** 2], axis=-1)
+        return np.stack([50 * u**2 + 20, 40 - 60 * np.sin(k * u), -60 + 20 * u**2], axis=-1)
 
     def c1_d1(u):
         return np.stack([100 * u, -60 * k * np.cos(k * u), 40 * u], axis=-1)
@@ -171,13 +172,14 @@ def propeller_blade(span: float = 400.0, hub_radius: float = 60.0) -> BSplineSur
     s = np.linspace(0, 1, nu)[:, None]
     t = np.linspace(-0.5, 0.5, nv)[None, :]
     rho = hub_radius + span * s
-    chord = 110 + 90 * np.sin(np.pi * (0.15 + 0.7 * s)) - 40 * s ** 2
+    chord = 110 + 90 * np.sin(np.pi * (0.15 + 0.7 * s)) - 40 * s**2
     beta = np.radians(55 - 35 * s)
     camber = 0.06 * chord * (1 - (2 * t) ** 2)
-    skew = 25 * s ** 2
+    skew = 25 * s**2
     xc = t * chord
     y = xc * np.cos(beta) - camber * np.sin(beta) + skew
     z = xc * np.sin(beta) + camber * np.cos(beta)
     pts = np.stack([np.broadcast_to(rho, y.shape), y, z], axis=-1)
-    return builders.interpolate_grid(pts, 3, 3, params_u=np.linspace(0, 1, nu), params_v=np.linspace(0, 1, nv),
-                                     name="propeller_blade")
+    return builders.interpolate_grid(
+        pts, 3, 3, params_u=np.linspace(0, 1, nu), params_v=np.linspace(0, 1, nv), name="propeller_blade"
+    )

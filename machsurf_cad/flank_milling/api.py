@@ -64,14 +64,26 @@ class FlankResult(Result):
         return None if self.path is None else max(self.path.max_gouge, self.path.max_undercut)
 
     def report(self) -> dict:
-        rep: dict = {"surface": self.surface.name, "tool": self.cutter.to_dict(), "R_mm": self.R, "rule": self.rule,
-                     "u_p": self.u_p, "setting": self.setting.report(), "interference": self.interference.report(),
-                     "all_settings_on_this_rule": self.comparison, "time_s": dict(self.time_s or {})}
+        rep: dict = {
+            "surface": self.surface.name,
+            "tool": self.cutter.to_dict(),
+            "R_mm": self.R,
+            "rule": self.rule,
+            "u_p": self.u_p,
+            "setting": self.setting.report(),
+            "interference": self.interference.report(),
+            "all_settings_on_this_rule": self.comparison,
+            "time_s": dict(self.time_s or {}),
+        }
         if self.path is not None:
-            rep["whole"] = {**self.path.report(), "toolpath": self.toolpath.report() if self.toolpath else None,
-                            "envelope_fit": self.envelope.report() if self.envelope is not None else None,
-                            "deviation_from_envelope": (self.envelope_deviation.report()
-                                                        if self.envelope_deviation is not None else None)}
+            rep["whole"] = {
+                **self.path.report(),
+                "toolpath": self.toolpath.report() if self.toolpath else None,
+                "envelope_fit": self.envelope.report() if self.envelope is not None else None,
+                "deviation_from_envelope": (
+                    self.envelope_deviation.report() if self.envelope_deviation is not None else None
+                ),
+            }
         if self.study is not None:
             rep["study"] = self.study
         if self.radius_range is not None:
@@ -92,10 +104,22 @@ def _as_ruled(surface, ruled_tolerance: float) -> RuledSurface:
     raise InputError("flank milling needs a RuledSurface, a B-spline surface or a Face")
 
 
-def flank(surface, tool, *, rule: float = 0.5, setting: SettingKind = "optimum", side: int = 1, whole: bool = False,
-          tolerance: float = 0.01, envelope_tolerance: float = 1e-3, study: bool = False,
-          radius_range: float | None = None, ruled_tolerance: float = 1e-6, clearance: float = 5.0,
-          progress: Progress | None = None) -> FlankResult:
+def flank(
+    surface,
+    tool,
+    *,
+    rule: float = 0.5,
+    setting: SettingKind = "optimum",
+    side: int = 1,
+    whole: bool = False,
+    tolerance: float = 0.01,
+    envelope_tolerance: float = 1e-3,
+    study: bool = False,
+    radius_range: float | None = None,
+    ruled_tolerance: float = 1e-6,
+    clearance: float = 5.0,
+    progress: Progress | None = None,
+) -> FlankResult:
     """Flank milling of a ruled surface by a cylindrical cutter (Redonnet et al.), as ``machsurf flank``.
 
     Parameters
@@ -143,6 +167,7 @@ def flank(surface, tool, *, rule: float = 0.5, setting: SettingKind = "optimum",
     from ..cutters import FlatEndMill, parse_cutter
 
     t0 = time.perf_counter()
+    cutter: Any
     if isinstance(tool, (int, float)):
         cutter = FlatEndMill(2.0 * float(tool))
     else:

@@ -18,9 +18,9 @@ import numpy as np
 
 from ..cam.toolpath import ToolPath
 from ..errors import InputError
+from ..results import Result
 from .ruled import RuledSurface
 from .settings import NoAdmissibleSetting, Setting, interference, tool_setting
-from ..results import Result
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,26 +50,55 @@ class FlankPath(Result):
 
         c = cutter if cutter is not None else FlatEndMill(2 * self.R, self.length)
         cc = np.array([s.contacts.get("M2", [np.nan] * 3) for s in self.settings], float).reshape(-1, 3)
-        extras = {"u": self.u, "gamma_deg": np.array([s.gamma_deg for s in self.settings]),
-                  "h0_mm": np.array([s.h0 for s in self.settings])}
-        return ToolPath.from_passes([self.tip], [self.axis], cc=[cc], extras=[extras], clearance=clearance, cutter=c,
-                                    name=f"flank_{self.kind}", info={"setting": self.kind, "n_rules": len(self.settings),
-                                                                     "step_tolerance_mm": self.step_tolerance})
+        extras = {
+            "u": self.u,
+            "gamma_deg": np.array([s.gamma_deg for s in self.settings]),
+            "h0_mm": np.array([s.h0 for s in self.settings]),
+        }
+        return ToolPath.from_passes(
+            [self.tip],
+            [self.axis],
+            cc=[cc],
+            extras=[extras],
+            clearance=clearance,
+            cutter=c,
+            name=f"flank_{self.kind}",
+            info={"setting": self.kind, "n_rules": len(self.settings), "step_tolerance_mm": self.step_tolerance},
+        )
 
     def report(self) -> dict:
-        return {"setting": self.kind, "R_mm": self.R, "side": self.side, "n_rules": len(self.settings),
-                "u": self.u.tolist(), "tool_length_mm": self.length, "step_tolerance_mm": self.step_tolerance,
-                "max_gouge_mm": self.max_gouge, "max_undercut_mm": self.max_undercut, "worst": self.worst,
-                "discontinuities": list(self.discontinuities)}
+        return {
+            "setting": self.kind,
+            "R_mm": self.R,
+            "side": self.side,
+            "n_rules": len(self.settings),
+            "u": self.u.tolist(),
+            "tool_length_mm": self.length,
+            "step_tolerance_mm": self.step_tolerance,
+            "max_gouge_mm": self.max_gouge,
+            "max_undercut_mm": self.max_undercut,
+            "worst": self.worst,
+            "discontinuities": list(self.discontinuities),
+        }
 
 
 def _tip_and_length(s: Setting, overhang: float):
     return s.placement(overhang)
 
 
-def flank_path(surface: RuledSurface, R: float, kind: str = "optimum", *, side: int = 1, tolerance: float = 0.01,
-               overhang: float = 1.0, max_rules: int = 2000, min_rules: int = 9, n_rules: int | None = None,
-               progress=None) -> FlankPath:
+def flank_path(
+    surface: RuledSurface,
+    R: float,
+    kind: str = "optimum",
+    *,
+    side: int = 1,
+    tolerance: float = 0.01,
+    overhang: float = 1.0,
+    max_rules: int = 2000,
+    min_rules: int = 9,
+    n_rules: int | None = None,
+    progress=None,
+) -> FlankPath:
     """Settings on rules along u and their CL points and axes.
 
     With ``n_rules`` the rules are uniform; otherwise the step follows ``tolerance`` (mm): a span
@@ -116,15 +145,30 @@ def flank_path(surface: RuledSurface, R: float, kind: str = "optimum", *, side: 
             i += 1
     sets = tuple(setting(u) for u in us)
     tips, axes, lengths = zip(*(_tip_and_length(s, overhang) for s in sets))
-    worst, g, uc = {}, 0.0, 0.0
+    worst: dict = {}
+    g, uc = 0.0, 0.0
     for s in sets:
         e = interference(surface, s, n_v=101)
         g = max(g, e.max_gouge)
         uc = max(uc, e.max_undercut)
         if not worst or e.max_abs > abs(worst["e_mm"]):
             worst = {**e.worst(), "rule_u": s.frame.u_p}
-    return FlankPath(surface, float(R), kind, side, sets, np.array(us), np.array(tips), np.array(axes),
-                     float(max(lengths)), g, uc, worst, float(tolerance), tuple(jumps))
+    return FlankPath(
+        surface,
+        float(R),
+        kind,
+        side,
+        sets,
+        np.array(us),
+        np.array(tips),
+        np.array(axes),
+        float(max(lengths)),
+        g,
+        uc,
+        worst,
+        float(tolerance),
+        tuple(jumps),
+    )
 
 
 # ----------------------------------------------------------------------------- envelope
@@ -146,8 +190,9 @@ def envelope_map(path: FlankPath):
     P = CubicSpline(path.u, path.tip, axis=0)
     A = CubicSpline(path.u, path.axis, axis=0)
     dP, dA = P.derivative(), A.derivative()
-    motion = Motion(P, A, (float(path.u[0]), float(path.u[-1])), "flank motion (cubic splines through the settings)",
-                    dP, dA)
+    motion = Motion(
+        P, A, (float(path.u[0]), float(path.u[-1])), "flank motion (cubic splines through the settings)", dP, dA
+    )
     cutter = FlatEndMill(2 * path.R, path.length)
     seg = cutter.sweep_segment()
     # the sheet facing the surface: the rules lie on that side of the tool (checked at every rule)
@@ -208,9 +253,18 @@ def whole_surface_error(surface: RuledSurface, R: float, kind: str, side: int, n
     return worst
 
 
-def radius_range(surface: RuledSurface, tolerance: float, *, kind: str = "optimum", side: int = 1,
-                 r_min: float = 1.0, r_max: float = 200.0, n_scan: int = 24, n_rules: int = 21,
-                 rel_precision: float = 1e-3) -> dict:
+def radius_range(
+    surface: RuledSurface,
+    tolerance: float,
+    *,
+    kind: str = "optimum",
+    side: int = 1,
+    r_min: float = 1.0,
+    r_max: float = 200.0,
+    n_scan: int = 24,
+    n_rules: int = 21,
+    rel_precision: float = 1e-3,
+) -> dict:
     """Smallest and largest tool radius (mm) keeping the whole surface within ``tolerance`` (mm).
 
     Scans R on a log grid, then bisects each boundary of the feasible set. Returns the range,
@@ -228,8 +282,13 @@ def radius_range(surface: RuledSurface, tolerance: float, *, kind: str = "optimu
     grid = np.geomspace(r_min, r_max, n_scan)
     ok = [err(R) <= tolerance for R in grid]
     if not any(ok):
-        return {"feasible": False, "R_min_mm": None, "R_max_mm": None, "iterations": its,
-                "message": f"no radius in [{r_min:g}, {r_max:g}] mm keeps the surface within {tolerance:g} mm"}
+        return {
+            "feasible": False,
+            "R_min_mm": None,
+            "R_max_mm": None,
+            "iterations": its,
+            "message": f"no radius in [{r_min:g}, {r_max:g}] mm keeps the surface within {tolerance:g} mm",
+        }
     first = ok.index(True)
     last = len(ok) - 1 - ok[::-1].index(True)
 
@@ -245,9 +304,15 @@ def radius_range(surface: RuledSurface, tolerance: float, *, kind: str = "optimu
 
     R_lo = grid[first] if first == 0 else bisect(grid[first - 1], grid[first], True)
     R_hi = grid[last] if last == len(grid) - 1 else bisect(grid[last + 1], grid[last], True)
-    return {"feasible": True, "R_min_mm": float(R_lo), "R_max_mm": float(R_hi), "scan": [float(x) for x in grid],
-            "iterations": its, "note": ("bounded by the scan range" if first == 0 or last == len(grid) - 1 else ""),
-            "contiguous": all(ok[first:last + 1])}
+    return {
+        "feasible": True,
+        "R_min_mm": float(R_lo),
+        "R_max_mm": float(R_hi),
+        "scan": [float(x) for x in grid],
+        "iterations": its,
+        "note": ("bounded by the scan range" if first == 0 or last == len(grid) - 1 else ""),
+        "contiguous": all(ok[first : last + 1]),
+    }
 
 
 def envelope_deviation(path: FlankPath, env_surface, n: int = 121):
@@ -266,8 +331,9 @@ def envelope_deviation(path: FlankPath, env_surface, n: int = 121):
     proj = project_points(env_surface, pts)
     mag = np.linalg.norm(pts - proj.foot, axis=1)
     t0, t1 = env_surface.bounds[2], env_surface.bounds[3]
-    at_end = proj.on_boundary & ((np.abs(proj.uv[:, 1] - t0) < 1e-9 * (t1 - t0)) |
-                                 (np.abs(proj.uv[:, 1] - t1) < 1e-9 * (t1 - t0)))
+    at_end = proj.on_boundary & (
+        (np.abs(proj.uv[:, 1] - t0) < 1e-9 * (t1 - t0)) | (np.abs(proj.uv[:, 1] - t1) < 1e-9 * (t1 - t0))
+    )
     if np.any(at_end):
         ends = []
         for k in (0, -1):

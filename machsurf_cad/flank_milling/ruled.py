@@ -8,8 +8,8 @@ ends it is along the paper's ``N0 = T0 x P0P1`` and ``N1 = T1 x P0P1``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -22,6 +22,7 @@ Directrix = Callable[[np.ndarray, int], np.ndarray]
 
 def _curve_directrix(c: BSplineCurve) -> Directrix:
     if c.is_rational or c.periodic or len(c.knots) != 2:
+
         def f(u, order=2):
             return c.derivatives(np.asarray(u, dtype=float), order)
 
@@ -32,7 +33,7 @@ def _curve_directrix(c: BSplineCurve) -> Directrix:
     L = b - a
     s = np.linspace(0.0, 1.0, c.degree + 1)
     coef = [np.linalg.solve(np.vander(s, c.degree + 1, increasing=True), c.evaluate(a + s * L))]
-    for k in range(1, 3):
+    for _ in range(2):
         prev = coef[-1]
         coef.append(prev[1:] * np.arange(1, prev.shape[0])[:, None] / L if prev.shape[0] > 1 else np.zeros((1, 3)))
 
@@ -63,7 +64,7 @@ class RuledSurface:
 
     # ------------------------------------------------------------------ builders
     @classmethod
-    def from_curves(cls, c0: BSplineCurve, c1: BSplineCurve, name: str = "ruled") -> "RuledSurface":
+    def from_curves(cls, c0: BSplineCurve, c1: BSplineCurve, name: str = "ruled") -> RuledSurface:
         if c0.dim != 3 or c1.dim != 3:
             raise InputError("directrices must be 3-D curves")
         a, b = c0.bounds, c1.bounds
@@ -72,7 +73,7 @@ class RuledSurface:
         return cls(_curve_directrix(c0), _curve_directrix(c1), a, name)
 
     @classmethod
-    def from_surface(cls, s: BSplineSurface, *, tolerance: float = 1e-6, name: str | None = None) -> "RuledSurface":
+    def from_surface(cls, s: BSplineSurface, *, tolerance: float = 1e-6, name: str | None = None) -> RuledSurface:
         """The ruled surface of a B-spline face, rules along v (or u, swapped).
 
         The ruled surface through the face's two boundary curves is measured against the face
@@ -100,8 +101,10 @@ class RuledSurface:
                 return cls(r.c0, r.c1, r.u_range, r.name, dev)
             best = dev if direction == "v" else min(best, dev)
         dev = best
-        raise InputError(f"face is not a ruled surface: it deviates by {dev:.4g} mm from the ruled surface through "
-                         f"its boundary curves (tolerance {tolerance:g} mm)")
+        raise InputError(
+            f"face is not a ruled surface: it deviates by {dev:.4g} mm from the ruled surface through "
+            f"its boundary curves (tolerance {tolerance:g} mm)"
+        )
 
     # ------------------------------------------------------------------ evaluation
     def rule(self, u: float):
@@ -147,8 +150,9 @@ class RuledSurface:
         from ..approx import fit_surface
 
         lo, hi = self.u_range
-        return fit_surface(self.grid_map, (lo, hi, 0.0, 1.0), tolerance=tolerance, degree=(3, 1),
-                           initial_spans=(8, 1), name=self.name)
+        return fit_surface(
+            self.grid_map, (lo, hi, 0.0, 1.0), tolerance=tolerance, degree=(3, 1), initial_spans=(8, 1), name=self.name
+        )
 
 
 def _iso_curve(s: BSplineSurface, v: float) -> BSplineCurve:
@@ -170,6 +174,16 @@ def _iso_curve(s: BSplineSurface, v: float) -> BSplineCurve:
 
 
 def _swap_uv(s: BSplineSurface) -> BSplineSurface:
-    return BSplineSurface(s.degree_v, s.degree_u, s.knots_v, s.mults_v, s.knots_u, s.mults_u,
-                          s.poles.transpose(1, 0, 2), None if s.weights is None else s.weights.T,
-                          s.periodic_v, s.periodic_u, s.name)
+    return BSplineSurface(
+        s.degree_v,
+        s.degree_u,
+        s.knots_v,
+        s.mults_v,
+        s.knots_u,
+        s.mults_u,
+        s.poles.transpose(1, 0, 2),
+        None if s.weights is None else s.weights.T,
+        s.periodic_v,
+        s.periodic_u,
+        s.name,
+    )

@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError, MachsurfError
-from .ruled import RuledSurface
 from ..results import Result
+from .ruled import RuledSurface
 
 
 class NoAdmissibleSetting(MachsurfError):
@@ -111,10 +111,18 @@ class Setting(Result):
 
     def report(self) -> dict:
         return {
-            "kind": self.kind, "R_mm": self.R, "u_p": self.frame.u_p, "side": self.frame.side,
-            "h_p_mm": self.frame.h_p, "alpha0_deg": self.frame.alpha0_deg,
-            "h0_mm": self.h0, "h1_mm": self.h1, "gamma_deg": self.gamma_deg, "phi_deg": self.phi_deg,
-            "axis_point_mm": self.q.tolist(), "axis_direction": self.a.tolist(),
+            "kind": self.kind,
+            "R_mm": self.R,
+            "u_p": self.frame.u_p,
+            "side": self.frame.side,
+            "h_p_mm": self.frame.h_p,
+            "alpha0_deg": self.frame.alpha0_deg,
+            "h0_mm": self.h0,
+            "h1_mm": self.h1,
+            "gamma_deg": self.gamma_deg,
+            "phi_deg": self.phi_deg,
+            "axis_point_mm": self.q.tolist(),
+            "axis_direction": self.a.tolist(),
             "contacts": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in self.contacts.items()},
         }
 
@@ -159,8 +167,9 @@ def _curve_min(directrix, q, a, u_start, u_range, iters=40):
     return u, float(np.linalg.norm(w)), c[0], float(2 * (w @ c[1]))
 
 
-def standard_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 1, distributed: bool = True,
-                     end: int = 0) -> Setting:
+def standard_setting(
+    surface: RuledSurface, u_p: float, R: float, *, side: int = 1, distributed: bool = True, end: int = 0
+) -> Setting:
     """Standard setting, axis collinear with the rule: distributed error (b) or tangent to one directrix (a)."""
     _check_R(R)
     fr = rule_frame(surface, u_p, side)
@@ -169,8 +178,17 @@ def standard_setting(surface: RuledSurface, u_p: float, R: float, *, side: int =
     else:
         y, kind = (fr.n0 if end == 0 else fr.n1), "standard-tangent"
     q = fr.p0 + R * y
-    return Setting(kind, fr, float(R), q, fr.z1.copy(), fr.h_p / 2, 0.0, 0.0,
-                   {"P0": fr.p0, "P1": fr.p1, "tangent_end": None if distributed else end})
+    return Setting(
+        kind,
+        fr,
+        float(R),
+        q,
+        fr.z1.copy(),
+        fr.h_p / 2,
+        0.0,
+        0.0,
+        {"P0": fr.p0, "P1": fr.p1, "tangent_end": None if distributed else end},
+    )
 
 
 def _check_R(R):
@@ -178,8 +196,9 @@ def _check_R(R):
         raise InputError(f"tool radius must be a positive number of mm, got {R!r}")
 
 
-def optimum_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 1,
-                    start: Setting | None = None) -> Setting:
+def optimum_setting(
+    surface: RuledSurface, u_p: float, R: float, *, side: int = 1, start: Setting | None = None
+) -> Setting:
     """The paper's optimum: tangent to the rule at M2 and to C0 at M0 and C1 at M1.
 
     Solved for ``h0`` and ``gamma`` with the tangency points found by Newton from the rule;
@@ -219,10 +238,10 @@ def optimum_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 
         return np.array([(r0[1] - R) / R, (r1[1] - R) / R])
 
     # gamma = 0 (the standard setting) makes the Jacobian singular: start just off it
-    starts = [(0.5, -0.05), (0.5, 0.05), (0.25, 0.1), (0.75, -0.1), (0.25, -0.1), (0.75, 0.1),
-              (0.5, 0.3), (0.5, -0.3)]
+    starts = [(0.5, -0.05), (0.5, 0.05), (0.25, 0.1), (0.75, -0.1), (0.25, -0.1), (0.75, 0.1), (0.5, 0.3), (0.5, -0.3)]
     if start is not None:  # continuation from a neighbouring rule
         starts.insert(0, (start.h0 / start.frame.h_p, math.radians(start.gamma_deg)))
+
     def newton(x0, iters=30):
         """Newton on (h0, gamma) with the analytic Jacobian: at a tangency the distance is stationary
         in u, so its derivatives in h0 and gamma are those at fixed contact points."""
@@ -271,11 +290,19 @@ def optimum_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 
             continue
         q, a, r0, r1 = contacts(h0, gamma)
         # a true tangency: the distance is stationary there (not a minimum clipped at the domain's edge)
-        tangent = all(abs(r_[3]) <= 1e-7 * R * max(1.0, float(np.linalg.norm(d(np.array([r_[0]]), 1)[0, 1])))
-                      for r_, d in ((r0, surface.c0), (r1, surface.c1)))
-        ok = (-1e-9 <= h0 <= fr.h_p + 1e-9 and abs(gamma) < math.radians(80) and tangent
-              and abs(r0[0] - u_p) < 0.5 * span and abs(r1[0] - u_p) < 0.5 * span
-              and np.all(np.isfinite(r0[2])) and np.all(np.isfinite(r1[2])))
+        tangent = all(
+            abs(r_[3]) <= 1e-7 * R * max(1.0, float(np.linalg.norm(d(np.array([r_[0]]), 1)[0, 1])))
+            for r_, d in ((r0, surface.c0), (r1, surface.c1))
+        )
+        ok = (
+            -1e-9 <= h0 <= fr.h_p + 1e-9
+            and abs(gamma) < math.radians(80)
+            and tangent
+            and abs(r0[0] - u_p) < 0.5 * span
+            and abs(r1[0] - u_p) < 0.5 * span
+            and np.all(np.isfinite(r0[2]))
+            and np.all(np.isfinite(r1[2]))
+        )
         if ok:
             best = (h0, gamma, q, a, r0, r1)
             break
@@ -283,13 +310,29 @@ def optimum_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 
         raise NoAdmissibleSetting(
             f"no admissible optimum setting for R = {R:g} mm on side {side:+d} at u = {u_p:g}: the three-tangency "
             f"system has no solution with M2 on the rule and true tangencies with both directrices (alpha0 = "
-            f"{fr.alpha0_deg:.3g} deg, h_p = {fr.h_p:.4g} mm)")
+            f"{fr.alpha0_deg:.3g} deg, h_p = {fr.h_p:.4g} mm)"
+        )
     h0, gamma, q, a, r0, r1 = best
-    return Setting("optimum", fr, float(R), q, a, float(h0), math.degrees(gamma), 0.0,
-                   {"u0": r0[0], "u1": r1[0], "M0": r0[2], "M1": r1[2], "M2": fr.p0 + h0 * fr.z1,
-                    "tangency_residual_mm": max(abs(r0[1] - R), abs(r1[1] - R)),
-                    "contact_outside_surface": bool(not (lo0 <= r0[0] <= hi0 and lo0 <= r1[0] <= hi0)),
-                    "tangency_slope_residual": max(abs(r0[3]), abs(r1[3]))})
+    return Setting(
+        "optimum",
+        fr,
+        float(R),
+        q,
+        a,
+        float(h0),
+        math.degrees(gamma),
+        0.0,
+        {
+            "u0": r0[0],
+            "u1": r1[0],
+            "M0": r0[2],
+            "M1": r1[2],
+            "M2": fr.p0 + h0 * fr.z1,
+            "tangency_residual_mm": max(abs(r0[1] - R), abs(r1[1] - R)),
+            "contact_outside_surface": bool(not (lo0 <= r0[0] <= hi0 and lo0 <= r1[0] <= hi0)),
+            "tangency_slope_residual": max(abs(r0[3]), abs(r1[3])),
+        },
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -319,12 +362,19 @@ class Interference(Result):
         return {"v": float(self.v[i]), "u": float(self.u[i]), "xyz": self.points[i].tolist(), "e_mm": float(self.e[i])}
 
     def report(self) -> dict:
-        return {"max_gouge_mm": self.max_gouge, "max_undercut_mm": self.max_undercut, "max_abs_mm": self.max_abs,
-                "worst": self.worst(), "band_mm": self.band_mm, "n_samples": int(self.v.size)}
+        return {
+            "max_gouge_mm": self.max_gouge,
+            "max_undercut_mm": self.max_undercut,
+            "max_abs_mm": self.max_abs,
+            "worst": self.worst(),
+            "band_mm": self.band_mm,
+            "n_samples": int(self.v.size),
+        }
 
 
-def interference(surface: RuledSurface, setting: Setting, *, n_v: int = 201, band_mm: float | None = None,
-                 n_u: int = 41) -> Interference:
+def interference(
+    surface: RuledSurface, setting: Setting, *, n_v: int = 201, band_mm: float | None = None, n_u: int = 41
+) -> Interference:
     """Signed distance between the cylinder and the surface along the rule (see module docstring)."""
     fr, R = setting.frame, setting.R
     band = float(band_mm) if band_mm is not None else R
@@ -360,8 +410,9 @@ def interference(surface: RuledSurface, setting: Setting, *, n_v: int = 201, ban
     return Interference(v, u, e, p, band)
 
 
-def minimax_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 1, start: Setting | None = None,
-                    n_v: int = 81) -> Setting:
+def minimax_setting(
+    surface: RuledSurface, u_p: float, R: float, *, side: int = 1, start: Setting | None = None, n_v: int = 81
+) -> Setting:
     """Beyond the paper: the setting minimising the largest |error| along the rule over (h0, gamma, phi).
 
     Starts from the optimum setting when it exists, else from the distributed standard one.
@@ -384,11 +435,24 @@ def minimax_setting(surface: RuledSurface, u_p: float, R: float, *, side: int = 
     def cost(x):
         return interference(surface, make(x), n_v=n_v).max_abs
 
-    res = minimize(cost, x0, method="Nelder-Mead",
-                   options={"xatol": 1e-9, "fatol": 1e-9, "maxiter": 2000, "initial_simplex": _simplex(x0)})
+    res = minimize(
+        cost,
+        x0,
+        method="Nelder-Mead",
+        options={"xatol": 1e-9, "fatol": 1e-9, "maxiter": 2000, "initial_simplex": _simplex(x0)},
+    )
     best = make(res.x)
-    return Setting("minimax", fr, float(R), best.q, best.a, best.h0, best.gamma_deg, best.phi_deg,
-                   {"M2": fr.p0 + best.h0 * fr.z1, "iterations": int(res.nit)})
+    return Setting(
+        "minimax",
+        fr,
+        float(R),
+        best.q,
+        best.a,
+        best.h0,
+        best.gamma_deg,
+        best.phi_deg,
+        {"M2": fr.p0 + best.h0 * fr.z1, "iterations": int(res.nit)},
+    )
 
 
 def _simplex(x0):
@@ -399,8 +463,9 @@ def _simplex(x0):
 SETTINGS = ("standard-tangent", "standard-distributed", "optimum", "minimax")
 
 
-def tool_setting(surface: RuledSurface, u_p: float, R: float, kind: str, *, side: int = 1,
-                 start: Setting | None = None) -> Setting:
+def tool_setting(
+    surface: RuledSurface, u_p: float, R: float, kind: str, *, side: int = 1, start: Setting | None = None
+) -> Setting:
     """Setting by name: standard-tangent, standard-distributed, optimum, minimax (``start``: a
     neighbouring rule's setting to continue from)."""
     if kind == "standard-tangent":

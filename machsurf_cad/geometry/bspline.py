@@ -16,15 +16,15 @@ Knot conventions (as in OCCT's ``Geom_BSplineCurve``):
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
 from ..errors import DegenerateGeometryError, InputError
-from .basis import basis_derivatives, collocation_matrix, find_spans, greville
 from ..results import Result
+from .basis import basis_derivatives, collocation_matrix, find_spans, greville
 
 _CHUNK = 1 << 14  # best of 2^13..2^16 on the benchmark machine (fits the caches)
 _THREADS = max(1, min(4, os.cpu_count() or 1))
@@ -43,8 +43,8 @@ def _power_rows(x: np.ndarray, degree: int, order: int, h: np.ndarray) -> np.nda
     if order >= 1:
         rows[:, 1, 1:] = pw[:, :-1] * (np.arange(1, degree + 1) / h[:, None])
     if order >= 2 and degree >= 2:
-        a = np.arange(2, degree + 1)
-        rows[:, 2, 2:] = pw[:, :-2] * (a * (a - 1) / (h * h)[:, None])
+        k2 = np.arange(2, degree + 1)
+        rows[:, 2, 2:] = pw[:, :-2] * (k2 * (k2 - 1) / (h * h)[:, None])
     return rows
 
 
@@ -69,9 +69,7 @@ def _check_knots(degree: int, knots: np.ndarray, mults: np.ndarray, n_poles: int
         if mults[0] != mults[-1] or int(mults[:-1].sum()) != n_poles:
             raise InputError(f"{what}: periodic knots need mults[0] == mults[-1] and sum(mults[:-1]) == n_poles")
     elif int(mults.sum()) != n_poles + degree + 1:
-        raise InputError(
-            f"{what}: sum(mults) = {int(mults.sum())} but n_poles + degree + 1 = {n_poles + degree + 1}"
-        )
+        raise InputError(f"{what}: sum(mults) = {int(mults.sum())} but n_poles + degree + 1 = {n_poles + degree + 1}")
 
 
 def _unperiodize(degree: int, knots: np.ndarray, mults: np.ndarray, periodic: bool):
@@ -154,12 +152,17 @@ class BSplineCurve:
             and np.array_equal(self.knots, other.knots)
             and np.array_equal(self.mults, other.mults)
             and np.array_equal(self.poles, other.poles)
-            and ((self.weights is None and other.weights is None)
-                 or (self.weights is not None and other.weights is not None
-                     and np.array_equal(self.weights, other.weights)))
+            and (
+                (self.weights is None and other.weights is None)
+                or (
+                    self.weights is not None
+                    and other.weights is not None
+                    and np.array_equal(self.weights, other.weights)
+                )
+            )
         )
 
-    __hash__ = None
+    __hash__ = None  # type: ignore[assignment]  # arrays inside: not hashable by value
 
     @property
     def is_rational(self) -> bool:
@@ -211,7 +214,7 @@ class BSplineCurve:
         """Points at parameters ``x``, shape ``x.shape + (dim,)`` in mm."""
         return self.derivatives(x, 0)[..., 0, :]
 
-    def with_poles(self, poles, weights=None) -> "BSplineCurve":
+    def with_poles(self, poles, weights=None) -> BSplineCurve:
         return BSplineCurve(self.degree, self.knots, self.mults, poles, weights, self.periodic)
 
     def to_dict(self) -> dict:
@@ -318,7 +321,7 @@ class BSplineSurface:
             and same_w
         )
 
-    __hash__ = None
+    __hash__ = None  # type: ignore[assignment]  # arrays inside: not hashable by value
 
     # ------------------------------------------------------------------ properties
     @property
@@ -347,14 +350,23 @@ class BSplineSurface:
             hp = np.concatenate([hp * w[..., None], w[..., None]], axis=2)
         return tu, tv, np.ascontiguousarray(hp)
 
-    def with_poles(self, poles, weights=None, name: str | None = None) -> "BSplineSurface":
+    def with_poles(self, poles, weights=None, name: str | None = None) -> BSplineSurface:
         """Same knots and degrees, new poles (and weights)."""
         return BSplineSurface(
-            self.degree_u, self.degree_v, self.knots_u, self.mults_u, self.knots_v, self.mults_v,
-            poles, weights, self.periodic_u, self.periodic_v, self.name if name is None else name,
+            self.degree_u,
+            self.degree_v,
+            self.knots_u,
+            self.mults_u,
+            self.knots_v,
+            self.mults_v,
+            poles,
+            weights,
+            self.periodic_u,
+            self.periodic_v,
+            self.name if name is None else name,
         )
 
-    def renamed(self, name: str) -> "BSplineSurface":
+    def renamed(self, name: str) -> BSplineSurface:
         return self.with_poles(self.poles, self.weights, name=name)
 
     # ------------------------------------------------------------------ evaluation
@@ -368,8 +380,10 @@ class BSplineSurface:
         bu = basis_derivatives(tu, p, su, u, order)  # (m, k, p+1)
         bv = basis_derivatives(tv, q, sv, v, order)  # (m, l, q+1)
         flat = hp.reshape(nu * nv, dim)
-        idx = (su - p)[:, None, None] * nv + (sv - q)[:, None, None] + (
-            np.arange(p + 1)[None, :, None] * nv + np.arange(q + 1)[None, None, :]
+        idx = (
+            (su - p)[:, None, None] * nv
+            + (sv - q)[:, None, None]
+            + (np.arange(p + 1)[None, :, None] * nv + np.arange(q + 1)[None, None, :])
         )
         g = flat[idx]  # (m, p+1, q+1, dim)
         w = np.matmul(bv[:, None, :, :], g)  # (m, p+1, l, dim)
@@ -406,10 +420,14 @@ class BSplineSurface:
         sv = sv[tv[sv + 1] > tv[sv]]
         hu = tu[su + 1] - tu[su]
         hv = tv[sv + 1] - tv[sv]
-        bu = basis_derivatives(tu, p, su, tu[su], p) * (hu[:, None] ** np.arange(p + 1) /
-                                                         np.array([factorial(a) for a in range(p + 1)]))[:, :, None]
-        bv = basis_derivatives(tv, q, sv, tv[sv], q) * (hv[:, None] ** np.arange(q + 1) /
-                                                         np.array([factorial(b) for b in range(q + 1)]))[:, :, None]
+        bu = (
+            basis_derivatives(tu, p, su, tu[su], p)
+            * (hu[:, None] ** np.arange(p + 1) / np.array([factorial(a) for a in range(p + 1)]))[:, :, None]
+        )
+        bv = (
+            basis_derivatives(tv, q, sv, tv[sv], q)
+            * (hv[:, None] ** np.arange(q + 1) / np.array([factorial(b) for b in range(q + 1)]))[:, :, None]
+        )
         iu = su[:, None] - p + np.arange(p + 1)
         iv = sv[:, None] - q + np.arange(q + 1)
         blocks = hp[iu[:, None, :, None], iv[None, :, None, :]]  # (nsu, nsv, p+1, q+1, dim)
@@ -470,7 +488,7 @@ class BSplineSurface:
         m = uf.shape[0]
         use_power = self.degree_u <= _POWER_MAX_DEGREE and self.degree_v <= _POWER_MAX_DEGREE
         if use_power:
-            self._power_data  # build the cache once, before any worker thread
+            _ = self._power_data  # build the cache once, before any worker thread
 
         def work(start):
             sl = slice(start, min(m, start + _CHUNK))
@@ -531,8 +549,11 @@ class BSplineSurface:
             tmp = (bu_full[k] @ hp.reshape(nu, nv * dim)).reshape(mu, nv, dim).transpose(0, 2, 1)
             for l in range(order + 1 - k):
                 h[:, :, k, l] = (tmp.reshape(mu * dim, nv) @ bv_full[l].T).reshape(mu, dim, mv).transpose(0, 2, 1)
-        d = _rational_surface_derivs(h.reshape(-1, order + 1, order + 1, dim), order) if self.weights is not None \
+        d = (
+            _rational_surface_derivs(h.reshape(-1, order + 1, order + 1, dim), order)
+            if self.weights is not None
             else h.reshape(-1, order + 1, order + 1, dim)
+        )
         d = d.reshape(us.size, vs.size, order + 1, order + 1, 3)
         keys = [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2)][: {0: 1, 1: 3, 2: 6}[order]]
         res = [d[:, :, k[0], k[1]] for k in keys]
@@ -568,19 +589,34 @@ class BSplineSurface:
 
     def to_dict(self) -> dict:
         return {
-            "degree_u": self.degree_u, "degree_v": self.degree_v,
-            "knots_u": self.knots_u.tolist(), "mults_u": self.mults_u.tolist(),
-            "knots_v": self.knots_v.tolist(), "mults_v": self.mults_v.tolist(),
+            "degree_u": self.degree_u,
+            "degree_v": self.degree_v,
+            "knots_u": self.knots_u.tolist(),
+            "mults_u": self.mults_u.tolist(),
+            "knots_v": self.knots_v.tolist(),
+            "mults_v": self.mults_v.tolist(),
             "poles": self.poles.tolist(),
             "weights": None if self.weights is None else self.weights.tolist(),
-            "periodic_u": self.periodic_u, "periodic_v": self.periodic_v, "name": self.name,
+            "periodic_u": self.periodic_u,
+            "periodic_v": self.periodic_v,
+            "name": self.name,
         }
 
     @classmethod
-    def from_dict(cls, d: dict) -> "BSplineSurface":
-        return cls(d["degree_u"], d["degree_v"], d["knots_u"], d["mults_u"], d["knots_v"], d["mults_v"],
-                   d["poles"], d.get("weights"), d.get("periodic_u", False), d.get("periodic_v", False),
-                   d.get("name", ""))
+    def from_dict(cls, d: dict) -> BSplineSurface:
+        return cls(
+            d["degree_u"],
+            d["degree_v"],
+            d["knots_u"],
+            d["mults_u"],
+            d["knots_v"],
+            d["mults_v"],
+            d["poles"],
+            d.get("weights"),
+            d.get("periodic_u", False),
+            d.get("periodic_v", False),
+            d.get("name", ""),
+        )
 
 
 def unit_normals(su, sv, scale, u=None, v=None, *, check=True) -> np.ndarray:
@@ -666,7 +702,7 @@ def _insert_once(c: BSplineCurve, x: float) -> BSplineCurve:
     hp = c.poles if c.weights is None else np.concatenate([c.poles * c.weights[:, None], c.weights[:, None]], 1)
     new = np.empty((n + 1, hp.shape[1]))
     new[: k - p + 1] = hp[: k - p + 1]
-    new[k + 1:] = hp[k:]
+    new[k + 1 :] = hp[k:]
     for i in range(k - p + 1, k + 1):
         alpha = (x - t[i]) / (t[i + p] - t[i])
         new[i] = alpha * hp[i] + (1 - alpha) * hp[i - 1]
@@ -715,7 +751,7 @@ def insert_knot_surface(surface: BSplineSurface, x: float, direction: str = "u",
             raise InputError(f"knot {x} outside the open domain ({lo}, {hi})")
         new = np.empty((nn + 1, flat.shape[1]))
         new[: k - deg + 1] = flat[: k - deg + 1]
-        new[k + 1:] = flat[k:]
+        new[k + 1 :] = flat[k:]
         for i in range(k - deg + 1, k + 1):
             alpha = (x - t[i]) / (t[i + deg] - t[i])
             new[i] = alpha * flat[i] + (1 - alpha) * flat[i - 1]
@@ -739,10 +775,32 @@ def insert_knot_surface(surface: BSplineSurface, x: float, direction: str = "u",
         weights = out[..., 3]
         out_poles = out_poles / weights[..., None]
     if direction == "u":
-        return BSplineSurface(s.degree_u, s.degree_v, new_knots, new_mults, s.knots_v, s.mults_v,
-                              out_poles, weights, False, s.periodic_v, s.name)
-    return BSplineSurface(s.degree_u, s.degree_v, s.knots_u, s.mults_u, new_knots, new_mults,
-                          out_poles, weights, s.periodic_u, False, s.name)
+        return BSplineSurface(
+            s.degree_u,
+            s.degree_v,
+            new_knots,
+            new_mults,
+            s.knots_v,
+            s.mults_v,
+            out_poles,
+            weights,
+            False,
+            s.periodic_v,
+            s.name,
+        )
+    return BSplineSurface(
+        s.degree_u,
+        s.degree_v,
+        s.knots_u,
+        s.mults_u,
+        new_knots,
+        new_mults,
+        out_poles,
+        weights,
+        s.periodic_u,
+        False,
+        s.name,
+    )
 
 
 def refit_curve_in_space(curve: BSplineCurve, degree: int, knots, mults) -> BSplineCurve:

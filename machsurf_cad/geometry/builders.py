@@ -7,15 +7,15 @@ analytic curve) return the measured error with the result.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 from ..errors import InputError, ToleranceError
+from ..results import Result
 from .basis import collocation_matrix
 from .bspline import BSplineCurve, BSplineSurface, elevate_and_merge
-from ..results import Result
 
 
 # ----------------------------------------------------------------------------- curves
@@ -62,7 +62,7 @@ def interpolate_curve(points, degree: int = 3, params=None) -> BSplineCurve:
 
 def _averaged_knots(params: np.ndarray, degree: int) -> tuple[np.ndarray, np.ndarray]:
     n = params.size
-    inner = np.array([params[j: j + degree].mean() for j in range(1, n - degree)])
+    inner = np.array([params[j : j + degree].mean() for j in range(1, n - degree)])
     knots = np.concatenate([[params[0]], inner, [params[-1]]])
     mults = np.ones(knots.size, dtype=int)
     mults[0] = mults[-1] = degree + 1
@@ -78,8 +78,16 @@ class CurveFit(Result):
     n_check: int
 
 
-def fit_curve(func: Callable[[np.ndarray], np.ndarray], lo: float, hi: float, *, tolerance: float,
-              degree: int = 3, max_poles: int = 2000, n_start: int = 8) -> CurveFit:
+def fit_curve(
+    func: Callable[[np.ndarray], np.ndarray],
+    lo: float,
+    hi: float,
+    *,
+    tolerance: float,
+    degree: int = 3,
+    max_poles: int = 2000,
+    n_start: int = 8,
+) -> CurveFit:
     """Fit a B-spline curve to ``func`` on [lo, hi] within ``tolerance`` (max-norm distance, mm).
 
     The parameterisation of ``func`` is kept (the curve at ``x`` approximates ``func(x)``).
@@ -104,7 +112,7 @@ def fit_curve(func: Callable[[np.ndarray], np.ndarray], lo: float, hi: float, *,
         curve = BSplineCurve(degree, knots, mults, poles)
         # check on points the fit never saw
         frac = (np.arange(16) + 0.5) / 16 * 0.999 + 0.0005
-        x_chk = (breaks[:-1, None] + (breaks[1:] - breaks[:-1])[:, None] * frac[None, :])
+        x_chk = breaks[:-1, None] + (breaks[1:] - breaks[:-1])[:, None] * frac[None, :]
         err = np.linalg.norm(curve.evaluate(x_chk.ravel()) - np.asarray(func(x_chk.ravel())), axis=-1)
         err = err.reshape(x_chk.shape)
         span_err = err.max(axis=1)
@@ -113,8 +121,8 @@ def fit_curve(func: Callable[[np.ndarray], np.ndarray], lo: float, hi: float, *,
             return CurveFit(curve, max_err, int(err.size))
         if n >= max_poles:
             raise ToleranceError(
-                f"curve fit did not reach {tolerance:g} mm within {max_poles} poles (reached {max_err:.3g} mm)",
-                max_err)
+                f"curve fit did not reach {tolerance:g} mm within {max_poles} poles (reached {max_err:.3g} mm)", max_err
+            )
         bad = span_err > tolerance
         mids = 0.5 * (breaks[:-1] + breaks[1:])[bad]
         breaks = np.sort(np.concatenate([breaks, mids]))
@@ -136,8 +144,9 @@ def surface_from_grid(poles, degree_u: int = 3, degree_v: int = 3, weights=None,
     return BSplineSurface(degree_u, degree_v, ku, mu, kv, mv, poles, weights, name=name)
 
 
-def interpolate_grid(points, degree_u: int = 3, degree_v: int = 3, params_u=None, params_v=None,
-                     name: str = "") -> BSplineSurface:
+def interpolate_grid(
+    points, degree_u: int = 3, degree_v: int = 3, params_u=None, params_v=None, name: str = ""
+) -> BSplineSurface:
     """Surface through a grid of points (nu, nv, 3), exactly at the given or chord-length parameters."""
     pts = np.asarray(points, dtype=float)
     nu, nv = pts.shape[:2]
@@ -173,8 +182,10 @@ def ruled_surface(c0: BSplineCurve, c1: BSplineCurve, name: str = "") -> BSpline
         wa = a.weights if a.weights is not None else np.ones(a.poles.shape[0])
         wb = b.weights if b.weights is not None else np.ones(b.poles.shape[0])
         if not np.allclose(wa, wb, rtol=0, atol=0):
-            raise InputError("rational directrices need identical weights for an exact ruled surface "
-                             "S = (1-v)C0 + vC1; reparameterise or fit them first")
+            raise InputError(
+                "rational directrices need identical weights for an exact ruled surface "
+                "S = (1-v)C0 + vC1; reparameterise or fit them first"
+            )
         weights = np.stack([wa, wb], axis=1)
     return BSplineSurface(a.degree, 1, a.knots, a.mults, [0.0, 1.0], [2, 2], poles, weights, name=name)
 
@@ -199,20 +210,21 @@ def revolve_profile(profile: BSplineCurve, angle_deg: float = 360.0, name: str =
         wts += [1.0, w_mid]
     angles.append(n_arcs * dth)
     wts.append(1.0)
-    angles = np.array(angles)
-    wts = np.array(wts)
-    rad = np.where(np.arange(angles.size) % 2 == 1, 1.0 / w_mid, 1.0)  # mid poles at the tangent corner
-    cu, su_ = np.cos(angles) * rad, np.sin(angles) * rad
+    ang = np.array(angles)
+    wts_a = np.array(wts)
+    rad = np.where(np.arange(ang.size) % 2 == 1, 1.0 / w_mid, 1.0)  # mid poles at the tangent corner
+    cu, su_ = np.cos(ang) * rad, np.sin(ang) * rad
     rho, z = prof[:, 0], prof[:, 1]
-    poles = np.stack([rho[:, None] * cu[None, :], rho[:, None] * su_[None, :],
-                      np.broadcast_to(z[:, None], (rho.size, angles.size))], axis=-1)
+    poles = np.stack(
+        [rho[:, None] * cu[None, :], rho[:, None] * su_[None, :], np.broadcast_to(z[:, None], (rho.size, ang.size))],
+        axis=-1,
+    )
     pw = profile.weights if profile.weights is not None else np.ones(rho.size)
-    weights = pw[:, None] * wts[None, :]
+    weights = pw[:, None] * wts_a[None, :]
     kv = np.linspace(0.0, 1.0, n_arcs + 1)
     mv = np.full(n_arcs + 1, 2)
     mv[0] = mv[-1] = 3
-    return BSplineSurface(profile.degree, 2, profile.knots, profile.mults, kv, mv, poles, weights,
-                          False, False, name)
+    return BSplineSurface(profile.degree, 2, profile.knots, profile.mults, kv, mv, poles, weights, False, False, name)
 
 
 def circular_arc(radius: float, start_deg: float, end_deg: float, center=(0.0, 0.0)) -> BSplineCurve:
@@ -242,7 +254,9 @@ def circular_arc(radius: float, start_deg: float, end_deg: float, center=(0.0, 0
     return BSplineCurve(2, kn, mu, pts, np.array(w))
 
 
-def sphere_patch(radius: float = 50.0, lat_deg=(-60.0, 60.0), lon_deg: float = 90.0, name: str = "sphere") -> BSplineSurface:
+def sphere_patch(
+    radius: float = 50.0, lat_deg=(-60.0, 60.0), lon_deg: float = 90.0, name: str = "sphere"
+) -> BSplineSurface:
     """Exact rational patch of a sphere of ``radius`` mm centred at the origin.
 
     u runs along the meridian from ``lat_deg[0]`` to ``lat_deg[1]`` (degrees), v along the
@@ -253,20 +267,25 @@ def sphere_patch(radius: float = 50.0, lat_deg=(-60.0, 60.0), lon_deg: float = 9
     return revolve_profile(prof, lon_deg, name=name)
 
 
-def cylinder_patch(radius: float = 30.0, height: float = 60.0, angle_deg: float = 90.0, name: str = "cylinder") -> BSplineSurface:
+def cylinder_patch(
+    radius: float = 30.0, height: float = 60.0, angle_deg: float = 90.0, name: str = "cylinder"
+) -> BSplineSurface:
     """Exact rational patch of a cylinder of axis z (u along z from 0 to ``height``)."""
     prof = BSplineCurve(1, [0, 1], [2, 2], [[radius, 0.0], [radius, height]])
     return revolve_profile(prof, angle_deg, name=name)
 
 
-def torus_patch(major: float = 40.0, minor: float = 10.0, tube_deg=(-90.0, 90.0), angle_deg: float = 90.0,
-                name: str = "torus") -> BSplineSurface:
+def torus_patch(
+    major: float = 40.0, minor: float = 10.0, tube_deg=(-90.0, 90.0), angle_deg: float = 90.0, name: str = "torus"
+) -> BSplineSurface:
     """Exact rational patch of a torus of axis z: centre-circle radius ``major``, tube radius ``minor``."""
     prof = circular_arc(minor, tube_deg[0], tube_deg[1], center=(major, 0.0))
     return revolve_profile(prof, angle_deg, name=name)
 
 
-def plane_patch(origin=(0.0, 0.0, 0.0), du=(100.0, 0.0, 0.0), dv=(0.0, 100.0, 0.0), name: str = "plane") -> BSplineSurface:
+def plane_patch(
+    origin=(0.0, 0.0, 0.0), du=(100.0, 0.0, 0.0), dv=(0.0, 100.0, 0.0), name: str = "plane"
+) -> BSplineSurface:
     """Planar bilinear patch ``origin + u du + v dv`` on [0, 1]^2."""
     o, a, b = (np.asarray(x, float) for x in (origin, du, dv))
     return bezier_surface([[o, o + b], [o + a, o + a + b]], name=name)

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .bspline import BSplineSurface, _cross, unit_normals
 from ..results import Result
+from .bspline import BSplineSurface, _cross, unit_normals
 
 
 @dataclass(frozen=True, eq=False)
@@ -66,7 +66,7 @@ def tangent_to_parameter(props: LocalProperties, vec: np.ndarray):
     """Parameter-space components ``(du, dv)`` of the tangent part of a 3-D vector."""
     a = np.einsum("...i,...i->...", vec, props.su)
     b = np.einsum("...i,...i->...", vec, props.sv)
-    det = props.E * props.G - props.F ** 2
+    det = props.E * props.G - props.F**2
     du = (props.G * a - props.F * b) / det
     dv = (props.E * b - props.F * a) / det
     return du, dv
@@ -134,5 +134,6 @@ def properties_from_derivatives(u, v, d, scale: float, *, check: bool = True) ->
     theta = 0.5 * np.arctan2(2 * b, a - c)
     dir1 = np.cos(theta)[..., None] * e1 + np.sin(theta)[..., None] * e2
     dir2 = _cross(n, dir1)
-    return LocalProperties(u, v, d.point, d.su, d.sv, d.suu, d.suv, d.svv, n, E, F, G, L, M, N, K, H, k1, k2,
-                           dir1, dir2)
+    return LocalProperties(
+        u, v, d.point, d.su, d.sv, d.suu, d.suv, d.svv, n, E, F, G, L, M, N, K, H, k1, k2, dir1, dir2
+    )

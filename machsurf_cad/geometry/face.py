@@ -57,10 +57,18 @@ class Face:
     def is_trimmed(self) -> bool:
         return len(self.loops) > 0
 
-    def with_surface(self, surface: BSplineSurface, name: str | None = None) -> "Face":
+    def with_surface(self, surface: BSplineSurface, name: str | None = None) -> Face:
         """Same trimming (same parameter domain), another surface: how S1/S2 keep F's trimming."""
-        return Face(surface, self.loops, self.name if name is None else name, -1, False, "BSplineSurface",
-                    self.uv_bounds, float("nan"))
+        return Face(
+            surface,
+            self.loops,
+            self.name if name is None else name,
+            -1,
+            False,
+            "BSplineSurface",
+            self.uv_bounds,
+            float("nan"),
+        )
 
     def contains_uv(self, u, v, n_per_curve: int = 64) -> np.ndarray:
         """Boolean mask of parameter points inside the trimmed region (even-odd rule on polygons)."""

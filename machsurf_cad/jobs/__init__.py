@@ -16,13 +16,12 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from ..results import Progress
 from .base import EXIT_INPUT, EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, quiet
-from .specs import (SPECS, DemoJob, EnvelopeJob, FlankJob, InfoJob, InspectJob, JobSpec, MachiningSurfaceJob,
-                    ReffJob)
+from .specs import SPECS, DemoJob, EnvelopeJob, FlankJob, InfoJob, InspectJob, JobSpec, MachiningSurfaceJob, ReffJob
 
 
 def _runner(spec: JobSpec) -> Callable:
@@ -86,5 +85,21 @@ def run_job(spec: JobSpec, out, *, say: Say = quiet, progress: Progress | None =
     return _runner(spec)(spec, Path(out), say, progress)
 
 
-__all__ = ["run_job", "JobOutcome", "JobSpec", "InfoJob", "InspectJob", "MachiningSurfaceJob", "ReffJob", "FlankJob",
-           "EnvelopeJob", "DemoJob", "SPECS", "Staging", "Say", "EXIT_OK", "EXIT_INPUT", "EXIT_TOLERANCE"]
+__all__ = [
+    "run_job",
+    "JobOutcome",
+    "JobSpec",
+    "InfoJob",
+    "InspectJob",
+    "MachiningSurfaceJob",
+    "ReffJob",
+    "FlankJob",
+    "EnvelopeJob",
+    "DemoJob",
+    "SPECS",
+    "Staging",
+    "Say",
+    "EXIT_OK",
+    "EXIT_INPUT",
+    "EXIT_TOLERANCE",
+]

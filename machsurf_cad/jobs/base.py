@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import shutil
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 from ..errors import InputError
 from ..results import write_json
@@ -55,7 +55,7 @@ class Staging:
     def abort(self) -> None:
         shutil.rmtree(self.dir, ignore_errors=True)
 
-    def __enter__(self) -> "Staging":
+    def __enter__(self) -> Staging:
         return self
 
     def __exit__(self, exc_type, exc, tb):
@@ -122,13 +122,15 @@ def post_options(spec):
     """:class:`~machsurf_cad.cam.PostOptions` from a job spec's feed fields."""
     from ..cam import PostOptions
 
-    return PostOptions(feed_mm_min=spec.feed, plunge_mm_min=spec.plunge_feed, spindle_rpm=spec.spindle,
-                       tool_number=spec.tool_number)
+    return PostOptions(
+        feed_mm_min=spec.feed, plunge_mm_min=spec.plunge_feed, spindle_rpm=spec.spindle, tool_number=spec.tool_number
+    )
 
 
 def write_toolpath(st: Staging, tp, spec, stem: str = "toolpath") -> list[str]:
     """The tool path as CSV, APT CLDATA and JSON through the one writer."""
-    from ..cam import write_apt, write_csv, write_json as write_tp_json
+    from ..cam import write_apt, write_csv
+    from ..cam import write_json as write_tp_json
 
     write_csv(st.path(f"{stem}.csv"), tp)
     write_apt(st.path(f"{stem}.apt"), tp, post_options(spec))
@@ -136,5 +138,17 @@ def write_toolpath(st: Staging, tp, spec, stem: str = "toolpath") -> list[str]:
     return [f"{stem}.csv", f"{stem}.apt", f"{stem}.json"]
 
 
-__all__ = ["Say", "quiet", "Staging", "JobOutcome", "finish", "face_input", "step_face", "post_options",
-           "write_toolpath", "EXIT_OK", "EXIT_INPUT", "EXIT_TOLERANCE"]
+__all__ = [
+    "Say",
+    "quiet",
+    "Staging",
+    "JobOutcome",
+    "finish",
+    "face_input",
+    "step_face",
+    "post_options",
+    "write_toolpath",
+    "EXIT_OK",
+    "EXIT_INPUT",
+    "EXIT_TOLERANCE",
+]

@@ -54,10 +54,12 @@ def run_demo(spec: DemoJob, out, say: Say, progress=None) -> JobOutcome:
             nominal = next(f for f in faces if f.name == "freeform_top")
         except StopIteration:
             raise InputError(f"{part} has no face named freeform_top") from None
-        say(f"part: {part} ({len(faces)} faces); nominal face {nominal.index} '{nominal.name}': "
+        say(
+            f"part: {part} ({len(faces)} faces); nominal face {nominal.index} '{nominal.name}': "
             f"{nominal.source_type} degree {nominal.surface.degree_u}x{nominal.surface.degree_v}, "
             f"{nominal.surface.shape[0]}x{nominal.surface.shape[1]} poles, trimmed by {len(nominal.loops)} loop(s), "
-            f"area {nominal.area:.1f} mm2")
+            f"area {nominal.area:.1f} mm2"
+        )
 
         # exact evaluation: curvature over the trimmed face
         u0, u1, v0, v1 = nominal.uv_bounds
@@ -67,8 +69,10 @@ def run_demo(spec: DemoJob, out, say: Say, progress=None) -> JobOutcome:
         props = local_properties(nominal.surface, U[inside], V[inside])
         kmax = float(np.max(np.maximum(np.abs(props.k1), np.abs(props.k2))))
         i_worst = int(np.argmax(np.maximum(np.abs(props.k1), np.abs(props.k2))))
-        say(f"smallest radius of curvature on the face: {1 / kmax:.2f} mm at "
-            f"({', '.join(f'{x:.2f}' for x in props.point[i_worst])}) mm")
+        say(
+            f"smallest radius of curvature on the face: {1 / kmax:.2f} mm at "
+            f"({', '.join(f'{x:.2f}' for x in props.point[i_worst])}) mm"
+        )
 
         # export the nominal face and a ball cutter touching it at that point
         step_path = st.path("freeform_top.step")
@@ -83,16 +87,25 @@ def run_demo(spec: DemoJob, out, say: Say, progress=None) -> JobOutcome:
         # read both back and measure against the exact nominal
         back = read_step_faces(step_path)[0]
         rt = deviation(nominal, back, samples=150)
-        say(f"STEP round trip: max |deviation| = {rt.max_abs:.3g} mm over {rt.stats['n_points']} points "
-            f"(name '{back.name}', {len(back.loops)} loop(s))")
+        say(
+            f"STEP round trip: max |deviation| = {rt.max_abs:.3g} mm over {rt.stats['n_points']} points "
+            f"(name '{back.name}', {len(back.loops)} loop(s))"
+        )
         pts, tris = read_stl(stl_path)
         spts, stris = subdivide(pts, tris, 2)
         mesh_dev = deviation(nominal, spts, tolerance=STL_DEFLECTION_MM, triangles=stris, progress=progress)
         s = mesh_dev.stats
-        say(f"STL ({tris.shape[0]} triangles, deflection {STL_DEFLECTION_MM} mm): max |deviation| = "
-            f"{s['max_abs']:.4g} mm, RMS {s['rms']:.3g} mm over {s['n_points']} points inside the triangles")
-        render_deviation(mesh_dev, st.path("deviation_stl.png"), vtp_path=st.path("deviation_stl.vtp"),
-                         title="STL mesh vs exact free-form face", tolerance=STL_DEFLECTION_MM)
+        say(
+            f"STL ({tris.shape[0]} triangles, deflection {STL_DEFLECTION_MM} mm): max |deviation| = "
+            f"{s['max_abs']:.4g} mm, RMS {s['rms']:.3g} mm over {s['n_points']} points inside the triangles"
+        )
+        render_deviation(
+            mesh_dev,
+            st.path("deviation_stl.png"),
+            vtp_path=st.path("deviation_stl.vtp"),
+            title="STL mesh vs exact free-form face",
+            tolerance=STL_DEFLECTION_MM,
+        )
 
         # machining surfaces: 5-axis filleted end mill, lead 10 deg along planes parallel to yOz
         from ..cam import write_apt, write_csv
@@ -100,33 +113,54 @@ def run_demo(spec: DemoJob, out, say: Say, progress=None) -> JobOutcome:
         from ..machining.surfaces import fit_deviation
         from ..machining.toolpath import tool_paths
 
-        ms = machining_surface(nominal, "bull:D=16,r=3", axes=5, strategy="planes:x", lead=10.0, tilt=0.0,
-                               tolerance=MS_TOL_MM)
+        ms = machining_surface(
+            nominal, "bull:D=16,r=3", axes=5, strategy="planes:x", lead=10.0, tilt=0.0, tolerance=MS_TOL_MM
+        )
         write_step(st.path("machining_surface.step"), ms.faces())
         ms_dev = fit_deviation(ms, "S1")
         tp = tool_paths(ms, stepover=4.0, chordal_tolerance=0.01)
-        render_deviation(ms_dev, st.path("deviation_S1.png"), vtp_path=st.path("deviation_S1.vtp"),
-                         title="S1 (bull D16 r3, lead 10 deg) fit vs exact offset; paths of K on S1",
-                         tolerance=MS_TOL_MM, extra_lines=[(p.extras["K"], "darkgreen") for p in tp.cutting_passes()
-                                                   if p.n_positions > 1])
+        render_deviation(
+            ms_dev,
+            st.path("deviation_S1.png"),
+            vtp_path=st.path("deviation_S1.vtp"),
+            title="S1 (bull D16 r3, lead 10 deg) fit vs exact offset; paths of K on S1",
+            tolerance=MS_TOL_MM,
+            extra_lines=[(p.extras["K"], "darkgreen") for p in tp.cutting_passes() if p.n_positions > 1],
+        )
         write_csv(st.path("toolpath.csv"), tp)
         write_apt(st.path("toolpath.apt"), tp)
-        say(f"machining surfaces (bull:D=16,r=3, 5 axes, lead 10 deg): S1 {ms.s1_fit.surface.shape[0]}x"
+        assert ms.s2_fit is not None  # 5 axes
+        say(
+            f"machining surfaces (bull:D=16,r=3, 5 axes, lead 10 deg): S1 {ms.s1_fit.surface.shape[0]}x"
             f"{ms.s1_fit.surface.shape[1]} poles, max error {ms.s1_fit.max_error:.3g} mm; S2 "
             f"{ms.s2_fit.surface.shape[0]}x{ms.s2_fit.surface.shape[1]} poles, max error {ms.s2_fit.max_error:.3g} mm "
             f"(tol {MS_TOL_MM} mm); loops: {'none' if not ms.loops.found else len(ms.loops.regions)}; "
-            f"axis error {ms.axis_error_deg:.3g} deg")
-        say(f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions, chordal error "
-            f"{tp.info['chordal_error_measured_mm']:.3g} mm")
+            f"axis error {ms.axis_error_deg:.3g} deg"
+        )
+        say(
+            f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions, chordal error "
+            f"{tp.info['chordal_error_measured_mm']:.3g} mm"
+        )
         report = {
-            "part": str(part), "n_faces": len(faces),
-            "nominal": {"index": nominal.index, "name": nominal.name, "type": nominal.source_type,
-                        "degrees": [nominal.surface.degree_u, nominal.surface.degree_v],
-                        "poles": list(nominal.surface.shape), "loops": len(nominal.loops), "area_mm2": nominal.area,
-                        "min_radius_of_curvature_mm": 1 / kmax},
+            "part": str(part),
+            "n_faces": len(faces),
+            "nominal": {
+                "index": nominal.index,
+                "name": nominal.name,
+                "type": nominal.source_type,
+                "degrees": [nominal.surface.degree_u, nominal.surface.degree_v],
+                "poles": list(nominal.surface.shape),
+                "loops": len(nominal.loops),
+                "area_mm2": nominal.area,
+                "min_radius_of_curvature_mm": 1 / kmax,
+            },
             "step_round_trip": rt.report(),
-            "stl": {"triangles": int(tris.shape[0]), "linear_deflection_mm": STL_DEFLECTION_MM,
-                    "angular_deflection_deg": STL_ANGLE_DEG, "deviation": mesh_dev.report()},
+            "stl": {
+                "triangles": int(tris.shape[0]),
+                "linear_deflection_mm": STL_DEFLECTION_MM,
+                "angular_deflection_deg": STL_ANGLE_DEG,
+                "deviation": mesh_dev.report(),
+            },
             "cutter": cutter.to_dict(),
             "machining_surface": ms.report(),
             "S1_deviation_map": ms_dev.report(),

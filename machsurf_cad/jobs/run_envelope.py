@@ -14,27 +14,44 @@ def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
     cutter = parse_cutter(spec.tool)
     motion = load_path(spec.path) if spec.path else example(spec.example or "sine", "motion")
     thetas = spec.thetas()
-    res = envelope(cutter, motion, passes=spec.passes, continuity=spec.continuity,
-                   theta_deg=thetas if len(thetas) > 1 else thetas[0], tolerance=spec.tol, side=spec.side,
-                   theta_scan=spec.theta_scan, compare=spec.render and spec.passes > 1,
-                   chordal_tolerance=spec.chordal, clearance=spec.clearance)
+    res = envelope(
+        cutter,
+        motion,
+        passes=spec.passes,
+        continuity=spec.continuity,
+        theta_deg=thetas if len(thetas) > 1 else thetas[0],
+        tolerance=spec.tol,
+        side=spec.side,
+        theta_scan=spec.theta_scan,
+        compare=spec.render and spec.passes > 1,
+        chordal_tolerance=spec.chordal,
+        clearance=spec.clearance,
+    )
     rep = res.report()
-    say(f"tool {cutter.spec()}, motion: {motion.label}; {spec.passes} pass(es), {spec.continuity.upper()}, "
-        f"theta {spec.theta} deg")
+    say(
+        f"tool {cutter.spec()}, motion: {motion.label}; {spec.passes} pass(es), {spec.continuity.upper()}, "
+        f"theta {spec.theta} deg"
+    )
     for prow in rep["passes"]:
         f = prow["fit"]
-        say(f"{prow['name']}: {f['poles'][0]}x{f['poles'][1]} poles, fit error {f['max_error_mm']:.3g} mm "
-            f"(tol {spec.tol:g})")
+        say(
+            f"{prow['name']}: {f['poles'][0]}x{f['poles'][1]} poles, fit error {f['max_error_mm']:.3g} mm "
+            f"(tol {spec.tol:g})"
+        )
     for srow in rep["seams"]:
         ex, fi = srow["exact"], srow["fitted"]
-        say(f"seam {srow['between'][0] + 1}-{srow['between'][1] + 1}: exact gap {ex['max_gap_mm']:.3g} mm, angle "
+        say(
+            f"seam {srow['between'][0] + 1}-{srow['between'][1] + 1}: exact gap {ex['max_gap_mm']:.3g} mm, angle "
             f"{ex['max_normal_angle_deg']:.3g} deg; fitted faces gap {fi['max_gap_mm']:.3g} mm, angle "
-            f"{fi['max_normal_angle_deg']:.3g} deg")
+            f"{fi['max_normal_angle_deg']:.3g} deg"
+        )
     if res.max_theta_deg is not None:
         say(f"largest |theta| without fold-back or loss of envelope (5 deg steps): {res.max_theta_deg:g} deg")
     tp = res.toolpath
-    say(f"tool path: {tp.n_passes} pass(es), {tp.n_cut} cutting positions, chordal error "
-        f"{tp.info['chordal_error_measured_mm']:.3g} mm (tol {spec.chordal:g})")
+    say(
+        f"tool path: {tp.n_passes} pass(es), {tp.n_cut} cutting positions, chordal error "
+        f"{tp.info['chordal_error_measured_mm']:.3g} mm (tol {spec.chordal:g})"
+    )
     with Staging(out) as st:
         from ..geometry.face import Face
         from ..occ import write_step, write_stl
@@ -51,8 +68,13 @@ def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
             g0 = res.other if spec.continuity == "g1" else chain
             ang0 = max(s["max_normal_angle_deg"] for s in g0.seams_fitted)
             ang1 = max(s["max_normal_angle_deg"] for s in g1.seams_fitted)
-            render_zebra([(f"G0 (crease up to {ang0:.3g} deg)", fitted_normals(g0)),
-                          (f"G1 (seam angle {ang1:.2g} deg)", fitted_normals(g1))], st.path("zebra.png"))
+            render_zebra(
+                [
+                    (f"G0 (crease up to {ang0:.3g} deg)", fitted_normals(g0)),
+                    (f"G1 (seam angle {ang1:.2g} deg)", fitted_normals(g1)),
+                ],
+                st.path("zebra.png"),
+            )
         outcome = finish(st, "envelope", rep, result=res)
     say(f"outputs in {out}/: {', '.join(outcome.files)}")
     return outcome

@@ -22,25 +22,46 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
     from ..flank_milling import flank, mean_normal
 
     surf, desc = _ruled_input(spec)
-    res = flank(surf, spec.tool, rule=spec.rule, setting=spec.setting, side=spec.side, whole=spec.whole,
-                tolerance=spec.tol, envelope_tolerance=spec.envelope_tol, study=spec.study,
-                radius_range=spec.radius_range, clearance=spec.clearance, progress=progress)
+    res = flank(
+        surf,
+        spec.tool,
+        rule=spec.rule,
+        setting=spec.setting,
+        side=spec.side,
+        whole=spec.whole,
+        tolerance=spec.tol,
+        envelope_tolerance=spec.envelope_tol,
+        study=spec.study,
+        radius_range=spec.radius_range,
+        clearance=spec.clearance,
+        progress=progress,
+    )
     st_, e, cutter = res.setting, res.interference, res.cutter
     rep = res.report()
     rep["surface"] = desc
-    say(f"surface: {desc}; rule u = {res.u_p:.6g} (fraction {spec.rule:g}), h_p = {st_.frame.h_p:.4f} mm, "
-        f"alpha0 = {st_.frame.alpha0_deg:.4f} deg; tool {cutter.spec()} (R = {res.R:g} mm), side {spec.side:+d}")
-    say(f"{spec.setting}: gamma = {st_.gamma_deg:.6f} deg, h0 = {st_.h0:.6f} mm, h1 = {st_.h1:.6f} mm"
-        + (f", phi = {st_.phi_deg:.6f} deg" if st_.phi_deg else ""))
+    say(
+        f"surface: {desc}; rule u = {res.u_p:.6g} (fraction {spec.rule:g}), h_p = {st_.frame.h_p:.4f} mm, "
+        f"alpha0 = {st_.frame.alpha0_deg:.4f} deg; tool {cutter.spec()} (R = {res.R:g} mm), side {spec.side:+d}"
+    )
+    say(
+        f"{spec.setting}: gamma = {st_.gamma_deg:.6f} deg, h0 = {st_.h0:.6f} mm, h1 = {st_.h1:.6f} mm"
+        + (f", phi = {st_.phi_deg:.6f} deg" if st_.phi_deg else "")
+    )
     for k in ("M0", "M1", "M2"):
         if k in st_.contacts:
             say(f"  {k} = ({', '.join(f'{x:.5f}' for x in st_.contacts[k])}) mm")
     w = e.worst()
-    say(f"interference: max gouge {e.max_gouge:.6g} mm, max undercut {e.max_undercut:.6g} mm, worst at v = "
-        f"{w['v']:.4f}, xyz ({', '.join(f'{x:.4f}' for x in w['xyz'])}) mm")
-    say("all settings on this rule: " + "; ".join(
-        f"{k} {v['max_abs_mm']:.4g} mm" if "max_abs_mm" in v else f"{k} not admissible"
-        for k, v in res.comparison.items()))
+    say(
+        f"interference: max gouge {e.max_gouge:.6g} mm, max undercut {e.max_undercut:.6g} mm, worst at v = "
+        f"{w['v']:.4f}, xyz ({', '.join(f'{x:.4f}' for x in w['xyz'])}) mm"
+    )
+    say(
+        "all settings on this rule: "
+        + "; ".join(
+            f"{k} {v['max_abs_mm']:.4g} mm" if "max_abs_mm" in v else f"{k} not admissible"
+            for k, v in res.comparison.items()
+        )
+    )
     code = EXIT_OK
     with Staging(out) as st:
         if res.path is not None:
@@ -55,14 +76,21 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
             if spec.render:
                 from ..viz import render_deviation
 
-                render_deviation(dev, st.path("deviation.png"), vtp_path=st.path("deviation.vtp"),
-                                 title=f"nominal vs envelope of {cutter.spec()} ({spec.setting}); red gouge, "
-                                       "blue undercut", tolerance=spec.tol, view_direction=mean_normal(surf, spec.side))
-            say(f"whole surface: {len(path.settings)} rules, max gouge {path.max_gouge:.4g} mm, max undercut "
+                render_deviation(
+                    dev,
+                    st.path("deviation.png"),
+                    vtp_path=st.path("deviation.vtp"),
+                    title=f"nominal vs envelope of {cutter.spec()} ({spec.setting}); red gouge, blue undercut",
+                    tolerance=spec.tol,
+                    view_direction=mean_normal(surf, spec.side),
+                )
+            say(
+                f"whole surface: {len(path.settings)} rules, max gouge {path.max_gouge:.4g} mm, max undercut "
                 f"{path.max_undercut:.4g} mm (rule u = {path.worst['rule_u']:.5g}); envelope {env.surface.shape[0]}x"
                 f"{env.surface.shape[1]} poles, fit error {env.max_error:.3g} mm; nominal vs envelope max "
-                f"{dev.max_abs:.4g} mm" + (f"; {len(path.discontinuities)} setting jump(s)"
-                                           if path.discontinuities else ""))
+                f"{dev.max_abs:.4g} mm"
+                + (f"; {len(path.discontinuities)} setting jump(s)" if path.discontinuities else "")
+            )
             if (res.whole_error_mm or 0.0) > spec.tol:
                 say(f"tolerance {spec.tol:g} mm NOT met on the whole surface")
                 code = EXIT_TOLERANCE
@@ -71,16 +99,31 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
             if spec.render:
                 from ..viz.plots import plot_ratio_curves
 
-                plot_ratio_curves(data["by_h_p"], st.path("study_h_p.png"), label_key="h_p_mm",
-                                  label_fmt="h_p = {:g} mm", title="hyperbolic paraboloid, alpha0 = 30 deg (fig. 9)")
-                plot_ratio_curves(data["by_alpha0"], st.path("study_alpha0.png"), label_key="alpha0_deg",
-                                  label_fmt="alpha0 = {:g} deg", title="hyperbolic paraboloid, h_p = 80 mm (fig. 10)")
+                plot_ratio_curves(
+                    data["by_h_p"],
+                    st.path("study_h_p.png"),
+                    label_key="h_p_mm",
+                    label_fmt="h_p = {:g} mm",
+                    title="hyperbolic paraboloid, alpha0 = 30 deg (fig. 9)",
+                )
+                plot_ratio_curves(
+                    data["by_alpha0"],
+                    st.path("study_alpha0.png"),
+                    label_key="alpha0_deg",
+                    label_fmt="alpha0 = {:g} deg",
+                    title="hyperbolic paraboloid, h_p = 80 mm (fig. 10)",
+                )
             say(f"parameter study: smallest ratio standard/optimum {data['min_ratio']:.3g}")
         if res.radius_range is not None:
             rr = res.radius_range
-            say(f"radius range for {spec.radius_range:g} mm: " + (
-                f"R in [{rr['R_min_mm']:.4g}, {rr['R_max_mm']:.4g}] mm after {len(rr['iterations'])} evaluations"
-                if rr["feasible"] else rr["message"]))
+            say(
+                f"radius range for {spec.radius_range:g} mm: "
+                + (
+                    f"R in [{rr['R_min_mm']:.4g}, {rr['R_max_mm']:.4g}] mm after {len(rr['iterations'])} evaluations"
+                    if rr["feasible"]
+                    else rr["message"]
+                )
+            )
         outcome = finish(st, "flank", rep, code, res)
     say(f"outputs in {out}/: {', '.join(outcome.files)}")
     return outcome

@@ -20,17 +20,34 @@ def run_info(spec: InfoJob, out, say: Say, progress=None) -> JobOutcome:
     say(f"{'idx':>3}  {'name':<16} {'type':<18} {'deg':>5} {'poles':>9} {'trim':>4} {'area mm2':>11}  uv bounds")
     for f in faces:
         s = f.surface
-        rows.append({
-            "index": f.index, "name": f.name, "source_type": f.source_type,
-            "degree_u": s.degree_u, "degree_v": s.degree_v, "poles_u": s.shape[0], "poles_v": s.shape[1],
-            "rational": s.is_rational, "trimmed": f.is_trimmed, "n_loops": len(f.loops),
-            "uv_bounds": list(f.uv_bounds), "area_mm2": f.area, "reversed": f.reversed,
-        })
-        say(f"{f.index:>3}  {f.name[:16]:<16} {f.source_type[:18]:<18} {s.degree_u:>2},{s.degree_v:<2} "
+        rows.append(
+            {
+                "index": f.index,
+                "name": f.name,
+                "source_type": f.source_type,
+                "degree_u": s.degree_u,
+                "degree_v": s.degree_v,
+                "poles_u": s.shape[0],
+                "poles_v": s.shape[1],
+                "rational": s.is_rational,
+                "trimmed": f.is_trimmed,
+                "n_loops": len(f.loops),
+                "uv_bounds": list(f.uv_bounds),
+                "area_mm2": f.area,
+                "reversed": f.reversed,
+            }
+        )
+        say(
+            f"{f.index:>3}  {f.name[:16]:<16} {f.source_type[:18]:<18} {s.degree_u:>2},{s.degree_v:<2} "
             f"{s.shape[0]:>4}x{s.shape[1]:<4} {'yes' if f.is_trimmed else 'no':>4} {f.area:>11.2f}  "
-            f"[{f.uv_bounds[0]:.4g}, {f.uv_bounds[1]:.4g}] x [{f.uv_bounds[2]:.4g}, {f.uv_bounds[3]:.4g}]")
-    report = {"part": str(spec.part), "n_faces": len(faces), "faces": rows,
-              "time_s": {"total_s": time.perf_counter() - t0}}
+            f"[{f.uv_bounds[0]:.4g}, {f.uv_bounds[1]:.4g}] x [{f.uv_bounds[2]:.4g}, {f.uv_bounds[3]:.4g}]"
+        )
+    report = {
+        "part": str(spec.part),
+        "n_faces": len(faces),
+        "faces": rows,
+        "time_s": {"total_s": time.perf_counter() - t0},
+    }
     with Staging(out) as st:
         outcome = finish(st, "info", report)
     say(f"report: {Path(out) / 'report.json'}")
@@ -72,8 +89,10 @@ def run_inspect(spec: InspectJob, out, say: Say, progress=None) -> JobOutcome:
     say(f"points measured: {rep['n_points']}")
     say(f"max |deviation| = {rep['max_abs_mm']:.6g} mm  (max {rep['max_mm']:.6g}, min {rep['min_mm']:.6g})")
     say(f"mean = {rep['mean_mm']:.6g} mm  RMS = {rep['rms_mm']:.6g} mm  p95 |dev| = {rep['p95_abs_mm']:.6g} mm")
-    say(f"worst at xyz = ({', '.join(f'{x:.4f}' for x in rep['worst_xyz_mm'])}) mm, "
-        f"uv = ({rep['worst_uv'][0]:.6f}, {rep['worst_uv'][1]:.6f})")
+    say(
+        f"worst at xyz = ({', '.join(f'{x:.4f}' for x in rep['worst_xyz_mm'])}) mm, "
+        f"uv = ({rep['worst_uv'][0]:.6f}, {rep['worst_uv'][1]:.6f})"
+    )
     if spec.tol is not None:
         say(f"tolerance {spec.tol:g} mm: {'met' if result.within_tolerance else 'NOT met'}")
     code = EXIT_TOLERANCE if (spec.tol is not None and not result.within_tolerance) else EXIT_OK
@@ -81,10 +100,21 @@ def run_inspect(spec: InspectJob, out, say: Say, progress=None) -> JobOutcome:
         if spec.render:
             from ..viz import render_deviation
 
-            render_deviation(result, st.path("deviation.png"), vtp_path=st.path("deviation.vtp"),
-                             title=f"{cand_path.name} vs {nominal.name}", tolerance=spec.tol)
-        report = {"nominal": str(spec.nominal), "face": nominal.index, "candidate": str(spec.candidate),
-                  "candidate_desc": cand_desc, "deviation": rep, "time_s": {"total_s": time.perf_counter() - t0}}
+            render_deviation(
+                result,
+                st.path("deviation.png"),
+                vtp_path=st.path("deviation.vtp"),
+                title=f"{cand_path.name} vs {nominal.name}",
+                tolerance=spec.tol,
+            )
+        report = {
+            "nominal": str(spec.nominal),
+            "face": nominal.index,
+            "candidate": str(spec.candidate),
+            "candidate_desc": cand_desc,
+            "deviation": rep,
+            "time_s": {"total_s": time.perf_counter() - t0},
+        }
         outcome = finish(st, "inspect", report, code, result)
     say(f"outputs in {out}/: {', '.join(outcome.files)}")
     return outcome

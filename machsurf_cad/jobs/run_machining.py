@@ -16,24 +16,41 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
     t0 = time.perf_counter()
     cutter = parse_cutter(spec.tool)
     face, desc = face_input(spec.part, spec.example, spec.face)
-    ms = machining_surface(face, cutter, axes=spec.axes, strategy=spec.strategy, lead=spec.lead, tilt=spec.tilt,
-                           axis=spec.axis, tolerance=spec.tol, loops=spec.loops, max_poles=spec.max_poles,
-                           tip=spec.tip, degree=(spec.degree, spec.degree), progress=progress)
+    ms = machining_surface(
+        face,
+        cutter,
+        axes=spec.axes,
+        strategy=spec.strategy,
+        lead=spec.lead,
+        tilt=spec.tilt,
+        axis=spec.axis,
+        tolerance=spec.tol,
+        loops=spec.loops,
+        max_poles=spec.max_poles,
+        tip=spec.tip,
+        degree=(spec.degree, spec.degree),
+        progress=progress,
+    )
     t_fit = time.perf_counter() - t0
     rep = ms.report()
     say(f"nominal: {desc}")
-    say(f"tool: {cutter.spec()} (r = {rep['r_mm']:g} mm, R_t = {rep['R_t_mm']:g} mm), {ms.axes} axes, "
-        f"{rep['strategy']}")
+    say(
+        f"tool: {cutter.spec()} (r = {rep['r_mm']:g} mm, R_t = {rep['R_t_mm']:g} mm), {ms.axes} axes, {rep['strategy']}"
+    )
     for key in ("S1", "S2"):
         f = rep[key]
         if f is None:
             continue
-        say(f"{f['name']}: degree {f['degrees'][0]}x{f['degrees'][1]}, {f['poles'][0]}x{f['poles'][1]} poles, "
-            f"max error {f['max_error_mm']:.3g} mm (tol {spec.tol:g}) on {f['n_check_points']} unseen points")
+        say(
+            f"{f['name']}: degree {f['degrees'][0]}x{f['degrees'][1]}, {f['poles'][0]}x{f['poles'][1]} poles, "
+            f"max error {f['max_error_mm']:.3g} mm (tol {spec.tol:g}) on {f['n_check_points']} unseen points"
+        )
     if ms.axes == 5:
-        say(f"axis orientation: alpha_max = {rep['alpha_max_deg_for_tolerance']:.4g} deg for the tolerance, "
+        say(
+            f"axis orientation: alpha_max = {rep['alpha_max_deg_for_tolerance']:.4g} deg for the tolerance, "
             f"{rep['alpha_max_deg_for_measured_errors']:.4g} deg for the measured errors; measured axis error "
-            f"{rep['axis_error_deg_measured']:.4g} deg")
+            f"{rep['axis_error_deg_measured']:.4g} deg"
+        )
     say("loops: " + ("none" if not ms.loops.found else "; ".join(r.describe() for r in ms.loops.regions)))
     tp = None
     with Staging(out) as st:
@@ -45,9 +62,14 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
             write_stl(st.path(f"{f.name}.stl"), [f], linear_deflection=spec.stl_deflection)
         dev = fit_deviation(ms, "S1")
         loops_pts = [(r.xyz, "magenta", f"{r.kind} loop ({r.surface})") for r in ms.loops.regions]
-        render_deviation(dev, st.path("deviation_S1.png"), vtp_path=st.path("deviation_S1.vtp"),
-                         title=f"S1 fit vs exact offset ({cutter.spec()})", tolerance=spec.tol,
-                         extra_points=loops_pts)
+        render_deviation(
+            dev,
+            st.path("deviation_S1.png"),
+            vtp_path=st.path("deviation_S1.vtp"),
+            title=f"S1 fit vs exact offset ({cutter.spec()})",
+            tolerance=spec.tol,
+            extra_points=loops_pts,
+        )
         rep["S1_deviation_map"] = dev.report()
         if spec.toolpath:
             from ..machining.toolpath import tool_paths
@@ -55,9 +77,11 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
             tp = tool_paths(ms, stepover=spec.stepover, chordal_tolerance=spec.chordal, clearance=spec.clearance)
             write_toolpath(st, tp, spec)
             rep["toolpath"] = tp.report()
-            say(f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions ({tp.n_positions} with approach and "
+            say(
+                f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions ({tp.n_positions} with approach and "
                 f"retract), chordal error {tp.info['chordal_error_measured_mm']:.3g} mm (tol {spec.chordal:g})"
-                + (", MULTAX (axis not +Z)" if tp.is_multiaxis else ""))
+                + (", MULTAX (axis not +Z)" if tp.is_multiaxis else "")
+            )
         rep["nominal"] = desc
         rep["time_s"] = {"fit_s": t_fit, "total_s": time.perf_counter() - t0}
         outcome = finish(st, "machining-surface", rep, result=ms)

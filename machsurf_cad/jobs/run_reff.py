@@ -19,25 +19,40 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
     face, desc = face_input(spec.part, spec.example, spec.face)
     dirs = parse_directions(spec.direction)
     compare = None if spec.compare == "none" else spec.compare
-    maps = reff_maps(face, cutter, directions=dirs, grid=spec.grid, compare=compare, scallop=spec.scallop,
-                     axes=spec.axes, lead=spec.lead, tilt=spec.tilt)
+    maps = reff_maps(
+        face,
+        cutter,
+        directions=dirs,
+        grid=spec.grid,
+        compare=compare,
+        scallop=spec.scallop,
+        axes=spec.axes,
+        lead=spec.lead,
+        tilt=spec.tilt,
+    )
     rep = maps.report()
     R = cutter.D / 2
-    say(f"face: {desc}; tool {cutter.spec()} (R = {R:g} mm, r = {rep['r_mm']:g} mm) vs "
+    say(
+        f"face: {desc}; tool {cutter.spec()} (R = {R:g} mm, r = {rep['r_mm']:g} mm) vs "
         f"{maps.compare.spec() if maps.compare else 'nothing'}; {maps.axes} axes"
         + (f", lead {spec.lead:g} deg, tilt {spec.tilt:g} deg" if maps.axes == 5 else "")
-        + f"; grid {spec.grid}x{spec.grid}; computed in {maps.time_s:.3f} s")
+        + f"; grid {spec.grid}x{spec.grid}; computed in {maps.time_s:.3f} s"
+    )
     for d in rep["directions"]:
-        line = (f"theta {d['theta_deg']:>6g} deg: R_eff min {d['r_eff_min_mm']:.4g} / mean {d['r_eff_mean_mm']:.4g} / "
-                f"max {d['r_eff_max_mm']:.4g} mm; torus beats ball on {100 * d['area_fraction_torus_beats_ball']:.1f} % "
-                f"of the area")
+        line = (
+            f"theta {d['theta_deg']:>6g} deg: R_eff min {d['r_eff_min_mm']:.4g} / mean {d['r_eff_mean_mm']:.4g} / "
+            f"max {d['r_eff_max_mm']:.4g} mm; torus beats ball on {100 * d['area_fraction_torus_beats_ball']:.1f} % "
+            f"of the area"
+        )
         if d.get("n_infinite_r_eff"):
             line += f"; {d['n_infinite_r_eff']} flat-spot sample(s) with infinite R_eff"
         say(line)
         if spec.scallop:
-            say(f"    step-over for scallop {spec.scallop:g} mm: torus {d['stepover_mean_mm']:.4g} mm, ball "
+            say(
+                f"    step-over for scallop {spec.scallop:g} mm: torus {d['stepover_mean_mm']:.4g} mm, ball "
                 f"{d['stepover_ball_mean_mm']:.4g} mm (ratio {d['stepover_ratio_mean']:.3f}); unreachable "
-                f"{d['n_unreachable']} sample(s)")
+                f"{d['n_unreachable']} sample(s)"
+            )
     with Staging(out) as st:
         if spec.render:
             from ..viz import render_scalar_map
@@ -45,22 +60,45 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
             mask = maps.inside if maps.face.is_trimmed else None
             for d in maps.directions:
                 tag = f"{d.theta_deg:g}".replace("-", "m")
-                extra = {"slope_deg": d.slope_deg, "alpha_deg": d.alpha_deg,
-                         "ratio_to_ball": np.nan_to_num(d.r_eff / maps.R_ball, posinf=1e300)}
+                extra = {
+                    "slope_deg": d.slope_deg,
+                    "alpha_deg": d.alpha_deg,
+                    "ratio_to_ball": np.nan_to_num(d.r_eff / maps.R_ball, posinf=1e300),
+                }
                 if d.stepover is not None:
-                    extra.update({"stepover_mm": np.nan_to_num(d.stepover, nan=-1, posinf=1e300),
-                                  "stepover_ball_mm": np.nan_to_num(d.stepover_ball, nan=-1, posinf=1e300)})
-                render_scalar_map(maps.points, d.r_eff, st.path(f"reff_theta{tag}.png"),
-                                  title=f"effective radius, {cutter.spec()}, theta = {d.theta_deg:g} deg\n"
-                                        f"white line: R_eff = {maps.R_ball:g} mm (ball)",
-                                  label="R_eff [mm]", clim=(rep["r_mm"] or 0.0, 2 * R), contour_level=maps.R_ball,
-                                  mask=mask, vtp_path=st.path(f"reff_theta{tag}.vtp"), extra_arrays=extra,
-                                  view="xy")
+                    extra.update(
+                        {
+                            "stepover_mm": np.nan_to_num(d.stepover, nan=-1, posinf=1e300),
+                            "stepover_ball_mm": np.nan_to_num(d.stepover_ball, nan=-1, posinf=1e300),
+                        }
+                    )
+                render_scalar_map(
+                    maps.points,
+                    d.r_eff,
+                    st.path(f"reff_theta{tag}.png"),
+                    title=f"effective radius, {cutter.spec()}, theta = {d.theta_deg:g} deg\n"
+                    f"white line: R_eff = {maps.R_ball:g} mm (ball)",
+                    label="R_eff [mm]",
+                    clim=(rep["r_mm"] or 0.0, 2 * R),
+                    contour_level=maps.R_ball,
+                    mask=mask,
+                    vtp_path=st.path(f"reff_theta{tag}.vtp"),
+                    extra_arrays=extra,
+                    view="xy",
+                )
             if maps.best_theta_deg is not None:
-                render_scalar_map(maps.points, maps.best_theta_deg, st.path("best_direction.png"),
-                                  title=f"best machining direction ({'step-over' if spec.scallop else 'R_eff'}), deg",
-                                  label="theta [deg]", clim=(min(dirs), max(dirs)), cmap="hsv", mask=mask,
-                                  vtp_path=st.path("best_direction.vtp"), view="xy")
+                render_scalar_map(
+                    maps.points,
+                    maps.best_theta_deg,
+                    st.path("best_direction.png"),
+                    title=f"best machining direction ({'step-over' if spec.scallop else 'R_eff'}), deg",
+                    label="theta [deg]",
+                    clim=(min(dirs), max(dirs)),
+                    cmap="hsv",
+                    mask=mask,
+                    vtp_path=st.path("best_direction.vtp"),
+                    view="xy",
+                )
         rep["face"] = desc
         rep["time_s"]["job_total_s"] = time.perf_counter() - t0
         outcome = finish(st, "reff", rep, result=maps)

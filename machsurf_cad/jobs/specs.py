@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, fields
-from typing import Literal, Optional
+from typing import Literal
 
 from ..errors import InputError
 
@@ -57,7 +57,7 @@ class JobSpec:
         return {"command": self.command, **asdict(self)}
 
     @classmethod
-    def from_mapping(cls, data: dict) -> "JobSpec":
+    def from_mapping(cls, data: dict) -> JobSpec:
         """Build from a mapping with these field names (unknown keys are an error)."""
         names = {f.name for f in fields(cls)}
         unknown = set(data) - names - {"command"}
@@ -85,8 +85,8 @@ class InspectJob(JobSpec):
     nominal: str = ""
     candidate: str = ""
     face: int = 0
-    candidate_face: Optional[int] = None
-    tol: Optional[float] = None
+    candidate_face: int | None = None
+    tol: float | None = None
     samples: int = 200
     render: bool = True
     command = "inspect"
@@ -101,15 +101,15 @@ class InspectJob(JobSpec):
 class MachiningSurfaceJob(_Post, JobSpec):
     """Guiding S1 and orientation S2 surfaces (Table 1 of Tournier et al.) and optionally a tool path."""
 
-    part: Optional[str] = None
-    example: Optional[str] = None
+    part: str | None = None
+    example: str | None = None
     face: int = 0
     tool: str = "ball:D=10"
     axes: int = 5
     strategy: str = "planes:x"
     lead: float = 0.0
     tilt: float = 0.0
-    axis: Optional[tuple] = None
+    axis: tuple | None = None
     tip: bool = False
     tol: float = 1e-3
     degree: int = 3
@@ -135,14 +135,14 @@ class MachiningSurfaceJob(_Post, JobSpec):
 class ReffJob(JobSpec):
     """Effective cutter radius (relation (30)) and step-over (31) maps over a face."""
 
-    part: Optional[str] = None
-    example: Optional[str] = None
+    part: str | None = None
+    example: str | None = None
     face: int = 0
     tool: str = "bull:D=10,r=2"
     compare: str = "ball"
     direction: str = "0"
     grid: int = 256
-    scallop: Optional[float] = None
+    scallop: float | None = None
     axes: int = 3
     lead: float = 0.0
     tilt: float = 0.0
@@ -158,10 +158,10 @@ class ReffJob(JobSpec):
 class FlankJob(_Post, JobSpec):
     """Flank milling settings of a cylindrical cutter on a ruled surface (Redonnet et al.)."""
 
-    part: Optional[str] = None
-    example: Optional[str] = None
+    part: str | None = None
+    example: str | None = None
     face: int = 0
-    fit_ruled: Optional[float] = None
+    fit_ruled: float | None = None
     tool: str = "cyl:D=20"
     rule: float = 0.5
     setting: Setting = "optimum"
@@ -170,7 +170,7 @@ class FlankJob(_Post, JobSpec):
     tol: float = 0.01
     envelope_tol: float = 1e-3
     study: bool = False
-    radius_range: Optional[float] = None
+    radius_range: float | None = None
     render: bool = True
     command = "flank"
 
@@ -191,8 +191,8 @@ class EnvelopeJob(_Post, JobSpec):
     """Swept envelopes of a rotational tool and G1/G0 adjacent passes (Aranda Bassegoda, eq. (21))."""
 
     tool: str = "cyl:D=10"
-    path: Optional[str] = None
-    example: Optional[str] = None
+    path: str | None = None
+    example: str | None = None
     passes: int = 2
     continuity: Continuity = "g1"
     theta: str = "0"
@@ -230,9 +230,22 @@ class DemoJob(JobSpec):
     command = "demo"
 
 
-SPECS: dict[str, type[JobSpec]] = {c.command: c for c in (InfoJob, InspectJob, MachiningSurfaceJob, ReffJob, FlankJob,
-                                                           EnvelopeJob, DemoJob)}
+SPECS: dict[str, type[JobSpec]] = {
+    c.command: c for c in (InfoJob, InspectJob, MachiningSurfaceJob, ReffJob, FlankJob, EnvelopeJob, DemoJob)
+}
 """Spec type by command name."""
 
-__all__ = ["JobSpec", "InfoJob", "InspectJob", "MachiningSurfaceJob", "ReffJob", "FlankJob", "EnvelopeJob", "DemoJob",
-           "SPECS", "LoopPolicy", "Continuity", "Setting"]
+__all__ = [
+    "JobSpec",
+    "InfoJob",
+    "InspectJob",
+    "MachiningSurfaceJob",
+    "ReffJob",
+    "FlankJob",
+    "EnvelopeJob",
+    "DemoJob",
+    "SPECS",
+    "LoopPolicy",
+    "Continuity",
+    "Setting",
+]

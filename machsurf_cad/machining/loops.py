@@ -36,13 +36,22 @@ class LoopRegion(Result):
 
     def describe(self) -> str:
         u0, u1, v0, v1 = self.uv_box
-        return (f"{self.kind} loop on {self.surface}: {self.n_samples} sample(s) in u [{u0:.4g}, {u1:.4g}] x "
-                f"v [{v0:.4g}, {v1:.4g}], worst at xyz ({', '.join(f'{x:.3f}' for x in self.worst_xyz)}) mm")
+        return (
+            f"{self.kind} loop on {self.surface}: {self.n_samples} sample(s) in u [{u0:.4g}, {u1:.4g}] x "
+            f"v [{v0:.4g}, {v1:.4g}], worst at xyz ({', '.join(f'{x:.3f}' for x in self.worst_xyz)}) mm"
+        )
 
     def report(self) -> dict:
-        return {"kind": self.kind, "surface": self.surface, "n_samples": self.n_samples, "uv_box": list(self.uv_box),
-                "xyz_box": [list(self.xyz_box[0]), list(self.xyz_box[1])], "worst_uv": list(self.worst_uv),
-                "worst_xyz": list(self.worst_xyz), "worst_value": self.worst_value}
+        return {
+            "kind": self.kind,
+            "surface": self.surface,
+            "n_samples": self.n_samples,
+            "uv_box": list(self.uv_box),
+            "xyz_box": [list(self.xyz_box[0]), list(self.xyz_box[1])],
+            "worst_uv": list(self.worst_uv),
+            "worst_xyz": list(self.worst_xyz),
+            "worst_value": self.worst_value,
+        }
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,9 +86,18 @@ def region_from_mask(kind: str, surface: str, mask: np.ndarray, U, V, xyz, value
         return None
     uu, vv, pts, val = U[mask], V[mask], xyz[mask], value[mask]
     w = int(np.argmax(val))
-    return LoopRegion(kind, surface, int(mask.sum()), (float(uu.min()), float(uu.max()), float(vv.min()), float(vv.max())),
-                      (pts.min(axis=0).tolist(), pts.max(axis=0).tolist()), (float(uu[w]), float(vv[w])),
-                      tuple(float(x) for x in pts[w]), float(val[w]), np.stack([uu, vv], 1), pts)
+    return LoopRegion(
+        kind,
+        surface,
+        int(mask.sum()),
+        (float(uu.min()), float(uu.max()), float(vv.min()), float(vv.max())),
+        (pts.min(axis=0).tolist(), pts.max(axis=0).tolist()),
+        (float(uu[w]), float(vv[w])),
+        tuple(float(x) for x in pts[w]),
+        float(val[w]),
+        np.stack([uu, vv], 1),
+        pts,
+    )
 
 
 def fold_mask(X: np.ndarray, us: np.ndarray, vs: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -113,8 +131,11 @@ def hole_loops(report: LoopReport, margin_cells: int = 2):
         g[:, :-1] |= grown[:, 1:]
         grown = g
     if grown[0, :].any() or grown[-1, :].any() or grown[:, 0].any() or grown[:, -1].any():
-        raise LoopError("a loop region reaches the edge of the face: it cannot be trimmed away as a hole; "
-                        "use loops='flag' or a smaller tool", report)
+        raise LoopError(
+            "a loop region reaches the edge of the face: it cannot be trimmed away as a hole; "
+            "use loops='flag' or a smaller tool",
+            report,
+        )
     gen = contourpy.contour_generator(x=report.vs, y=report.us, z=grown.astype(float), line_type="Separate")
     loops = []
     for line in gen.lines(0.5):

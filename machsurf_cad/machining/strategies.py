@@ -16,8 +16,10 @@ Sign conventions
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
+
+from typing import Any
 
 import numpy as np
 
@@ -66,8 +68,10 @@ class PlanesFeed:
         f = np.cross(frame.normal, np.asarray(self.plane_normal))
         bad = np.linalg.norm(f, axis=-1) < 1e-9
         if np.any(bad):
-            raise InputError("the guiding planes are tangent to the face somewhere (normal parallel to the "
-                             "plane normal): choose another plane direction")
+            raise InputError(
+                "the guiding planes are tangent to the face somewhere (normal parallel to the "
+                "plane normal): choose another plane direction"
+            )
         return _normalize(f)
 
     def describe(self) -> str:
@@ -100,7 +104,7 @@ class FixedAxis:
     """Fixed tool axis (3-axis: z; 3+2: any direction), unit vector."""
 
     direction: tuple = (0.0, 0.0, 1.0)
-    feed: object = None
+    feed: Any = None
 
     def __post_init__(self):
         object.__setattr__(self, "direction", tuple(_unit(self.direction, "tool axis")))
@@ -121,7 +125,7 @@ class LeadTilt:
 
     lead_deg: float
     tilt_deg: float
-    feed: object
+    feed: Any
 
     def __post_init__(self):
         for name in ("lead_deg", "tilt_deg"):
@@ -130,8 +134,10 @@ class LeadTilt:
                 raise InputError(f"{name.replace('_deg', '')} angle must be finite")
             object.__setattr__(self, name, x)
         if not -89.0 <= self.lead_deg <= 89.0:
-            raise InputError(f"lead angle {self.lead_deg:g} deg puts the axis at or below the tangent plane "
-                             "(|lead| must be <= 89 deg)")
+            raise InputError(
+                f"lead angle {self.lead_deg:g} deg puts the axis at or below the tangent plane "
+                "(|lead| must be <= 89 deg)"
+            )
 
     def axis(self, frame: LocalFrame) -> np.ndarray:
         f = self.feed.feed(frame)
@@ -149,7 +155,7 @@ class AxisField:
     """Axis given by the caller: ``func(u, v) -> (..., 3)`` (normalised here), broadcast over arrays."""
 
     func: Callable
-    feed: object = None
+    feed: Any = None
     label: str = "axis field"
 
     def axis(self, frame: LocalFrame) -> np.ndarray:
@@ -165,7 +171,7 @@ class AxisField:
         return self.label
 
     @classmethod
-    def from_grid(cls, axes, bounds, label: str = "axis field (grid)") -> "AxisField":
+    def from_grid(cls, axes, bounds, label: str = "axis field (grid)") -> AxisField:
         """Axis field from unit vectors on a uniform (nu, nv) grid over ``bounds``, interpolated bicubically."""
         from ..geometry.builders import interpolate_grid
 

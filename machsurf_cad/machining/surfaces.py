@@ -25,6 +25,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from typing import Any
+
 import numpy as np
 
 from ..approx import SurfaceFit, fit_surface
@@ -33,12 +35,12 @@ from ..errors import DegenerateGeometryError, InputError
 from ..geometry.bspline import BSplineSurface, unit_normals
 from ..geometry.differential import local_properties_grid
 from ..geometry.face import Face
+from ..results import Result
 from .loops import LoopError, LoopReport, fold_mask, region_from_mask
 from .strategies import AxisField, FixedAxis, IsoFeed, LeadTilt, LocalFrame, PlanesFeed, parse_strategy
-from ..results import Result
 
 _SIN_MIN_AXIS_TO_NORMAL = 1e-6  # |u x n| below this: v undefined (axis along the normal)
-_MIN_AXIS_ELEVATION_DEG = 1.0   # the axis must stay this far above the tangent plane
+_MIN_AXIS_ELEVATION_DEG = 1.0  # the axis must stay this far above the tangent plane
 
 
 _PURPOSE = "machining surfaces (Table 1)"
@@ -59,7 +61,7 @@ class MachiningMaps:
     face: Face
     cutter: Cutter
     axes: int
-    strategy: object
+    strategy: Any
     axis_length: float
     tip: bool = False
 
@@ -87,8 +89,9 @@ class MachiningMaps:
             raise DegenerateGeometryError(
                 f"the tool axis is within {_MIN_AXIS_ELEVATION_DEG:g} deg of the tangent plane (or below it) at "
                 f"{int(low.sum())} point(s), e.g. xyz {np.round(frame.point[low][0], 3).tolist()}: the "
-                f"{'fixed axis cannot reach this face' if self.axes == 3 else 'lead/tilt lays the tool on the surface'}",
-                {"uv": np.stack([frame.U[low], frame.V[low]], 1)[:20].tolist()})
+                + ("fixed axis cannot reach this face" if self.axes == 3 else "lead/tilt lays the tool on the surface"),
+                {"uv": np.stack([frame.U[low], frame.V[low]], 1)[:20].tolist()},
+            )
         return u
 
     def v_direction(self, u: np.ndarray, frame: LocalFrame) -> np.ndarray:
@@ -101,7 +104,8 @@ class MachiningMaps:
                 f"v = ((u x n)/|u x n|) x u is undefined where the tool axis is parallel to the face normal "
                 f"({int(bad.sum())} sample(s), e.g. xyz {where}): the flat/torus end touches along a circle there"
                 + ("; use a lead angle" if self.axes == 5 else "; the 3-axis point is singular at horizontal spots"),
-                {"uv": np.stack([frame.U[bad], frame.V[bad]], 1)[:20].tolist()})
+                {"uv": np.stack([frame.U[bad], frame.V[bad]], 1)[:20].tolist()},
+            )
         return np.cross(c / s[..., None], u)
 
     # ------------------------------------------------------------------ Table 1
@@ -138,7 +142,6 @@ class MachiningMaps:
         a non-zero winding number around a grid cell finds it even when no sample hits it.
         """
         em = self.cutter.end_mill_radii(_PURPOSE)
-        r, Rt = em.r, em.R_t
         if em.is_ball or (self.axes == 5 and isinstance(self.strategy, LeadTilt) and self.strategy.lead_deg != 0):
             return
         u0, u1, v0, v1 = self.face.uv_bounds
@@ -155,8 +158,12 @@ class MachiningMaps:
         def wrap(a):
             return (a + np.pi) % (2 * np.pi) - np.pi
 
-        wind = (wrap(ang[1:, :-1] - ang[:-1, :-1]) + wrap(ang[1:, 1:] - ang[1:, :-1])
-                + wrap(ang[:-1, 1:] - ang[1:, 1:]) + wrap(ang[:-1, :-1] - ang[:-1, 1:]))
+        wind = (
+            wrap(ang[1:, :-1] - ang[:-1, :-1])
+            + wrap(ang[1:, 1:] - ang[1:, :-1])
+            + wrap(ang[:-1, 1:] - ang[1:, 1:])
+            + wrap(ang[:-1, :-1] - ang[:-1, 1:])
+        )
         cells = np.argwhere(np.abs(wind) > np.pi)
         if cells.size:
             i, j = cells[0]
@@ -165,7 +172,8 @@ class MachiningMaps:
                 f"the tool axis is parallel to the face normal near xyz {where} (u ~ {us[i]:.4g}, v ~ {vs[j]:.4g}; "
                 f"{len(cells)} cell(s)): v = ((u x n)/|u x n|) x u is undefined there, the flat/torus end touches "
                 "along a circle" + ("; the 3-axis point is singular at horizontal spots" if self.axes == 3 else ""),
-                {"uv": [[float(us[a]), float(vs[b])] for a, b in cells[:20]]})
+                {"uv": [[float(us[a]), float(vs[b])] for a, b in cells[:20]]},
+            )
 
     def tool_axis(self, us, vs) -> np.ndarray:
         """Exact unit tool axis on the grid."""
@@ -189,7 +197,8 @@ def recover_axis(k: np.ndarray, cl: np.ndarray, n: np.ndarray, *, ball_length: f
     if np.any(bad):
         raise DegenerateGeometryError(
             f"tool axis undefined at {int(bad.sum())} point(s): K->C_L is parallel to the face normal "
-            "(axis tangent to the surface) or zero")
+            "(axis tangent to the surface) or zero"
+        )
     u = np.cross(w, c / s[..., None])
     return u / np.linalg.norm(u, axis=-1, keepdims=True)
 
@@ -205,7 +214,7 @@ class MachiningSurface(Result):
     nominal: Face
     cutter: Cutter
     axes: int
-    strategy: object
+    strategy: Any
     tolerance: float
     s1: Face
     s1_fit: SurfaceFit
@@ -231,11 +240,17 @@ class MachiningSurface(Result):
         r, Rt = em.r, em.R_t
         out = {
             "trimmed_holes": max(0, len(self.s1.loops) - max(1, len(self.nominal.loops))) if self.loops.found else 0,
-            "tool": self.cutter.to_dict(), "tool_kind": self.cutter.kind, "r_mm": r, "R_t_mm": Rt,
-            "axes": self.axes, "strategy": self.strategy.describe(), "tolerance_mm": self.tolerance,
-            "tip_location": self.tip, "axis_length_mm": self.axis_length if em.is_ball else None,
+            "tool": self.cutter.to_dict(),
+            "tool_kind": self.cutter.kind,
+            "r_mm": r,
+            "R_t_mm": Rt,
+            "axes": self.axes,
+            "strategy": self.strategy.describe(),
+            "tolerance_mm": self.tolerance,
+            "tip_location": self.tip,
+            "axis_length_mm": self.axis_length if em.is_ball else None,
             "S1": {"name": self.s1.name, **self.s1_fit.report()},
-            "S2": None if self.s2 is None else {"name": self.s2.name, **self.s2_fit.report()},
+            "S2": None if (self.s2 is None or self.s2_fit is None) else {"name": self.s2.name, **self.s2_fit.report()},
             "loops": self.loops.report(),
             "alpha_max_deg_for_tolerance": self.alpha_max_deg_tolerance,
             "alpha_max_deg_for_measured_errors": self.alpha_max_deg_measured,
@@ -259,10 +274,25 @@ def _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field):
     return LeadTilt(lead, tilt, feed)
 
 
-def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: float = 0.0, tilt: float = 0.0,
-                      axis=None, axis_field=None, tolerance: float = 1e-3, degree=(3, 3), max_poles: int = 40000,
-                      loops: str = "error", axis_length: float | None = None, tip: bool = False,
-                      loop_grid: int = 121, progress=None) -> MachiningSurface:
+def machining_surface(
+    face,
+    tool,
+    *,
+    axes: int = 5,
+    strategy="planes:x",
+    lead: float = 0.0,
+    tilt: float = 0.0,
+    axis=None,
+    axis_field=None,
+    tolerance: float = 1e-3,
+    degree=(3, 3),
+    max_poles: int = 40000,
+    loops: str = "error",
+    axis_length: float | None = None,
+    tip: bool = False,
+    loop_grid: int = 121,
+    progress=None,
+) -> MachiningSurface:
     """Guiding surface S1 and orientation surface S2 of a face, as certified B-spline faces.
 
     Parameters
@@ -310,7 +340,7 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
         raise InputError("tip=True is for 3-axis machining (5-axis S1 is the offset F + r n)")
     cutter = parse_cutter(tool) if isinstance(tool, str) else tool
     em = cutter.end_mill_radii(_PURPOSE)
-    r, Rt = em.r, em.R_t
+    Rt = em.R_t
     face = _as_face(face)
     strat = _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field)
     L = float(axis_length) if axis_length is not None else cutter.D
@@ -325,39 +355,82 @@ def machining_surface(face, tool, *, axes: int = 5, strategy="planes:x", lead: f
     report = detect_loops(maps, loop_grid)
     timings["loops_s"] = time.perf_counter() - t0
     if report.found and loops == "error":
-        raise LoopError("machining surface has loops (the tool would gouge): "
-                        + "; ".join(r_.describe() for r_ in report.regions)
-                        + ". Use a smaller corner radius, another strategy, or loops='flag' to export anyway",
-                        report)
+        raise LoopError(
+            "machining surface has loops (the tool would gouge): "
+            + "; ".join(r_.describe() for r_ in report.regions)
+            + ". Use a smaller corner radius, another strategy, or loops='flag' to export anyway",
+            report,
+        )
     t1 = time.perf_counter()
     brk = derived_breaks(face.surface, degree, derivative_loss=1)
-    s1_fit = fit_surface(maps.s1, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles, name="S1_guiding",
-                         breaks=brk, progress=progress)
+    s1_fit = fit_surface(
+        maps.s1,
+        bounds,
+        tolerance=tolerance,
+        degree=degree,
+        max_poles=max_poles,
+        name="S1_guiding",
+        breaks=brk,
+        progress=progress,
+    )
     timings["fit_S1_s"] = time.perf_counter() - t1
     s2_fit = None
     if axes == 5:
         t2 = time.perf_counter()
-        s2_fit = fit_surface(maps.s2, bounds, tolerance=tolerance, degree=degree, max_poles=max_poles,
-                             name="S2_orientation", breaks=brk, progress=progress)
+        s2_fit = fit_surface(
+            maps.s2,
+            bounds,
+            tolerance=tolerance,
+            degree=degree,
+            max_poles=max_poles,
+            name="S2_orientation",
+            breaks=brk,
+            progress=progress,
+        )
         timings["fit_S2_s"] = time.perf_counter() - t2
     trimmed = face
     if report.found and loops == "trim":
         from .loops import hole_loops
 
         outer = face.loops or (_box_loop(face.uv_bounds),)
-        trimmed = Face(face.surface, tuple(outer) + tuple(hole_loops(report)), face.name, face.index, face.reversed,
-                       face.source_type, face.uv_bounds, face.area)
+        trimmed = Face(
+            face.surface,
+            tuple(outer) + tuple(hole_loops(report)),
+            face.name,
+            face.index,
+            face.reversed,
+            face.source_type,
+            face.uv_bounds,
+            face.area,
+        )
     s1 = trimmed.with_surface(s1_fit.surface, "S1_guiding")
     s2 = trimmed.with_surface(s2_fit.surface, "S2_orientation") if s2_fit is not None else None
     axis_err = a_tol = a_meas = None
     if axes == 5:
+        assert s2_fit is not None  # 5 axes always fit S2
         axis_err = _measured_axis_error(maps, s1_fit.surface, s2_fit.surface, em.is_ball, L)
         lever = L if em.is_ball else Rt
         a_tol = math.degrees(math.atan(2 * tolerance / lever))
         a_meas = math.degrees(math.atan((s1_fit.max_error + s2_fit.max_error) / lever))
     timings["total_s"] = time.perf_counter() - t0
-    return MachiningSurface(face, cutter, axes, strat, float(tolerance), s1, s1_fit, s2, s2_fit, report, L, tip,
-                            axis_err, a_tol, a_meas, timings)
+    return MachiningSurface(
+        face,
+        cutter,
+        axes,
+        strat,
+        float(tolerance),
+        s1,
+        s1_fit,
+        s2,
+        s2_fit,
+        report,
+        L,
+        tip,
+        axis_err,
+        a_tol,
+        a_meas,
+        timings,
+    )
 
 
 def derived_breaks(surface: BSplineSurface, degree=(3, 3), derivative_loss: int = 1):
@@ -365,8 +438,10 @@ def derived_breaks(surface: BSplineSurface, degree=(3, 3), derivative_loss: int 
     ``derivative_loss``-th derivatives needs: the map is C^(k - loss) where the surface is C^k,
     so a fit of degree p gets multiplicity ``p - (k - loss)`` there (at least 1)."""
     out = []
-    for knots, mults, deg, p in ((surface.knots_u, surface.mults_u, surface.degree_u, degree[0]),
-                                 (surface.knots_v, surface.mults_v, surface.degree_v, degree[1])):
+    for knots, mults, deg, p in (
+        (surface.knots_u, surface.mults_u, surface.degree_u, degree[0]),
+        (surface.knots_v, surface.mults_v, surface.degree_v, degree[1]),
+    ):
         k_in = knots[1:-1]
         cont = deg - mults[1:-1] - derivative_loss
         m = np.clip(p - cont, 1, p)
@@ -405,8 +480,19 @@ def fit_deviation(ms: MachiningSurface, which: str = "S1", samples: int = 150):
         grid_points, grid_index = pts, np.nonzero(keep)[0]
         pts, ref, sg, uv = pts[keep], ref[keep], sg[keep], uv[keep]
     stats = deviation_stats(sg, pts, uv)
-    return DeviationResult(pts, sg, uv, ref, np.zeros(len(sg), bool), (samples, samples), None, ms.tolerance, stats,
-                           grid_points, grid_index)
+    return DeviationResult(
+        pts,
+        sg,
+        uv,
+        ref,
+        np.zeros(len(sg), bool),
+        (samples, samples),
+        None,
+        ms.tolerance,
+        stats,
+        grid_points,
+        grid_index,
+    )
 
 
 def _measured_axis_error(maps: MachiningMaps, s1: BSplineSurface, s2: BSplineSurface, is_ball: bool, L: float) -> float:
@@ -427,7 +513,7 @@ def detect_loops(maps: MachiningMaps, n: int = 121) -> LoopReport:
     """Local, fold and global loops of S1 (and S2) on an n x n grid inside the trimmed face."""
     face = maps.face
     em = maps.cutter.end_mill_radii(_PURPOSE)
-    r, Rt = em.r, em.R_t
+    r = em.r
     u0, u1, v0, v1 = face.uv_bounds
     us, vs = np.linspace(u0, u1, n), np.linspace(v0, v1, n)
     U, V = np.meshgrid(us, vs, indexing="ij")
@@ -496,5 +582,16 @@ def _near_edge(n: int) -> np.ndarray:
     return m
 
 
-__all__ = ["machining_surface", "MachiningSurface", "MachiningMaps", "recover_axis", "detect_loops",
-           "LoopError", "FixedAxis", "LeadTilt", "AxisField", "PlanesFeed", "IsoFeed"]
+__all__ = [
+    "machining_surface",
+    "MachiningSurface",
+    "MachiningMaps",
+    "recover_axis",
+    "detect_loops",
+    "LoopError",
+    "FixedAxis",
+    "LeadTilt",
+    "AxisField",
+    "PlanesFeed",
+    "IsoFeed",
+]

@@ -25,8 +25,16 @@ from .strategies import IsoFeed, PlanesFeed
 from .surfaces import MachiningSurface, recover_axis
 
 
-def tool_paths(ms: MachiningSurface, *, stepover: float, chordal_tolerance: float = 0.01, strategy=None,
-               grid: int = 401, zigzag: bool = True, clearance: float = 5.0) -> ToolPath:
+def tool_paths(
+    ms: MachiningSurface,
+    *,
+    stepover: float,
+    chordal_tolerance: float = 0.01,
+    strategy=None,
+    grid: int = 401,
+    zigzag: bool = True,
+    clearance: float = 5.0,
+) -> ToolPath:
     """Tool paths on S1: plane sections (``PlanesFeed``) or iso-parametric lines (``IsoFeed``).
 
     Parameters
@@ -69,7 +77,9 @@ def tool_paths(ms: MachiningSurface, *, stepover: float, chordal_tolerance: floa
         # iso lines: v = const for a feed along u; levels spaced by the S1 arc length across them
         across = vs if feed.direction == "u" else us
         d = s1.derivatives_grid(us, vs, 1)
-        speed = np.linalg.norm(d.sv if feed.direction == "u" else d.su, axis=-1).mean(axis=0 if feed.direction == "u" else 1)
+        speed = np.linalg.norm(d.sv if feed.direction == "u" else d.su, axis=-1).mean(
+            axis=0 if feed.direction == "u" else 1
+        )
         s_len = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * np.diff(across))])
         g = np.broadcast_to(V if feed.direction == "u" else U, U.shape).copy()
         kind = f"iso-{feed.direction}"
@@ -87,7 +97,10 @@ def tool_paths(ms: MachiningSurface, *, stepover: float, chordal_tolerance: floa
     import contourpy
 
     gen = contourpy.contour_generator(x=vs, y=us, z=g_masked, line_type="Separate")
-    tips, axes, ccs, extras = [], [], [], []
+    tips: list[np.ndarray] = []
+    axes: list[np.ndarray] = []
+    ccs: list[np.ndarray] = []
+    extras: list[dict] = []
     chord_err = 0.0
     axis_err = 0.0
     for level in levels:
@@ -107,15 +120,22 @@ def tool_paths(ms: MachiningSurface, *, stepover: float, chordal_tolerance: floa
             tips.append(p["tip"][idx])
             axes.append(p["axis"][idx])
             ccs.append(p["cc"][idx])
-            extras.append({"uv": uv[idx], "K": p["k"][idx], "CL": p["cl"][idx],
-                           "level": np.full(idx.size, float(level))})
+            extras.append(
+                {"uv": uv[idx], "K": p["k"][idx], "CL": p["cl"][idx], "level": np.full(idx.size, float(level))}
+            )
     if not tips:
         raise InputError("no tool pass crosses the face: reduce the step-over")
-    info = {"kind": kind, "stepover_mm": float(stepover), "chordal_tolerance_mm": float(chordal_tolerance),
-            "chordal_error_measured_mm": chord_err, "axis_error_deg_measured": axis_err if ms.axes == 5 else None,
-            "n_cut_positions": int(sum(t.shape[0] for t in tips))}
-    return ToolPath.from_passes(tips, axes, cc=ccs, extras=extras, clearance=clearance, cutter=ms.cutter,
-                                name="machining_surface", info=info)
+    info = {
+        "kind": kind,
+        "stepover_mm": float(stepover),
+        "chordal_tolerance_mm": float(chordal_tolerance),
+        "chordal_error_measured_mm": chord_err,
+        "axis_error_deg_measured": axis_err if ms.axes == 5 else None,
+        "n_cut_positions": int(sum(t.shape[0] for t in tips)),
+    }
+    return ToolPath.from_passes(
+        tips, axes, cc=ccs, extras=extras, clearance=clearance, cutter=ms.cutter, name="machining_surface", info=info
+    )
 
 
 def _densify(uv: np.ndarray, ms: MachiningSurface, level: float, kind: str, N) -> np.ndarray:
@@ -156,6 +176,7 @@ def _positions(ms: MachiningSurface, uv: np.ndarray) -> dict:
     k = ms.s1.surface.evaluate(uv[:, 0], uv[:, 1])
     maps = ms.maps
     if ms.axes == 5:
+        assert ms.s2 is not None  # 5 axes always have S2
         cl = ms.s2.surface.evaluate(uv[:, 0], uv[:, 1])
         axis = recover_axis(k, cl, n, ball_length=ms.axis_length if em.is_ball else None)
         if em.is_ball:

@@ -11,10 +11,30 @@ except ImportError as exc:  # pragma: no cover - exercised only without the kern
 
     raise InputError("the OpenCASCADE kernel (cadquery-ocp) is not installed: pip install 'machsurf_cad[occ]'") from exc
 
-from .convert import (check_valid, face_from_surface, from_cq_face, from_geom_surface, is_valid, to_cq_face,
-                      to_geom_surface)
+from .convert import (
+    check_valid,
+    face_from_surface,
+    from_cq_face,
+    from_geom_surface,
+    is_valid,
+    to_cq_face,
+    to_geom_surface,
+)
 from .mesh import read_stl, triangulate_face, write_stl
 from .step import read_step_face, read_step_faces, write_step
 
-__all__ = ["to_geom_surface", "from_geom_surface", "to_cq_face", "from_cq_face", "face_from_surface", "check_valid", "is_valid",
-           "read_step_faces", "read_step_face", "write_step", "write_stl", "read_stl", "triangulate_face"]
+__all__ = [
+    "to_geom_surface",
+    "from_geom_surface",
+    "to_cq_face",
+    "from_cq_face",
+    "face_from_surface",
+    "check_valid",
+    "is_valid",
+    "read_step_faces",
+    "read_step_face",
+    "write_step",
+    "write_stl",
+    "read_stl",
+    "triangulate_face",
+]

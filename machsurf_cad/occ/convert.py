@@ -69,8 +69,19 @@ def from_geom_surface(g, name: str = "") -> BSplineSurface:
     kv = [g.VKnot(i) for i in range(1, g.NbVKnots() + 1)]
     mv = [g.VMultiplicity(i) for i in range(1, g.NbVKnots() + 1)]
     rational = g.IsURational() or g.IsVRational()
-    return BSplineSurface(g.UDegree(), g.VDegree(), ku, mu, kv, mv, poles, weights if rational else None,
-                          g.IsUPeriodic(), g.IsVPeriodic(), name)
+    return BSplineSurface(
+        g.UDegree(),
+        g.VDegree(),
+        ku,
+        mu,
+        kv,
+        mv,
+        poles,
+        weights if rational else None,
+        g.IsUPeriodic(),
+        g.IsVPeriodic(),
+        name,
+    )
 
 
 def to_geom2d_curve(c: BSplineCurve) -> Geom2d_BSplineCurve:
@@ -149,14 +160,14 @@ def _wire_on_surface(loop: list[BSplineCurve], geom):
     return mk.Wire()
 
 
-def to_cq_face(face) -> "object":
+def to_cq_face(face) -> object:
     """A cadquery ``Face`` from a numpy :class:`~machsurf_cad.geometry.face.Face` (trimming kept)."""
     import cadquery as cq
 
     return cq.Face(face_from_surface(face.surface, [list(lp) for lp in face.loops] or None))
 
 
-def from_cq_face(cq_face, name: str = "") -> "object":
+def from_cq_face(cq_face, name: str = "") -> object:
     """A numpy :class:`~machsurf_cad.geometry.face.Face` from a cadquery ``Face`` (NURBS-converted)."""
     from .step import face_record
 

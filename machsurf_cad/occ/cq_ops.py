@@ -24,7 +24,7 @@ from ..machining import machining_surface
 from .convert import from_cq_face, to_cq_face
 
 
-def machining_surface_faces(face: "cq.Face", tool, **kwargs):
+def machining_surface_faces(face: cq.Face, tool, **kwargs):
     """S1 and S2 of a cadquery Face as cadquery Faces (trimmed like the input), plus the result.
 
     Keyword arguments are those of :func:`machsurf_cad.machining.machining_surface`
@@ -38,7 +38,7 @@ def machining_surface_faces(face: "cq.Face", tool, **kwargs):
 def machining_surface_op(tool, **kwargs):
     """A function for ``Workplane.invoke``: replaces the selected faces by their S1 (and S2) faces."""
 
-    def op(wp: "cq.Workplane") -> "cq.Workplane":
+    def op(wp: cq.Workplane) -> cq.Workplane:
         faces = [v for v in wp.vals() if isinstance(v, cq.Face)]
         if not faces:
             from ..errors import InputError

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-import numpy as np
 import cadquery as cq
+import numpy as np
 
 from ..geometry import builders
 from ..geometry.face import Face
@@ -40,8 +40,11 @@ def freeform_block():
     from OCP.GeomAbs import GeomAbs_BSplineSurface
     from OCP.GeomAdaptor import GeomAdaptor_Surface
 
-    names = [(f, "freeform_top") for f in iter_faces(solid.wrapped)
-             if GeomAdaptor_Surface(BRep_Tool.Surface_s(f)).GetType() == GeomAbs_BSplineSurface and _is_top(f)]
+    names = [
+        (f, "freeform_top")
+        for f in iter_faces(solid.wrapped)
+        if GeomAdaptor_Surface(BRep_Tool.Surface_s(f)).GetType() == GeomAbs_BSplineSurface and _is_top(f)
+    ]
     return solid, names
 
 

@@ -5,13 +5,17 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeWire
-from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+from OCP.BRepBuilderAPI import (
+    BRepBuilderAPI_MakeEdge,
+    BRepBuilderAPI_MakeFace,
+    BRepBuilderAPI_MakeWire,
+    BRepBuilderAPI_Transform,
+)
 from OCP.BRepGProp import BRepGProp
 from OCP.BRepPrimAPI import BRepPrimAPI_MakeRevol
 from OCP.GC import GC_MakeArcOfCircle, GC_MakeSegment
-from OCP.GProp import GProp_GProps
 from OCP.gp import gp_Ax1, gp_Ax3, gp_Dir, gp_Pnt, gp_Trsf
+from OCP.GProp import GProp_GProps
 
 from ..cutters import Cutter, LineSegment
 from ..errors import InputError
@@ -52,8 +56,7 @@ def cutter_solid(cutter: Cutter, *, tip=(0.0, 0.0, 0.0), axis=(0.0, 0.0, 1.0)):
     a = a / np.linalg.norm(a)
     trsf = gp_Trsf()
     ref = np.array([1.0, 0, 0]) if abs(a[0]) < 0.9 else np.array([0, 1.0, 0])
-    trsf.SetTransformation(gp_Ax3(gp_Pnt(*map(float, tip)), gp_Dir(*map(float, a)), gp_Dir(*map(float, ref))),
-                           gp_Ax3())
+    trsf.SetTransformation(gp_Ax3(gp_Pnt(*map(float, tip)), gp_Dir(*map(float, a)), gp_Dir(*map(float, ref))), gp_Ax3())
     solid = BRepBuilderAPI_Transform(solid, trsf.Inverted(), True).Shape()
     check_valid(solid, what=f"cutter solid {cutter.spec()}")
     return solid

@@ -27,8 +27,17 @@ from .convert import face_from_surface, from_geom_surface, pcurve_of_edge
 from .quiet import quiet_occt
 
 _SURFACE_TYPES = {
-    0: "Plane", 1: "Cylinder", 2: "Cone", 3: "Sphere", 4: "Torus", 5: "BezierSurface", 6: "BSplineSurface",
-    7: "SurfaceOfRevolution", 8: "SurfaceOfExtrusion", 9: "OffsetSurface", 10: "OtherSurface",
+    0: "Plane",
+    1: "Cylinder",
+    2: "Cone",
+    3: "Sphere",
+    4: "Torus",
+    5: "BezierSurface",
+    6: "BSplineSurface",
+    7: "SurfaceOfRevolution",
+    8: "SurfaceOfExtrusion",
+    9: "OffsetSurface",
+    10: "OtherSurface",
 }
 
 
@@ -85,12 +94,23 @@ def face_record(face, index: int, name: str) -> Face:
             loops.append(loop)
     # a face whose only loop runs along its parameter box is untrimmed: keep the plain form
     sb = surface.bounds
-    natural = len(loops) == 1 and all(abs(a - b) < 1e-9 for a, b in zip((u0, u1, v0, v1), sb)) and \
-        all(_on_box(c, sb) for c in loops[0])
+    natural = (
+        len(loops) == 1
+        and all(abs(a - b) < 1e-9 for a, b in zip((u0, u1, v0, v1), sb))
+        and all(_on_box(c, sb) for c in loops[0])
+    )
     props = GProp_GProps()
     BRepGProp.SurfaceProperties_s(face, props)
-    return Face(surface, () if natural else tuple(tuple(lp) for lp in loops), name, index,
-                face.Orientation() == TopAbs_REVERSED, source_type, (u0, u1, v0, v1), float(props.Mass()))
+    return Face(
+        surface,
+        () if natural else tuple(tuple(lp) for lp in loops),
+        name,
+        index,
+        face.Orientation() == TopAbs_REVERSED,
+        source_type,
+        (u0, u1, v0, v1),
+        float(props.Mass()),
+    )
 
 
 def _on_box(curve, box, tol=1e-9) -> bool:
@@ -98,8 +118,12 @@ def _on_box(curve, box, tol=1e-9) -> bool:
 
     uv = curve.evaluate(np.linspace(*curve.bounds, 7))
     u0, u1, v0, v1 = box
-    return bool(np.all(np.isclose(uv[:, 0], u0, atol=tol)) or np.all(np.isclose(uv[:, 0], u1, atol=tol))
-                or np.all(np.isclose(uv[:, 1], v0, atol=tol)) or np.all(np.isclose(uv[:, 1], v1, atol=tol)))
+    return bool(
+        np.all(np.isclose(uv[:, 0], u0, atol=tol))
+        or np.all(np.isclose(uv[:, 0], u1, atol=tol))
+        or np.all(np.isclose(uv[:, 1], v0, atol=tol))
+        or np.all(np.isclose(uv[:, 1], v1, atol=tol))
+    )
 
 
 def _iter(shape, kind):

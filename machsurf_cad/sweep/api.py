@@ -33,23 +33,34 @@ class EnvelopeResult(Result):
     def report(self) -> dict:
         rep = self.chain.report()
         rep["chain_time_s"] = rep.pop("time_s")
-        rep.update({"tool": self.chain.passes[0].cutter.to_dict(), "motion": self.chain.passes[0].motion.label,
-                    "toolpath": self.toolpath.report(), "time_s": dict(self.time_s or {})})
+        rep.update(
+            {
+                "tool": self.chain.passes[0].cutter.to_dict(),
+                "motion": self.chain.passes[0].motion.label,
+                "toolpath": self.toolpath.report(),
+                "time_s": dict(self.time_s or {}),
+            }
+        )
         if self.max_theta_deg is not None:
             rep["max_theta_deg"] = self.max_theta_deg
         if self.other is not None:
-            rep["other_continuity"] = {"continuity": self.other.continuity, "seams": [
-                {"fitted": s} for s in self.other.seams_fitted]}
+            rep["other_continuity"] = {
+                "continuity": self.other.continuity,
+                "seams": [{"fitted": s} for s in self.other.seams_fitted],
+            }
         return rep
 
 
-def chain_toolpath(chain: PassChain, *, chordal_tolerance: float = 0.01, n_dense: int = 2001,
-                   clearance: float = 5.0) -> ToolPath:
+def chain_toolpath(
+    chain: PassChain, *, chordal_tolerance: float = 0.01, n_dense: int = 2001, clearance: float = 5.0
+) -> ToolPath:
     """The passes' motions as the one :class:`ToolPath` type: tip and axis sampled densely along each
     pass, kept where the chords stay within ``chordal_tolerance`` mm of the dense tip path (measured)."""
     if not chordal_tolerance > 0:
         raise InputError("chordal tolerance must be > 0 mm")
-    tips, axes, extras = [], [], []
+    tips: list[np.ndarray] = []
+    axes: list[np.ndarray] = []
+    extras: list[dict] = []
     err = 0.0
     for e in chain.passes:
         t = np.linspace(*e.motion.t_range, n_dense)
@@ -62,15 +73,31 @@ def chain_toolpath(chain: PassChain, *, chordal_tolerance: float = 0.01, n_dense
         axes.append(A[idx])
         extras.append({"t": t[idx]})
     tools = sorted({e.cutter.spec() for e in chain.passes})
-    return ToolPath.from_passes(tips, axes, extras=extras, clearance=clearance, cutter=chain.passes[0].cutter,
-                                name="envelope_passes",
-                                info={"chordal_tolerance_mm": float(chordal_tolerance), "chordal_error_measured_mm": err,
-                                      "tools": tools})
+    return ToolPath.from_passes(
+        tips,
+        axes,
+        extras=extras,
+        clearance=clearance,
+        cutter=chain.passes[0].cutter,
+        name="envelope_passes",
+        info={"chordal_tolerance_mm": float(chordal_tolerance), "chordal_error_measured_mm": err, "tools": tools},
+    )
 
 
-def envelope(tool, motion: Motion, *, passes: int = 1, continuity: Continuity = "g1", theta_deg=0.0,
-             tolerance: float = 1e-3, side: int = 1, theta_scan: bool = False, compare: bool = False,
-             chordal_tolerance: float = 0.01, clearance: float = 5.0) -> EnvelopeResult:
+def envelope(
+    tool,
+    motion: Motion,
+    *,
+    passes: int = 1,
+    continuity: Continuity = "g1",
+    theta_deg=0.0,
+    tolerance: float = 1e-3,
+    side: int = 1,
+    theta_scan: bool = False,
+    compare: bool = False,
+    chordal_tolerance: float = 0.01,
+    clearance: float = 5.0,
+) -> EnvelopeResult:
     """Swept envelopes of a rotational tool along a motion, chained G1 or G0 (Aranda Bassegoda, eq. (21)).
 
     Parameters
@@ -90,7 +117,7 @@ def envelope(tool, motion: Motion, *, passes: int = 1, continuity: Continuity = 
     side : {1, -1}
         Envelope sheet of the first pass.
     theta_scan : bool
-        Also scan the largest admissible |theta| (5 deg steps).
+        Also scan the largest admissible abs(theta) (5 deg steps).
     compare : bool
         Also build the chain with the other continuity (for a G0/G1 comparison).
     chordal_tolerance, clearance : float
@@ -120,8 +147,9 @@ def envelope(tool, motion: Motion, *, passes: int = 1, continuity: Continuity = 
     chain = build_chain(first, passes, continuity=continuity, theta_deg=th, tolerance=tolerance)
     other = None
     if compare and passes > 1:
-        other = build_chain(first, passes, continuity="g0" if continuity == "g1" else "g1", theta_deg=th,
-                            tolerance=tolerance)
+        other = build_chain(
+            first, passes, continuity="g0" if continuity == "g1" else "g1", theta_deg=th, tolerance=tolerance
+        )
     mt = max_theta(first, continuity=continuity) if (theta_scan and passes > 1) else None
     tp = chain_toolpath(chain, chordal_tolerance=chordal_tolerance, clearance=clearance)
     return EnvelopeResult(chain, tp, other, mt, {"total_s": time.perf_counter() - t0})

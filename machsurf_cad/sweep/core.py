@@ -19,8 +19,8 @@ A ball end (a single sphere, ``a0 == a1``) sweeps a canal surface, parameterised
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -83,7 +83,7 @@ class Motion:
             return (da - np.einsum("...i,...i->...", u, da)[..., None] * u) / na
         return self._d(self.A, t)
 
-    def frozen(self, n: int = 2001, k: int = 7) -> "Motion":
+    def frozen(self, n: int = 2001, k: int = 7) -> Motion:
         """The same motion as interpolating splines of degree ``k`` through ``n`` samples, with exact
         spline derivatives: chained passes then cost the same as the first (no nested differences).
         The interpolation error is measured and kept in the label."""
@@ -97,9 +97,14 @@ class Motion:
         dT_, dA_ = sT.derivative(), sA.derivative()
         mid = 0.5 * (ts[1:] + ts[:-1])
         err = float(np.linalg.norm(sT(mid) - self.T(mid), axis=1).max())
-        return Motion(lambda t: sT(np.clip(t, t0, t1)), lambda t: sA(np.clip(t, t0, t1)), self.t_range,
-                      f"{self.label} (spline, interpolation error {err:.2g} mm)", lambda t: dT_(np.clip(t, t0, t1)),
-                      lambda t: dA_(np.clip(t, t0, t1)))
+        return Motion(
+            lambda t: sT(np.clip(t, t0, t1)),
+            lambda t: sA(np.clip(t, t0, t1)),
+            self.t_range,
+            f"{self.label} (spline, interpolation error {err:.2g} mm)",
+            lambda t: dT_(np.clip(t, t0, t1)),
+            lambda t: dA_(np.clip(t, t0, t1)),
+        )
 
     def _d(self, f, t):
         t = np.asarray(t, float)
@@ -109,16 +114,20 @@ class Motion:
 
     # ------------------------------------------------------------------ builders
     @classmethod
-    def line(cls, start, end, axis=(0.0, 0.0, 1.0), label="line") -> "Motion":
+    def line(cls, start, end, axis=(0.0, 0.0, 1.0), label="line") -> Motion:
         """Straight tip path from ``start`` to ``end`` (t in [0, 1]) with a constant axis."""
         s, e, a = (np.asarray(x, float) for x in (start, end, axis))
         if np.linalg.norm(a) == 0:
             raise InputError("zero-length axis vector")
-        return cls(lambda t: s + np.asarray(t)[..., None] * (e - s), lambda t: np.broadcast_to(a, np.shape(t) + (3,)),
-                   (0.0, 1.0), label)
+        return cls(
+            lambda t: s + np.asarray(t)[..., None] * (e - s),
+            lambda t: np.broadcast_to(a, np.shape(t) + (3,)),
+            (0.0, 1.0),
+            label,
+        )
 
     @classmethod
-    def from_points(cls, points, axes=None, axis=(0.0, 0.0, 1.0), label="CL points") -> "Motion":
+    def from_points(cls, points, axes=None, axis=(0.0, 0.0, 1.0), label="CL points") -> Motion:
         """Cubic interpolation of cutter-location (tip) points, with per-point axes or a constant one."""
         from ..geometry.builders import interpolate_curve
 
@@ -133,8 +142,12 @@ class Motion:
             a = np.asarray(axis, float)
             if np.linalg.norm(a) == 0:
                 raise InputError("zero-length axis vector")
-            return cls(lambda t: c.evaluate(np.clip(t, 0, 1)), lambda t: np.broadcast_to(a, np.shape(t) + (3,)),
-                       (0.0, 1.0), label)
+            return cls(
+                lambda t: c.evaluate(np.clip(t, 0, 1)),
+                lambda t: np.broadcast_to(a, np.shape(t) + (3,)),
+                (0.0, 1.0),
+                label,
+            )
         ax = np.asarray(axes, float)
         if ax.shape != pts.shape or np.any(np.linalg.norm(ax, axis=1) == 0):
             raise InputError("one non-zero axis vector per path point is needed")
@@ -143,7 +156,7 @@ class Motion:
         return cls(lambda t: c.evaluate(np.clip(t, 0, 1)), lambda t: ca.evaluate(np.clip(t, 0, 1)), (0.0, 1.0), label)
 
     @classmethod
-    def interpolated_axis(cls, tip, axis0, axis1, t_range=(0.0, 1.0), label="motion") -> "Motion":
+    def interpolated_axis(cls, tip, axis0, axis1, t_range=(0.0, 1.0), label="motion") -> Motion:
         """Axis turning uniformly (great-circle) from ``axis0`` to ``axis1`` over the t range."""
         a0, a1 = (_unit(np.asarray(x, float)) for x in (axis0, axis1))
         om = math.acos(float(np.clip(a0 @ a1, -1, 1)))
@@ -211,8 +224,9 @@ class Envelope(Result):
             e1 = A - np.einsum("...i,...i->...", A, tau)[..., None] * tau
             ne = np.linalg.norm(e1, axis=-1, keepdims=True)
             if np.any(ne < 1e-12):
-                raise DegenerateGeometryError("the ball's path is parallel to the tool axis: the angle reference "
-                                              "around the path is undefined")
+                raise DegenerateGeometryError(
+                    "the ball's path is parallel to the tool axis: the angle reference around the path is undefined"
+                )
             e1 = e1 / ne
             e2 = np.cross(tau, e1) * self.side
             ph = np.radians(a)[..., None]
@@ -225,7 +239,8 @@ class Envelope(Result):
             bad = det <= 1e-24 * g11 * np.maximum(g22, 1e-300)
             raise DegenerateGeometryError(
                 f"S_a and S_t are parallel at {int(bad.sum())} sample(s) (the path runs along the tool axis, or "
-                f"P'(t) = 0), e.g. t = {float(t[bad][0]):.6g}: the envelope degenerates")
+                f"P'(t) = 0), e.g. t = {float(t[bad][0]):.6g}: the envelope degenerates"
+            )
         A11 = g22 / det
         A21 = -g12 / det
         disc = 1.0 - ra * ra * A11
@@ -233,13 +248,18 @@ class Envelope(Result):
         if check and not np.all(ok):
             bad = ~ok
             raise DegenerateGeometryError(
-                f"no real envelope at {int(bad.sum())} sample(s): 1 - r'^2 A11 < 0 (e.g. a = {float(a[bad][0]):.6g} mm, "
+                f"no real envelope at {int(bad.sum())} sample(s): 1 - r'^2 A11 < 0 "
+                f"(e.g. a = {float(a[bad][0]):.6g} mm, "
                 f"t = {float(t[bad][0]):.6g}); the motion runs too close to the axis for this "
                 f"{'cone' if self.segment.kind == 'cone' else 'profile'}",
-                {"at": np.stack([a[bad], t[bad]], 1)[:20].tolist()})
+                {"at": np.stack([a[bad], t[bad]], 1)[:20].tolist()},
+            )
         ns = _unit(np.cross(Sa, St))
-        n = (-A11 * ra)[..., None] * Sa + (-A21 * ra)[..., None] * St + (self.side * np.sqrt(np.maximum(disc, 0)))[
-            ..., None] * ns
+        n = (
+            (-A11 * ra)[..., None] * Sa
+            + (-A21 * ra)[..., None] * St
+            + (self.side * np.sqrt(np.maximum(disc, 0)))[..., None] * ns
+        )
         return n, ok
 
     def points(self, a, t):
@@ -249,7 +269,7 @@ class Envelope(Result):
         return S + r[..., None] * n
 
     def grid(self, as_, ts):
-        """X on the grid ``as_ x ts``, shape (len(as_), len(ts), 3) (for the approximation engine)."""
+        """X on the grid of ``as_`` by ``ts``, shape ``(len(as_), len(ts), 3)`` (for the approximation engine)."""
         A_, T_ = np.meshgrid(np.asarray(as_, float), np.asarray(ts, float), indexing="ij")
         return self.points(A_, T_)
 
@@ -275,8 +295,16 @@ def make_envelope(motion: Motion, tool, *, side: int = 1, segment="side", a_rang
 
 
 # ----------------------------------------------------------------------------- adjacent passes
-def next_pass(prev: Envelope, tool=None, *, continuity: str = "g1", theta_deg: float = 0.0, kink_deg: float = 10.0,
-              side: int | None = None, name: str | None = None) -> Envelope:
+def next_pass(
+    prev: Envelope,
+    tool=None,
+    *,
+    continuity: str = "g1",
+    theta_deg: float = 0.0,
+    kink_deg: float = 10.0,
+    side: int | None = None,
+    name: str | None = None,
+) -> Envelope:
     """The next pass, whose ``a0`` end joins ``prev``'s ``a1`` end (Corollaries 5.2, 5.3, 5.5).
 
     G1: ``T2(t) + a0 A2(t) = S1(a1, t) + (r1(a1) - r2(a0)) n1(a1, t)`` (eq. (39)/(35)) and
@@ -320,8 +348,11 @@ def next_pass(prev: Envelope, tool=None, *, continuity: str = "g1", theta_deg: f
         if continuity == "g0":
             tau = _unit(m1._d(lambda s: seam(s)[3], t))
             kk = math.radians(kink_deg)
-            a2 = (a2 * math.cos(kk) + np.cross(tau, a2) * math.sin(kk)
-                  + tau * np.einsum("...i,...i->...", tau, a2)[..., None] * (1 - math.cos(kk)))
+            a2 = (
+                a2 * math.cos(kk)
+                + np.cross(tau, a2) * math.sin(kk)
+                + tau * np.einsum("...i,...i->...", tau, a2)[..., None] * (1 - math.cos(kk))
+            )
         return a2
 
     def tip2(t):
@@ -364,8 +395,13 @@ def seam_report(e1: Envelope, e2: Envelope, n: int = 401) -> dict:
     n2 = e2.normals(np.full(n, e2.a_range[0]), t)[0]
     gap = np.linalg.norm(x1 - x2, axis=1)
     ang = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", n1, n2), -1, 1)))
-    return {"max_gap_mm": float(gap.max()), "max_normal_angle_deg": float(ang.max()), "n_samples": n,
-            "worst_t_gap": float(t[np.argmax(gap)]), "worst_t_angle": float(t[np.argmax(ang)])}
+    return {
+        "max_gap_mm": float(gap.max()),
+        "max_normal_angle_deg": float(ang.max()),
+        "n_samples": n,
+        "worst_t_gap": float(t[np.argmax(gap)]),
+        "worst_t_angle": float(t[np.argmax(ang)]),
+    }
 
 
 def fold_check(e1: Envelope, e2: Envelope, n: int = 201) -> dict:
@@ -378,8 +414,13 @@ def fold_check(e1: Envelope, e2: Envelope, n: int = 201) -> dict:
     A, T = np.meshgrid(np.linspace(*e2.a_range, 41), t, indexing="ij")
     _, ok = e2.normals(A, T, check=False)
     if not ok.all():
-        return {"folds_back": False, "fold_t": [], "min_cos_between_strips": None, "real_envelope": False,
-                "n_no_envelope": int((~ok).sum())}
+        return {
+            "folds_back": False,
+            "fold_t": [],
+            "min_cos_between_strips": None,
+            "real_envelope": False,
+            "n_no_envelope": int((~ok).sum()),
+        }
     h1 = 1e-4 * (e1.a_range[1] - e1.a_range[0])
     h2 = 1e-4 * (e2.a_range[1] - e2.a_range[0])
     a1, a0 = e1.a_range[1], e2.a_range[0]
@@ -387,5 +428,10 @@ def fold_check(e1: Envelope, e2: Envelope, n: int = 201) -> dict:
     d2 = (e2.points(np.full(n, a0 + h2), t) - e2.points(np.full(n, a0), t)) / h2
     cosang = np.einsum("ij,ij->i", _unit(d1), _unit(d2))
     folds = cosang < 0
-    return {"folds_back": bool(folds.any()), "fold_t": t[folds].tolist()[:20],
-            "min_cos_between_strips": float(cosang.min()), "real_envelope": True, "n_no_envelope": 0}
+    return {
+        "folds_back": bool(folds.any()),
+        "fold_t": t[folds].tolist()[:20],
+        "min_cos_between_strips": float(cosang.min()),
+        "real_envelope": True,
+        "n_no_envelope": 0,
+    }

@@ -8,8 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..approx import SurfaceFit, fit_surface
-from .core import Envelope, fold_check, next_pass, seam_report
 from ..results import Result
+from .core import Envelope, fold_check, next_pass, seam_report
 
 
 @dataclass(frozen=True, eq=False)
@@ -27,11 +27,21 @@ class PassChain(Result):
     def report(self) -> dict:
         return {
             "continuity": self.continuity,
-            "passes": [{"name": e.name, "tool": e.cutter.spec(), "a_range": list(e.a_range),
-                        "t_range": list(e.motion.t_range), "side": e.side, "fit": f.report()}
-                       for e, f in zip(self.passes, self.fits)],
-            "seams": [{"between": [i, i + 1], "exact": s, "fitted": sf, "fold_check": fc}
-                      for i, (s, sf, fc) in enumerate(zip(self.seams_exact, self.seams_fitted, self.folds))],
+            "passes": [
+                {
+                    "name": e.name,
+                    "tool": e.cutter.spec(),
+                    "a_range": list(e.a_range),
+                    "t_range": list(e.motion.t_range),
+                    "side": e.side,
+                    "fit": f.report(),
+                }
+                for e, f in zip(self.passes, self.fits)
+            ],
+            "seams": [
+                {"between": [i, i + 1], "exact": s, "fitted": sf, "fold_check": fc}
+                for i, (s, sf, fc) in enumerate(zip(self.seams_exact, self.seams_fitted, self.folds))
+            ],
             "time_s": self.timings,
         }
 
@@ -58,8 +68,17 @@ def fitted_seam(f1: SurfaceFit, f2: SurfaceFit, n: int = 401) -> dict:
     return {"max_gap_mm": float(gap.max()), "max_normal_angle_deg": float(ang.max()), "n_samples": n}
 
 
-def build_chain(first: Envelope, n_passes: int = 2, *, continuity: str = "g1", theta_deg=0.0, tools=None,
-                tolerance: float = 1e-3, max_poles: int = 40000, kink_deg: float = 10.0) -> PassChain:
+def build_chain(
+    first: Envelope,
+    n_passes: int = 2,
+    *,
+    continuity: str = "g1",
+    theta_deg=0.0,
+    tools=None,
+    tolerance: float = 1e-3,
+    max_poles: int = 40000,
+    kink_deg: float = 10.0,
+) -> PassChain:
     """``n_passes`` passes from ``first``, each from the previous by :func:`next_pass`; every pass is
     fitted within ``tolerance`` and every seam measured before and after fitting.
 
@@ -75,16 +94,21 @@ def build_chain(first: Envelope, n_passes: int = 2, *, continuity: str = "g1", t
     folds = []
     for k in range(n_passes - 1):
         tool = None if tools is None else tools[k]
-        nxt = next_pass(envs[-1], tool, continuity=continuity, theta_deg=thetas[k], kink_deg=kink_deg,
-                        name=f"pass_{k + 2}")
+        nxt = next_pass(
+            envs[-1], tool, continuity=continuity, theta_deg=thetas[k], kink_deg=kink_deg, name=f"pass_{k + 2}"
+        )
         fc = fold_check(envs[-1], nxt)
         folds.append(fc)
         if fc["folds_back"] or not fc["real_envelope"]:
             raise InputError(
                 f"pass {k + 2} with theta = {thetas[k]:g} deg "
-                + ("folds back over pass %d (at t = %s)" % (k + 1, ", ".join(f"{x:.3g}" for x in fc["fold_t"][:3]))
-                   if fc["folds_back"] else f"has no real envelope at {fc['n_no_envelope']} sample(s)")
-                + ": choose a smaller |theta|")
+                + (
+                    f"folds back over pass {k + 1} (at t = {', '.join(f'{x:.3g}' for x in fc['fold_t'][:3])})"
+                    if fc["folds_back"]
+                    else f"has no real envelope at {fc['n_no_envelope']} sample(s)"
+                )
+                + ": choose a smaller |theta|"
+            )
         envs.append(nxt)
     envs[0] = Envelope(first.motion, first.cutter, first.segment, first.side, first.a_range, "pass_1")
     t_build = time.perf_counter() - t0
@@ -95,12 +119,13 @@ def build_chain(first: Envelope, n_passes: int = 2, *, continuity: str = "g1", t
     t_fit = time.perf_counter() - t1
     seams = tuple(seam_report(a, b) for a, b in zip(envs[:-1], envs[1:]))
     seams_f = tuple(fitted_seam(a, b) for a, b in zip(fits[:-1], fits[1:]))
-    return PassChain(tuple(envs), tuple(fits), seams, seams_f, tuple(folds), continuity,
-                     {"build_s": t_build, "fit_s": t_fit})
+    return PassChain(
+        tuple(envs), tuple(fits), seams, seams_f, tuple(folds), continuity, {"build_s": t_build, "fit_s": t_fit}
+    )
 
 
 def max_theta(first: Envelope, *, continuity: str = "g1", step_deg: float = 5.0) -> float:
-    """Largest |theta| (degrees, scanned by ``step_deg``) for which the next pass neither folds back nor
+    """Largest abs(theta) (degrees, scanned by ``step_deg``) for which the next pass neither folds back nor
     loses its real envelope; checked, not assumed."""
     from ..errors import DegenerateGeometryError
 

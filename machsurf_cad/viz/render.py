@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-
 import pyvista as pv
 
 from ..measure import DeviationResult
@@ -68,9 +67,18 @@ def deviation_polydata(result: DeviationResult) -> pv.PolyData:
     return mesh
 
 
-def render_deviation(result: DeviationResult, png_path, *, title: str = "deviation", vtp_path=None,
-                     tolerance: float | None = None, extra_lines=None, extra_points=None,
-                     view_direction=None, window_size=(1200, 900)) -> Path:
+def render_deviation(
+    result: DeviationResult,
+    png_path,
+    *,
+    title: str = "deviation",
+    vtp_path=None,
+    tolerance: float | None = None,
+    extra_lines=None,
+    extra_points=None,
+    view_direction=None,
+    window_size=(1200, 900),
+) -> Path:
     """Off-screen PNG of a deviation map.
 
     Diverging colour map centred on zero (blue below the reference normal, red above), legend
@@ -84,13 +92,29 @@ def render_deviation(result: DeviationResult, png_path, *, title: str = "deviati
     vmax = max(result.max_abs, tol or 0.0, 1e-12)
     p = pv.Plotter(off_screen=True, window_size=list(window_size))
     p.set_background("white")
-    sargs = dict(title="deviation [mm]", color="black", fmt="%.3g", n_labels=5, vertical=True,
-                 position_x=0.86, position_y=0.15, height=0.7, width=0.06)
+    sargs = dict(
+        title="deviation [mm]",
+        color="black",
+        fmt="%.3g",
+        n_labels=5,
+        vertical=True,
+        position_x=0.86,
+        position_y=0.15,
+        height=0.7,
+        width=0.06,
+    )
     annotations = {}
     if tol:
         annotations = {tol: f"+tol {tol:g}", -tol: f"-tol {tol:g}"}
-    p.add_mesh(mesh, scalars="deviation_mm", cmap="coolwarm", clim=[-vmax, vmax], scalar_bar_args=sargs,
-               annotations=annotations, smooth_shading=True)
+    p.add_mesh(
+        mesh,
+        scalars="deviation_mm",
+        cmap="coolwarm",
+        clim=[-vmax, vmax],
+        scalar_bar_args=sargs,
+        annotations=annotations,
+        smooth_shading=True,
+    )
     if tol and mesh.n_points > 3:
         try:
             lines = mesh.contour([-tol, tol], scalars="deviation_mm")
@@ -108,9 +132,11 @@ def render_deviation(result: DeviationResult, png_path, *, title: str = "deviati
     if extra_points and any(len(np.asarray(e[0])) for e in extra_points):
         p.add_legend(bcolor="white", size=(0.2, 0.08), loc="lower left")
     s = result.stats
-    text = (f"{title}\nmax abs deviation = {s['max_abs']:.4g} mm   max = {s['max']:.4g}   min = {s['min']:.4g}\n"
-            f"RMS = {s['rms']:.4g} mm   points = {s['n_points']}"
-            + (f"\ntolerance = {tol:g} mm: {'MET' if s['max_abs'] <= tol else 'NOT MET'}" if tol else ""))
+    text = (
+        f"{title}\nmax abs deviation = {s['max_abs']:.4g} mm   max = {s['max']:.4g}   min = {s['min']:.4g}\n"
+        f"RMS = {s['rms']:.4g} mm   points = {s['n_points']}"
+        + (f"\ntolerance = {tol:g} mm: {'MET' if s['max_abs'] <= tol else 'NOT MET'}" if tol else "")
+    )
     p.add_text(text, position="upper_left", font_size=11, color="black")
     w = np.array(s["worst_xyz"])
     p.add_mesh(pv.PolyData(w[None, :]), color="magenta", point_size=14, render_points_as_spheres=True)
@@ -127,10 +153,25 @@ def render_deviation(result: DeviationResult, png_path, *, title: str = "deviati
     return _save(p, png_path, mesh, vtp_path)
 
 
-def render_scalar_map(points, values, png_path, *, title: str = "", label: str = "value [mm]", clim=None,
-                      cmap: str = "jet", contour_level: float | None = None, contour_color: str = "white",
-                      mask=None, vtp_path=None, extra_arrays: dict | None = None, annotations: dict | None = None,
-                      background: str = "dimgray", view: str = "iso", window_size=(1200, 900)) -> Path:
+def render_scalar_map(
+    points,
+    values,
+    png_path,
+    *,
+    title: str = "",
+    label: str = "value [mm]",
+    clim=None,
+    cmap: str = "jet",
+    contour_level: float | None = None,
+    contour_color: str = "white",
+    mask=None,
+    vtp_path=None,
+    extra_arrays: dict | None = None,
+    annotations: dict | None = None,
+    background: str = "dimgray",
+    view: str = "iso",
+    window_size=(1200, 900),
+) -> Path:
     """Off-screen PNG of a scalar field on a ``(nu, nv, 3)`` grid (e.g. effective radius, mm).
 
     ``clim`` fixes the colour scale (values beyond it saturate; ``inf`` shows at the top),
@@ -150,10 +191,20 @@ def render_scalar_map(points, values, png_path, *, title: str = "", label: str =
         mesh = mesh.extract_cells(np.nonzero(m[faces].all(axis=1))[0]).extract_geometry()
     p = pv.Plotter(off_screen=True, window_size=list(window_size))
     p.set_background(background)
-    sargs = dict(title=label, color="white", fmt="%.3g", n_labels=6, vertical=True, position_x=0.86,
-                 position_y=0.15, height=0.7, width=0.06)
-    p.add_mesh(mesh, scalars=label, cmap=cmap, clim=clim, scalar_bar_args=sargs, annotations=annotations or {},
-               lighting=False)  # a map: colours must read true against the legend
+    sargs = dict(
+        title=label,
+        color="white",
+        fmt="%.3g",
+        n_labels=6,
+        vertical=True,
+        position_x=0.86,
+        position_y=0.15,
+        height=0.7,
+        width=0.06,
+    )
+    p.add_mesh(
+        mesh, scalars=label, cmap=cmap, clim=clim, scalar_bar_args=sargs, annotations=annotations or {}, lighting=False
+    )  # a map: colours must read true against the legend
     if contour_level is not None and mesh.n_points > 3:
         lines = mesh.contour([contour_level], scalars=label)
         if lines.n_points:
@@ -176,16 +227,22 @@ def zebra_values(normals, *, light=(0.3, 0.2, 1.0), stripes: int = 24) -> np.nda
     return 0.5 * (1 + np.sign(np.sin(stripes * ang)))
 
 
-def render_zebra(panels, png_path, *, window_size=(1600, 800), stripes: float | None = None,
-                 light=(0.3, 0.2, 1.0)) -> Path:
+def render_zebra(
+    panels, png_path, *, window_size=(1600, 800), stripes: float | None = None, light=(0.3, 0.2, 1.0)
+) -> Path:
     """Side-by-side zebra renderings. ``panels`` is a list of ``(title, [(points (nu,nv,3), normals), ...])``:
     continuous stripes across a seam show G1, kinked stripes show a G0 crease. By default the stripe
     density is set so that about 12 stripes cover the range of normal directions."""
     n = len(panels)
     if stripes is None:
         L = np.asarray(light, float) / np.linalg.norm(light)
-        angs = np.concatenate([np.arccos(np.clip(np.abs(np.asarray(nrm).reshape(-1, 3) @ L), -1, 1))
-                               for _, surfs in panels for _, nrm in surfs])
+        angs = np.concatenate(
+            [
+                np.arccos(np.clip(np.abs(np.asarray(nrm).reshape(-1, 3) @ L), -1, 1))
+                for _, surfs in panels
+                for _, nrm in surfs
+            ]
+        )
         stripes = 12 * np.pi / max(float(np.ptp(angs)), 1e-6)
     p = pv.Plotter(off_screen=True, window_size=list(window_size), shape=(1, n))
     for k, (title, surfaces) in enumerate(panels):

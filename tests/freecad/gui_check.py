@@ -24,8 +24,15 @@ try:
     Gui.runCommand("Machsurf_MachiningSurface")
     doc.recompute()
     ms = next(o for o in doc.Objects if o.Name.startswith("MachiningSurface"))
-    result.update({"valid": ms.isValid(), "status": ms.Status, "max_s1": ms.MaxErrorS1, "faces": len(ms.Shape.Faces),
-                   "colours": [list(c) for c in ms.ViewObject.DiffuseColor]})
+    result.update(
+        {
+            "valid": ms.isValid(),
+            "status": ms.Status,
+            "max_s1": ms.MaxErrorS1,
+            "faces": len(ms.Shape.Faces),
+            "colours": [list(c) for c in ms.ViewObject.DiffuseColor],
+        }
+    )
     part.ViewObject.Transparency = 60
     view = Gui.ActiveDocument.ActiveView
     view.viewIsometric()

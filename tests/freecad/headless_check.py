@@ -19,13 +19,12 @@ def step(name, **kw):
 
 
 try:
-    import numpy as np
-
     import FreeCAD
+    import numpy as np
     import Part
-
     from freecad.machsurf import features
     from freecad.machsurf.convert import face_to_numpy
+
     from machsurf_cad.machining import machining_surface
 
     result["no_ocp_in_process"] = "OCP" not in sys.modules and "cadquery" not in sys.modules
@@ -34,13 +33,22 @@ try:
     part = doc.addObject("Part::Feature", "Block")
     part.Shape = shape
     # the free-form top: the B-spline face with the largest area above z = 20
-    idx = max((i for i, f in enumerate(shape.Faces) if isinstance(f.Surface, Part.BSplineSurface)),
-              key=lambda i: shape.Faces[i].Area)
+    idx = max(
+        (i for i, f in enumerate(shape.Faces) if isinstance(f.Surface, Part.BSplineSurface)),
+        key=lambda i: shape.Faces[i].Area,
+    )
     fname = f"Face{idx + 1}"
     ms = features.make("MachiningSurface", doc, (part, [fname]), Tool="bull:D=16,r=3", Lead=10.0, Tolerance=1e-3)
     doc.recompute()
-    step("recompute", valid=ms.isValid(), status=ms.Status, max_s1=ms.MaxErrorS1, max_s2=ms.MaxErrorS2,
-         poles=ms.PolesS1, n_faces=len(ms.Shape.Faces))
+    step(
+        "recompute",
+        valid=ms.isValid(),
+        status=ms.Status,
+        max_s1=ms.MaxErrorS1,
+        max_s2=ms.MaxErrorS2,
+        poles=ms.PolesS1,
+        n_faces=len(ms.Shape.Faces),
+    )
     # the same computation directly through machsurf_cad, compared by sampling
     nominal = face_to_numpy(shape.Faces[idx], "F")
     direct = machining_surface(nominal, "bull:D=16,r=3", axes=5, strategy="planes:x", lead=10.0, tolerance=1e-3)
@@ -59,23 +67,38 @@ try:
     doc.recompute()
     step("change_tool", valid=ms.isValid(), max_s1=ms.MaxErrorS1, report_tool=json.loads(ms.Report)["tool"]["spec"])
     # the other features
-    flat_face = max((i for i, f in enumerate(shape.Faces) if isinstance(f.Surface, Part.Plane)),
-                    key=lambda i: shape.Faces[i].Area)  # the bottom
+    flat_face = max(
+        (i for i, f in enumerate(shape.Faces) if isinstance(f.Surface, Part.Plane)), key=lambda i: shape.Faces[i].Area
+    )  # the bottom
     er = features.make("EffectiveRadius", doc, (part, [fname]), Tool="bull:D=10,r=2", Direction=45.0, Grid=32)
     env = features.make("Envelope", doc, None, Tool="cone:D=10,angle=10,L=20", Passes=2)
     doc.recompute()
-    step("other_features", reff_valid=er.isValid(), reff_mean=er.ReffMean, env_valid=env.isValid(),
-         env_status=env.Status,
-         env_gap=env.MaxSeamGap, env_faces=len(env.Shape.Faces))
+    step(
+        "other_features",
+        reff_valid=er.isValid(),
+        reff_mean=er.ReffMean,
+        env_valid=env.isValid(),
+        env_status=env.Status,
+        env_gap=env.MaxSeamGap,
+        env_faces=len(env.Shape.Faces),
+    )
     # bad input: an edge, a planar face (converted), an unreachable tolerance, a deleted source
     bad_edge = features.make("MachiningSurface", doc, (part, ["Edge1"]), Tool="ball:D=10")
-    planar = features.make("MachiningSurface", doc, (part, [f"Face{flat_face + 1}"]), Tool="ball:D=10", Lead=10.0,
-                           Strategy="planes:x")
+    planar = features.make(
+        "MachiningSurface", doc, (part, [f"Face{flat_face + 1}"]), Tool="ball:D=10", Lead=10.0, Strategy="planes:x"
+    )
     tight = features.make("MachiningSurface", doc, (part, [fname]), Tool="bull:D=16,r=3", Lead=10.0, Tolerance=1e-12)
     doc.recompute()
-    step("bad_input", edge_valid=bad_edge.isValid(), edge_status=bad_edge.Status, planar_valid=planar.isValid(),
-         planar_status=planar.Status, planar_faces=len(planar.Shape.Faces), tight_valid=tight.isValid(),
-         tight_status=tight.Status)
+    step(
+        "bad_input",
+        edge_valid=bad_edge.isValid(),
+        edge_status=bad_edge.Status,
+        planar_valid=planar.isValid(),
+        planar_status=planar.Status,
+        planar_faces=len(planar.Shape.Faces),
+        tight_valid=tight.isValid(),
+        tight_status=tight.Status,
+    )
     # save, reopen, recompute
     path = os.path.join(os.path.dirname(out_path), "machsurf_test.FCStd")
     ms_name = ms.Name
@@ -86,9 +109,16 @@ try:
     ms2 = doc2.getObject(ms_name)
     ms2.Tool = "bull:D=16,r=3"
     doc2.recompute()
-    step("reopen", valid=ms2.isValid(), max_s1=ms2.MaxErrorS1, n_faces=len(ms2.Shape.Faces),
-         proxy=type(ms2.Proxy).__name__, proxy_module=type(ms2.Proxy).__module__, loops=str(ms2.Loops),
-         loops_enum=list(ms2.getEnumerationsOfProperty("Loops")))
+    step(
+        "reopen",
+        valid=ms2.isValid(),
+        max_s1=ms2.MaxErrorS1,
+        n_faces=len(ms2.Shape.Faces),
+        proxy=type(ms2.Proxy).__name__,
+        proxy_module=type(ms2.Proxy).__module__,
+        loops=str(ms2.Loops),
+        loops_enum=list(ms2.getEnumerationsOfProperty("Loops")),
+    )
     # delete the source and recompute: a message and an invalid feature, nothing else broken
     doc2.removeObject("Block")
     doc2.recompute()

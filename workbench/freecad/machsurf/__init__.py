@@ -7,10 +7,12 @@ knots, multiplicities, poles, weights). Lengths in mm, angles in degrees.
 import sys
 from pathlib import Path
 
+
 def ensure_core():
     """Make ``machsurf_cad`` importable: installed, or the repository this add-on is linked from."""
     try:
-        import machsurf_cad  # noqa: F401
+        import machsurf_cad
+
         return
     except ImportError:
         pass
@@ -24,4 +26,4 @@ def ensure_core():
 
 ensure_core()
 
-from machsurf_cad import __version__  # noqa: E402  (one version, the core's)
+from machsurf_cad import __version__ as __version__

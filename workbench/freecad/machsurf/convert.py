@@ -1,8 +1,7 @@
 """FreeCAD Part geometry <-> machsurf_cad numpy types, as B-spline arrays only."""
 
-import numpy as np
-
 import FreeCAD
+import numpy as np
 import Part
 
 from machsurf_cad.errors import InputError
@@ -14,9 +13,19 @@ def _surface_arrays(bs, name=""):
     poles = np.array([[[p.x, p.y, p.z] for p in row] for row in bs.getPoles()])
     w = np.array(bs.getWeights(), dtype=float)
     rational = bool(bs.isURational() or bs.isVRational())
-    return BSplineSurface(bs.UDegree, bs.VDegree, bs.getUKnots(), bs.getUMultiplicities(), bs.getVKnots(),
-                          bs.getVMultiplicities(), poles, w if rational else None, bool(bs.isUPeriodic()),
-                          bool(bs.isVPeriodic()), name)
+    return BSplineSurface(
+        bs.UDegree,
+        bs.VDegree,
+        bs.getUKnots(),
+        bs.getUMultiplicities(),
+        bs.getVKnots(),
+        bs.getVMultiplicities(),
+        poles,
+        w if rational else None,
+        bool(bs.isUPeriodic()),
+        bool(bs.isVPeriodic()),
+        name,
+    )
 
 
 def face_to_numpy(face, name="F"):
@@ -40,17 +49,31 @@ def face_to_numpy(face, name="F"):
                 bs.setNotPeriodic()  # plain clamped knots: the form machsurf_cad's trimming loops use
             poles = np.array([[p.x, p.y] for p in bs.getPoles()])
             weights = np.array(bs.getWeights(), dtype=float)
-            c = BSplineCurve(bs.Degree, bs.getKnots(), bs.getMultiplicities(), poles,
-                             weights if bs.isRational() else None, False)
+            c = BSplineCurve(
+                bs.Degree, bs.getKnots(), bs.getMultiplicities(), poles, weights if bs.isRational() else None, False
+            )
             if e.Orientation == "Reversed":
-                c = BSplineCurve(c.degree, (c.knots[-1] + c.knots[0]) - c.knots[::-1], c.mults[::-1], c.poles[::-1],
-                                 None if c.weights is None else c.weights[::-1])
+                c = BSplineCurve(
+                    c.degree,
+                    (c.knots[-1] + c.knots[0]) - c.knots[::-1],
+                    c.mults[::-1],
+                    c.poles[::-1],
+                    None if c.weights is None else c.weights[::-1],
+                )
             loop.append(c)
         loops.append(loop)
     sb = surf.bounds
     natural = len(loops) == 1 and all(abs(a - b) < 1e-9 for a, b in zip((u0, u1, v0, v1), sb)) and len(loops[0]) == 4
-    return Face(surf, () if natural else tuple(tuple(lp) for lp in loops), name, -1,
-                f.Orientation == "Reversed", type(face.Surface).__name__, (u0, u1, v0, v1), float(face.Area))
+    return Face(
+        surf,
+        () if natural else tuple(tuple(lp) for lp in loops),
+        name,
+        -1,
+        f.Orientation == "Reversed",
+        type(face.Surface).__name__,
+        (u0, u1, v0, v1),
+        float(face.Area),
+    )
 
 
 def surface_to_part(s):
@@ -58,8 +81,17 @@ def surface_to_part(s):
     bs = Part.BSplineSurface()
     poles = [[FreeCAD.Vector(*map(float, p)) for p in row] for row in s.poles]
     weights = None if s.weights is None else [[float(w) for w in row] for row in s.weights]
-    args = (poles, [int(m) for m in s.mults_u], [int(m) for m in s.mults_v], [float(k) for k in s.knots_u],
-            [float(k) for k in s.knots_v], bool(s.periodic_u), bool(s.periodic_v), int(s.degree_u), int(s.degree_v))
+    args = (
+        poles,
+        [int(m) for m in s.mults_u],
+        [int(m) for m in s.mults_v],
+        [float(k) for k in s.knots_u],
+        [float(k) for k in s.knots_v],
+        bool(s.periodic_u),
+        bool(s.periodic_v),
+        int(s.degree_u),
+        int(s.degree_v),
+    )
     if weights is None:
         bs.buildFromPolesMultsKnots(*args)
     else:
@@ -80,11 +112,18 @@ def face_to_part(face):
             g = Part.Geom2d.BSplineCurve2d()
             poles = [FreeCAD.Base.Vector2d(float(x), float(y)) for x, y in c.poles]
             if c.weights is None:
-                g.buildFromPolesMultsKnots(poles, [int(m) for m in c.mults], [float(k) for k in c.knots], False,
-                                           int(c.degree))
+                g.buildFromPolesMultsKnots(
+                    poles, [int(m) for m in c.mults], [float(k) for k in c.knots], False, int(c.degree)
+                )
             else:
-                g.buildFromPolesMultsKnots(poles, [int(m) for m in c.mults], [float(k) for k in c.knots], False,
-                                           int(c.degree), [float(w) for w in c.weights])
+                g.buildFromPolesMultsKnots(
+                    poles,
+                    [int(m) for m in c.mults],
+                    [float(k) for k in c.knots],
+                    False,
+                    int(c.degree),
+                    [float(w) for w in c.weights],
+                )
             edges.append(g.toShape(bs, float(c.knots[0]), float(c.knots[-1])))
         wires.append(Part.Wire(edges))
     f = Part.Face(bs, wires[0])

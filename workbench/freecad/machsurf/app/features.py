@@ -16,9 +16,9 @@ from .. import ensure_core
 
 ensure_core()
 
-from machsurf_cad.errors import MachsurfError  # noqa: E402
+from machsurf_cad.errors import MachsurfError
 
-from ..convert import face_to_numpy, face_to_part, surface_to_part  # noqa: E402
+from ..convert import face_to_numpy, face_to_part, surface_to_part
 
 READ_ONLY = 1
 
@@ -83,8 +83,11 @@ class _Base:
             self.compute(obj)
             obj.Status = "ok"
         except Exception as exc:  # every failure: a message, an invalid feature, the document unharmed
-            msg = f"{obj.Label}: {exc}" if isinstance(exc, (MachsurfError, ValueError)) else \
-                f"{obj.Label}: {type(exc).__name__}: {exc}"
+            msg = (
+                f"{obj.Label}: {exc}"
+                if isinstance(exc, (MachsurfError, ValueError))
+                else f"{obj.Label}: {type(exc).__name__}: {exc}"
+            )
             obj.Status = str(exc)
             FreeCAD.Console.PrintError(msg + "\n")
             raise RuntimeError(msg) from None  # marks the feature invalid; the document stays as it was
@@ -101,25 +104,47 @@ class MachiningSurfaceFeature(_Base):
         _add(obj, "App::PropertyFloat", "Lead", "Strategy", "Lead angle Omega_t (deg), leans towards the feed", 10.0)
         _add(obj, "App::PropertyFloat", "Tilt", "Strategy", "Tilt angle Omega_n (deg), about the normal", 0.0)
         _add(obj, "App::PropertyFloat", "Tolerance", "Approximation", "Max-norm fit tolerance (mm)", 1e-3)
-        _add(obj, "App::PropertyEnumeration", "Loops", "Approximation", "On loops: error, flag or trim",
-             ["error", "flag", "trim"])
+        _add(
+            obj,
+            "App::PropertyEnumeration",
+            "Loops",
+            "Approximation",
+            "On loops: error, flag or trim",
+            ["error", "flag", "trim"],
+        )
         if "trim" not in obj.getEnumerationsOfProperty("Loops"):  # migration from 0.1 (error, flag)
             current = str(obj.Loops)
             obj.Loops = ["error", "flag", "trim"]
             obj.Loops = current
-        for name, doc in (("MaxErrorS1", "Measured max error of S1 (mm)"), ("MaxErrorS2", "Measured max error of S2 (mm)"),
-                          ("AlphaMax", "Axis orientation error bound for the measured errors (deg)")):
+        for name, doc in (
+            ("MaxErrorS1", "Measured max error of S1 (mm)"),
+            ("MaxErrorS2", "Measured max error of S2 (mm)"),
+            ("AlphaMax", "Axis orientation error bound for the measured errors (deg)"),
+        ):
             _add(obj, "App::PropertyFloat", name, "Result", doc, read_only=True)
-        for name, doc in (("PolesS1", "Poles of S1"), ("PolesS2", "Poles of S2"), ("LoopReport", "Loops found"),
-                          ("Status", "Last recompute"), ("Report", "JSON report of the last recompute")):
+        for name, doc in (
+            ("PolesS1", "Poles of S1"),
+            ("PolesS2", "Poles of S2"),
+            ("LoopReport", "Loops found"),
+            ("Status", "Last recompute"),
+            ("Report", "JSON report of the last recompute"),
+        ):
             _add(obj, "App::PropertyString", name, "Result", doc, read_only=True)
 
     def compute(self, obj):
         from machsurf_cad import machining_surface
 
         f = face_to_numpy(source_face(obj), "F")
-        ms = machining_surface(f, obj.Tool, axes=int(obj.Axes), strategy=obj.Strategy, lead=float(obj.Lead),
-                               tilt=float(obj.Tilt), tolerance=float(obj.Tolerance), loops=str(obj.Loops))
+        ms = machining_surface(
+            f,
+            obj.Tool,
+            axes=int(obj.Axes),
+            strategy=obj.Strategy,
+            lead=float(obj.Lead),
+            tilt=float(obj.Tilt),
+            tolerance=float(obj.Tolerance),
+            loops=str(obj.Loops),
+        )
         faces = [face_to_part(x) for x in ms.faces()]
         obj.Shape = Part.Compound(faces)
         obj.MaxErrorS1 = ms.s1_fit.max_error
@@ -151,8 +176,9 @@ class EffectiveRadiusFeature(_Base):
 
         fc = source_face(obj)
         f = face_to_numpy(fc, "F")
-        m = reff_maps(f, obj.Tool, directions=[float(obj.Direction)], grid=int(obj.Grid),
-                      scallop=float(obj.Scallop) or None)
+        m = reff_maps(
+            f, obj.Tool, directions=[float(obj.Direction)], grid=int(obj.Grid), scallop=float(obj.Scallop) or None
+        )
         d = m.report()["directions"][0]
         obj.ReffMin, obj.ReffMean, obj.ReffMax = d["r_eff_min_mm"], d["r_eff_mean_mm"], d["r_eff_max_mm"]
         obj.TorusBeatsBall = d["area_fraction_torus_beats_ball"]
@@ -169,8 +195,14 @@ class FlankSettingFeature(_Base):
         _add(obj, "App::PropertyLinkSub", "Source", "Nominal", "Ruled face")
         _add(obj, "App::PropertyFloat", "Radius", "Cutter", "Cylinder radius (mm)", 10.0)
         _add(obj, "App::PropertyFloat", "Rule", "Strategy", "Rule position, fraction of the u range", 0.5)
-        _add(obj, "App::PropertyEnumeration", "Setting", "Strategy", "Tool setting",
-             ["optimum", "standard-distributed", "standard-tangent", "minimax"])
+        _add(
+            obj,
+            "App::PropertyEnumeration",
+            "Setting",
+            "Strategy",
+            "Tool setting",
+            ["optimum", "standard-distributed", "standard-tangent", "minimax"],
+        )
         _add(obj, "App::PropertyInteger", "Side", "Strategy", "+1 or -1", 1)
         for name in ("MaxGouge", "MaxUndercut", "Gamma"):
             _add(obj, "App::PropertyFloat", name, "Result", name + " (mm or deg)", read_only=True)
@@ -180,22 +212,34 @@ class FlankSettingFeature(_Base):
     def compute(self, obj):
         from machsurf_cad import flank
 
-        res = flank(face_to_numpy(source_face(obj), "F"), float(obj.Radius), rule=float(obj.Rule),
-                    setting=str(obj.Setting), side=int(obj.Side))
+        res = flank(
+            face_to_numpy(source_face(obj), "F"),
+            float(obj.Radius),
+            rule=float(obj.Rule),
+            setting=str(obj.Setting),
+            side=int(obj.Side),
+        )
         st, e = res.setting, res.interference
         obj.MaxGouge, obj.MaxUndercut, obj.Gamma = e.max_gouge, e.max_undercut, st.gamma_deg
         obj.Report = json.dumps(res.report(), default=float)
         tip, axis, length = st.placement()
-        obj.Shape = Part.makeCylinder(float(obj.Radius), float(length), FreeCAD.Vector(*map(float, tip)),
-                                      FreeCAD.Vector(*map(float, axis)))
+        obj.Shape = Part.makeCylinder(
+            float(obj.Radius), float(length), FreeCAD.Vector(*map(float, tip)), FreeCAD.Vector(*map(float, axis))
+        )
 
 
 class EnvelopeFeature(_Base):
     """Swept envelopes of a rotational tool along an example motion, chained G1 (machsurf_cad.sweep)."""
 
     def properties(self, obj):
-        _add(obj, "App::PropertyString", "Tool", "Cutter", "cyl:|cone:|drum:|barrel:|ball: (mm, deg)",
-             "cone:D=10,angle=10,L=20")
+        _add(
+            obj,
+            "App::PropertyString",
+            "Tool",
+            "Cutter",
+            "cyl:|cone:|drum:|barrel:|ball: (mm, deg)",
+            "cone:D=10,angle=10,L=20",
+        )
         _add(obj, "App::PropertyString", "Motion", "Motion", "Example motion: sine, line, helix", "sine")
         _add(obj, "App::PropertyInteger", "Passes", "Motion", "Number of passes", 2)
         _add(obj, "App::PropertyFloat", "Theta", "Motion", "Axis turn about n1 between passes (deg)", 0.0)
@@ -208,8 +252,13 @@ class EnvelopeFeature(_Base):
     def compute(self, obj):
         from machsurf_cad import envelope, example
 
-        res = envelope(obj.Tool, example(str(obj.Motion), "motion"), passes=int(obj.Passes),
-                       theta_deg=float(obj.Theta), tolerance=float(obj.Tolerance))
+        res = envelope(
+            obj.Tool,
+            example(str(obj.Motion), "motion"),
+            passes=int(obj.Passes),
+            theta_deg=float(obj.Theta),
+            tolerance=float(obj.Tolerance),
+        )
         ch = res.chain
         faces = []
         for fit in ch.fits:
@@ -226,8 +275,12 @@ class EnvelopeFeature(_Base):
 def make(kind, doc=None, source=None, **props):
     """Create a feature in ``doc`` (``kind``: MachiningSurface, EffectiveRadius, FlankSetting, Envelope)."""
     doc = doc or FreeCAD.ActiveDocument
-    classes = {"MachiningSurface": MachiningSurfaceFeature, "EffectiveRadius": EffectiveRadiusFeature,
-               "FlankSetting": FlankSettingFeature, "Envelope": EnvelopeFeature}
+    classes = {
+        "MachiningSurface": MachiningSurfaceFeature,
+        "EffectiveRadius": EffectiveRadiusFeature,
+        "FlankSetting": FlankSettingFeature,
+        "Envelope": EnvelopeFeature,
+    }
     obj = doc.addObject("Part::FeaturePython", kind)
     classes[kind](obj)
     if source is not None:

@@ -6,8 +6,13 @@ import FreeCAD
 import FreeCADGui as Gui
 
 ICON = os.path.join(os.path.dirname(os.path.dirname(__file__)), "resources", "machsurf.svg")
-NAMES = ["Machsurf_MachiningSurface", "Machsurf_EffectiveRadius", "Machsurf_FlankSetting", "Machsurf_Envelope",
-         "Machsurf_ExportStep"]
+NAMES = [
+    "Machsurf_MachiningSurface",
+    "Machsurf_EffectiveRadius",
+    "Machsurf_FlankSetting",
+    "Machsurf_Envelope",
+    "Machsurf_ExportStep",
+]
 
 
 def _selected_face():
@@ -65,8 +70,11 @@ class EnvelopeCommand(_FeatureCommand):
 
 class ExportStepCommand:
     def GetResources(self):
-        return {"Pixmap": ICON, "MenuText": "Export machsurf results to STEP",
-                "ToolTip": "Write the selected (or all) machsurf results to STEP, one named object per feature"}
+        return {
+            "Pixmap": ICON,
+            "MenuText": "Export machsurf results to STEP",
+            "ToolTip": "Write the selected (or all) machsurf results to STEP, one named object per feature",
+        }
 
     def IsActive(self):
         return FreeCAD.ActiveDocument is not None
@@ -76,8 +84,11 @@ class ExportStepCommand:
         from PySide2 import QtWidgets
 
         doc = FreeCAD.ActiveDocument
-        objs = [o for o in doc.Objects if hasattr(o, "Proxy") and o.Proxy.__class__.__module__.endswith("features")
-                and o.isValid()]
+        objs = [
+            o
+            for o in doc.Objects
+            if hasattr(o, "Proxy") and o.Proxy.__class__.__module__.endswith("features") and o.isValid()
+        ]
         if path is None:
             path, _ = QtWidgets.QFileDialog.getSaveFileName(None, "Export STEP", "", "STEP (*.step *.stp)")
         if path:

@@ -20,8 +20,9 @@ class ViewProvider:
         return ICON
 
     def setEdit(self, vobj, mode=0):
-        from .panels import FeaturePanel
         import FreeCADGui as Gui
+
+        from .panels import FeaturePanel
 
         Gui.Control.showDialog(FeaturePanel(vobj.Object))
         return True
