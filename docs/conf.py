@@ -5,7 +5,7 @@ import sys
 
 sys.path.insert(0, os.path.abspath(".."))
 
-from machsurf_cad import __version__  # noqa: E402
+from machsurf_cad import __version__
 
 project = "machsurf_cad"
 author = "machsurf_cad contributors"

@@ -13,7 +13,25 @@ pytestmark = needs_kernel
 BLOCK = ROOT / "example_parts" / "freeform_block.step"
 
 
-def run(*args, cwd=None):
+def run(*args):
+    """The CLI in-process through ``main(argv)``: exit code, stdout and stderr."""
+    import contextlib
+    import io
+    from types import SimpleNamespace
+
+    from machsurf_cad.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main([str(a) for a in args])
+        except SystemExit as exc:  # argparse usage errors
+            code = exc.code
+    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
+
+
+def run_process(*args, cwd=None):
+    """The CLI as a user runs it (a new process): keeps exit codes and 'no traceback' honest."""
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     return subprocess.run(
         [sys.executable, "-m", "machsurf_cad", *map(str, args)],
@@ -27,7 +45,7 @@ def run(*args, cwd=None):
 
 
 def test_info_reports_every_face(tmp_path):
-    r = run("info", BLOCK, "-o", tmp_path / "info")
+    r = run_process("info", BLOCK, "-o", tmp_path / "info")
     assert r.returncode == 0, r.stderr
     rep = json.loads((tmp_path / "info" / "report.json").read_text())
     assert rep["n_faces"] == 8 and f"{rep['n_faces']} face(s)" in r.stdout
@@ -56,7 +74,9 @@ def test_inspect_step_candidate_and_tolerance_exit_code(tmp_path):
     assert 0.018 < dev["max_abs_mm"] <= 0.02 + 1e-9
     assert f"{dev['max_abs_mm']:.6g}" in ok.stdout
     assert (tmp_path / "ok" / "deviation.png").stat().st_size > 10000
-    bad = run("inspect", nominal, shifted, "--tol", "0.01", "--samples", "40", "--no-render", "-o", tmp_path / "bad")
+    bad = run_process(
+        "inspect", nominal, shifted, "--tol", "0.01", "--samples", "40", "--no-render", "-o", tmp_path / "bad"
+    )
     assert bad.returncode == 2 and "NOT met" in bad.stdout
     assert json.loads((tmp_path / "bad" / "report.json").read_text())["deviation"]["within_tolerance"] is False
 
@@ -85,7 +105,7 @@ def test_bad_input_one_line_exit_1_nothing_written(tmp_path, case):
         "index": ("inspect", BLOCK, BLOCK, "--face", "42"),
         "suffix": ("inspect", BLOCK, tmp_path / "cand.iges"),
     }[case]
-    r = run(*args, "-o", out)
+    r = run_process(*args, "-o", out)
     assert r.returncode == 1
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and lines[0].startswith("machsurf: error:"), r.stderr

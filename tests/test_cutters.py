@@ -4,8 +4,19 @@ import math
 
 import numpy as np
 import pytest
+from helpers import assert_close
 
-from machsurf_cad.cutters import ArcSegment, BallEndMill, BullNoseEndMill, ConicalCutter, LineSegment, parse_cutter
+from machsurf_cad.cutters import (
+    ArcSegment,
+    BallEndMill,
+    BullNoseEndMill,
+    ConicalCutter,
+    FlatEndMill,
+    LineSegment,
+    Shank,
+    cutter_from_apt,
+    parse_cutter,
+)
 from machsurf_cad.errors import InputError
 
 SPECS = [
@@ -114,3 +125,91 @@ def test_profiles_are_continuous():
         for s0, s1 in zip(segs[:-1], segs[1:]):
             assert np.allclose(s0.points(2)[-1], s1.points(2)[0], atol=1e-12), spec
         assert isinstance(segs[0], (LineSegment, ArcSegment))
+
+
+# ----------------------------------------------------------------------------- the shared vocabulary
+def _brute_signed_distance(cutter, rho, z):
+    """Independent: distance to a dense polyline of the closed half-section, sign by an even-odd ray test."""
+    pts = np.concatenate([seg.points(2001) for seg in cutter.profile()])
+    top = pts[-1]
+    outline = np.concatenate([pts, [[0.0, top[1]]]])  # closed by the top cap
+    a, b = outline[:-1], outline[1:]
+    ab = b - a
+    L2 = np.maximum((ab * ab).sum(1), 1e-300)
+    q = np.stack([rho, z], 1)
+    d = np.full(rho.size, np.inf)
+    for k in range(0, rho.size, 200):  # distance to every polyline segment, in chunks
+        w = q[k : k + 200, None, :] - a[None]
+        t = np.clip((w * ab[None]).sum(-1) / L2[None], 0, 1)
+        d[k : k + 200] = np.sqrt(((w - t[..., None] * ab[None]) ** 2).sum(-1)).min(1)
+    poly = np.concatenate([[[0.0, pts[0, 1]]], outline, [[0.0, pts[0, 1]]]])
+    inside = np.zeros(rho.size, bool)
+    for (x0, y0), (x1, y1) in zip(poly[:-1], poly[1:]):
+        if y0 == y1:
+            continue
+        cross = (y0 > z) != (y1 > z)
+        xi = x0 + (z - y0) * (x1 - x0) / (y1 - y0)
+        inside ^= cross & (rho < xi)
+    return np.where(inside, -d, d)
+
+
+CUTTERS = [
+    "ball:D=10",
+    "flat:D=12",
+    "bull:D=20,r=4",
+    "cone:D=10,angle=10",
+    "cone:D=10,angle=-8",
+    "drum:D=20,Rp=40,L=20",
+    "barrel:D=20,Rp=40,L=20",
+    "apt:D=20,r=3,e=7,f=3,alpha=0,beta=5,h=40",
+]
+
+
+@pytest.mark.parametrize("spec", CUTTERS)
+def test_signed_distance_matches_a_brute_force_of_the_half_section(spec, rng):
+    c = parse_cutter(spec)
+    rho = rng.uniform(0, c.D, 3000)
+    z = rng.uniform(-c.D / 2, c.length + c.D / 2, 3000)
+    ang = rng.uniform(0, 2 * np.pi, 3000)
+    pts = np.stack([rho * np.cos(ang), rho * np.sin(ang), z], 1)
+    got = c.signed_distance(pts)
+    ref = _brute_signed_distance(c, rho, z)
+    far = np.abs(ref) > 1e-3  # the sign is only meaningful off the boundary
+    assert np.abs(got - ref).max() < 1e-5  # brute polyline: 2001 points per segment (chord error < 1e-5 mm)
+    assert (np.sign(got[far]) == np.sign(ref[far])).all()
+
+
+def test_signed_distance_placed_and_with_a_shank():
+    c = BullNoseEndMill(20, 4, 30, shank=Shank(16, 50))
+    tip, axis = np.array([10.0, -5.0, 2.0]), np.array([0.0, 0.6, 0.8])
+    e1 = np.array([1.0, 0.0, 0.0])
+    # on the axis 1 mm below the tip; 3 mm outside the shank's side; 1 mm above the shank top
+    pts = [tip - axis, tip + 40 * axis + 11 * e1, tip + 81 * axis]
+    assert_close(c.signed_distance(pts, tip=tip, axis=axis), [1.0, 3.0, 1.0], 1e-12)
+    assert_close(c.signed_distance([tip + 5 * axis], tip=tip, axis=axis), [-5.0], 1e-12)  # inside, 5 mm above the flat
+    assert c.body_parts() == [(8.0, 30.0, 80.0)]
+
+
+def test_height_width_offset_and_apt_parameters():
+    b = BullNoseEndMill(20, 4)
+    rho = np.array([0.0, 6.0, 8.0, 10.0, 11.0])
+    assert_close(b.height(rho)[:4], [0.0, 0.0, 4 - np.sqrt(16 - 4), 4.0], 1e-12)  # flat, then the corner arc
+    assert np.isinf(b.height(rho)[4])
+    assert_close(b.width(np.array([0.0, 4.0, 2.0])), [6.0, 10.0, 6 + np.sqrt(16 - 4)], 1e-12)
+    ball = BallEndMill(10)
+    assert_close(ball.height(np.array([3.0])), [5 - 4.0], 1e-12)
+    assert ball.offset(1.0) == BallEndMill(12, ball.length)
+    assert b.offset(0.5) == BullNoseEndMill(21, 4.5, b.length)
+    assert FlatEndMill(10).offset(2.0) == BullNoseEndMill(14, 2.0, FlatEndMill(10).length)
+    with pytest.raises(InputError, match="offset"):
+        parse_cutter("cone:D=10,angle=10").offset(1.0)
+    # one APT convention (d, r, e, f, alpha, beta, h): e = D/2 - r, f = r; back to the same cutter
+    for spec in ("ball:D=10", "flat:D=12", "bull:D=20,r=4", "cone:D=10,angle=10"):
+        c = parse_cutter(spec)
+        d, r, e, f, al, be, h = c.apt_parameters()
+        assert d == c.D and e == pytest.approx(c.D / 2 - c.corner_radius) and f == pytest.approx(c.corner_radius)
+        assert cutter_from_apt(c.apt_parameters()) == c
+    assert FlatEndMill(12).apt_parameters() == (12.0, 0.0, 6.0, 0.0, 0.0, 0.0, 36.0)
+    assert b.end_mill_radii("x") == (4.0, 6.0, 10.0) and ball.end_mill_radii("x").is_ball
+    with pytest.raises(InputError, match="ball, flat and bull-nose"):
+        parse_cutter("cone:D=10,angle=10").end_mill_radii("machining surfaces")

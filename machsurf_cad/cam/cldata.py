@@ -276,8 +276,8 @@ def read_apt(path, *, name: str | None = None) -> ToolPath:
             feed = _floats(args, st)[0] * scale
         elif word == "UNITS":
             scale = 25.4 if rest.strip().upper().startswith("INCH") else 1.0
-        elif word == "CUTTER":
-            cutter_params = _floats(args, st)
+        elif word == "CUTTER":  # d, r, e, f and h are lengths; alpha and beta (5th, 6th) angles
+            cutter_params = [x * (scale if i not in (4, 5) else 1.0) for i, x in enumerate(_floats(args, st))]
         elif word in ("PARTNO", "FINI", "END", "LOADTL", "SPINDL", "COOLNT", "PPRINT", "TLAXIS", "MACHIN", "CLPRNT"):
             if word in ("FINI", "END"):
                 break

@@ -53,7 +53,7 @@ def deviation_polydata(result: DeviationResult) -> pv.PolyData:
         inside[result.grid_index] = True
         faces = mesh.faces.reshape(-1, 5)[:, 1:]
         keep_cells = inside[faces].all(axis=1)
-        return mesh.extract_cells(np.nonzero(keep_cells)[0]).extract_geometry()
+        return mesh.extract_cells(np.nonzero(keep_cells)[0]).extract_surface(algorithm=None)
     if result.grid_shape is not None:
         mesh = grid_polydata(pts.reshape(*result.grid_shape, 3))
         mesh.point_data["deviation_mm"] = result.signed
