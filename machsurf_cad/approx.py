@@ -124,6 +124,18 @@ def fit_surface(
         :data:`~machsurf_cad.results.Progress`: ``progress(iteration, None, "<poles> poles, error <e> mm")``
         after each refinement (the total is not known in advance).
 
+    Returns
+    -------
+    SurfaceFit
+        The B-spline surface and its error measured on unseen points (max, RMS, worst uv).
+
+    Raises
+    ------
+    ToleranceError
+        The pole budget or iteration limit was reached first; ``reached`` holds the error (mm).
+    DegenerateGeometryError
+        The map returned non-finite values (the region is named).
+
     Examples
     --------
     >>> import numpy as np

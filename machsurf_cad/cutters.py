@@ -749,6 +749,17 @@ def cutter_from_apt(params) -> Cutter | None:
     :meth:`Cutter.apt_parameters`), a conical cutter from ``r = 0, alpha = 0, beta != 0``; other
     consistent sets give an :class:`APTCutter`; ``None`` when the set is not a cutter of this library.
 
+    Parameters
+    ----------
+    params : sequence of float
+        ``d[, r[, e, f[, alpha, beta[, h]]]]`` (mm, degrees).
+
+    Returns
+    -------
+    Cutter or None
+
+    Examples
+    --------
     >>> cutter_from_apt([20, 4, 6, 4, 0, 0, 60]).spec()
     'bull:D=20,r=4'
     """
@@ -791,12 +802,27 @@ _KINDS = {
 def parse_cutter(text: str) -> Cutter:
     """Cutter from its CLI string, e.g. ``ball:D=10``, ``bull:D=20,r=4``, ``cone:D=10,angle=6``.
 
-    Raises :class:`InputError` with a one-line message for an unknown kind or bad parameter.
+    Parameters
+    ----------
+    text : str
+        ``kind:K=V,...`` with kind ball, flat, cyl, bull (torus), cone, drum, barrel or apt;
+        lengths in mm, angles in degrees (``L`` the cutting length).
+
+    Returns
+    -------
+    Cutter
+
+    Raises
+    ------
+    InputError
+        Unknown kind or parameter, missing or bad value (one-line message).
 
     Examples
     --------
     >>> parse_cutter("bull:D=20,r=4").R_t
     6.0
+    >>> parse_cutter("cone:D=10,angle=6").spec()
+    'cone:D=10,angle=6'
     """
     m = re.fullmatch(r"\s*([A-Za-z]+)\s*:(.*)", text or "")
     if not m:

@@ -61,7 +61,25 @@ def _check_angles(name: str, deg) -> np.ndarray:
 def effective_radius(cutter, slope_deg, alpha_deg) -> np.ndarray:
     """Effective radius (mm) of a cutter for slope ``S`` and angle ``alpha`` (degrees), vectorised.
 
-    Returns ``inf`` at flat spots (``S = 0``, horizontal feed) for flat and bull-nose cutters.
+    Parameters
+    ----------
+    cutter : Cutter or str
+        Ball, flat or bull-nose end mill (mm).
+    slope_deg : float or array_like
+        Slope S of the surface: angle between its normal and the tool axis, degrees.
+    alpha_deg : float or array_like
+        Angle between the steepest slope and the feed, projected normal to the axis, degrees.
+
+    Returns
+    -------
+    ndarray
+        Relation (30), ``R_t cos^2 a / (sin S (cos^2 a + sin^2 a cos^2 S)) + r`` (mm); ``inf`` at
+        flat spots (``S = 0``, horizontal feed) for flat and bull-nose cutters.
+
+    Raises
+    ------
+    InputError
+        Angles outside [-360, 360] (radians given by mistake), not an end mill.
 
     Examples
     --------
@@ -99,10 +117,24 @@ def effective_radius(cutter, slope_deg, alpha_deg) -> np.ndarray:
 def stepover(scallop: float, r_eff, rho) -> tuple[np.ndarray, np.ndarray]:
     """Distance between adjacent passes (mm) for scallop height ``scallop`` (mm).
 
-    ``rho`` is the signed radius of the surface's normal section in the plane normal to the
-    feed: positive convex, negative concave, ``inf`` flat. Returns ``(d, reachable)``: ``d`` is
-    NaN where the cutter cannot reach (concave radius not larger than ``R_eff + h/2``); an
-    infinite ``R_eff`` (flat spot) gives an infinite ``d``.
+    Parameters
+    ----------
+    scallop : float
+        Scallop height h, mm (> 0).
+    r_eff : float or array_like
+        Effective cutter radius, mm.
+    rho : float or array_like
+        Signed radius of the surface's normal section in the plane normal to the feed (mm):
+        positive convex, negative concave, ``inf`` flat.
+
+    Returns
+    -------
+    d : ndarray
+        ``sqrt(h (2 R_eff - h)(2 rho + h)(2 rho + 2 R_eff + h)) / |rho + h|`` (relation (31)
+        re-derived), mm; NaN where the cutter cannot reach (concave radius not larger than
+        ``R_eff + h/2``); infinite for an infinite ``R_eff`` (flat spot).
+    reachable : ndarray of bool
+        False where ``d`` is NaN.
 
     Examples
     --------
@@ -296,6 +328,24 @@ def reff_maps(
         3: axis z. 5: the axis is leaned by ``lead`` towards the feed and turned by ``tilt``
         about the normal (conventions of :mod:`machsurf_cad.machining.strategies`); S and alpha
         are then measured in the tool frame.
+
+    Returns
+    -------
+    ReffMaps
+        Per direction: slope, alpha, R_eff (and step-overs) on the grid; the best direction
+        when there are several; ``report()`` with min/mean/max R_eff, area fractions, ratios.
+
+    Raises
+    ------
+    InputError
+        Not a ball/flat/bull-nose cutter, directions given in radians, a scallop not below R.
+
+    Examples
+    --------
+    >>> from machsurf_cad import examples
+    >>> m = reff_maps(examples.bezier5_patch(), "ball:D=10", grid=16)
+    >>> float(m.directions[0].r_eff.min()), float(m.directions[0].r_eff.max())  # a ball: R everywhere
+    (5.0, 5.0)
     """
     t0 = time.perf_counter()
     timings = {}

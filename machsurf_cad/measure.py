@@ -114,8 +114,28 @@ def project_points(
 
     Newton's method on ``|S(u, v) - p|^2`` from the nearest of ``seed_samples^2`` reference
     samples (default: 6 per knot span, at least 64 per direction), with an active set for
-    the box bounds so feet on the boundary are exact too. ``progress(done, total, message)`` is
-    called after each chunk of points.
+    the box bounds so feet on the boundary are exact too.
+
+    Parameters
+    ----------
+    surface : BSplineSurface
+        The surface (mm).
+    points : array_like (n, 3)
+        Points to project, mm.
+    progress : Progress, optional
+        ``progress(done, total, message)`` after each chunk of points.
+
+    Returns
+    -------
+    Projection
+        ``uv``, ``foot``, unit ``normal`` at the foot, ``on_boundary`` and ``converged`` per point.
+
+    Examples
+    --------
+    >>> from machsurf_cad.geometry import builders
+    >>> pr = project_points(builders.plane_patch(), [[30.0, 40.0, 7.0]])
+    >>> pr.uv.round(12).tolist(), pr.foot.round(12).tolist()
+    ([[0.3, 0.4]], [[30.0, 40.0, 0.0]])
     """
     p = np.asarray(points, dtype=float).reshape(-1, 3)
     if not np.all(np.isfinite(p)):
@@ -230,6 +250,24 @@ def deviation(
         Mesh connectivity of candidate points (kept for rendering).
     progress : callable, optional
         :data:`~machsurf_cad.results.Progress` called after each chunk of projected points.
+
+    Returns
+    -------
+    DeviationResult
+        Signed distances (+ on the side of the reference's outward normal), closest points and
+        statistics (``report()``: ``max_abs_mm``, ``rms_mm``, worst point in xyz and uv...).
+
+    Raises
+    ------
+    InputError
+        Empty candidate, wrong point array shape, non-finite points.
+
+    Examples
+    --------
+    >>> from machsurf_cad.geometry import builders
+    >>> d = deviation(builders.plane_patch(), builders.plane_patch(origin=(0, 0, -0.2)), samples=5)
+    >>> round(d.stats["min"], 12), d.within_tolerance
+    (-0.2, None)
     """
     ref_surface = reference.surface if isinstance(reference, Face) else reference
     flip = -1.0 if isinstance(reference, Face) and reference.reversed else 1.0

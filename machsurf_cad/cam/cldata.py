@@ -64,8 +64,23 @@ class PostOptions:
 
 # ----------------------------------------------------------------------------- writers
 def write_csv(path, tp: ToolPath) -> Path:
-    """One row per position: ``pass,index,move,tip_x,tip_y,tip_z,i,j,k,cc_x,cc_y,cc_z,feed_mm_min``
-    then the producer's extra columns (``name`` or ``name_0, name_1, ...``). Lengths in mm."""
+    """Write the tool path as CSV, one row per position.
+
+    Columns ``pass,index,move,tip_x,tip_y,tip_z,i,j,k,cc_x,cc_y,cc_z,feed_mm_min`` then the
+    producer's extra columns (``name`` or ``name_0, name_1, ...``); empty cells for NaN. Lengths in mm.
+
+    Parameters
+    ----------
+    path : str or Path
+        File to write.
+    tp : ToolPath
+        The tool path.
+
+    Returns
+    -------
+    Path
+        The file written; read it back with :func:`read_csv`.
+    """
     path = Path(path)
     extra_cols, extra_data = [], []
     for k, v in tp.extras.items():
@@ -121,7 +136,20 @@ def _num(x, digits: int) -> str:
 
 
 def write_json(path, tp: ToolPath) -> Path:
-    """The tool path as JSON: ``report`` plus per-position arrays (mm)."""
+    """Write the tool path as JSON: its ``report()`` plus per-position arrays (mm, NaN as null).
+
+    Parameters
+    ----------
+    path : str or Path
+        File to write.
+    tp : ToolPath
+        The tool path.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     path = Path(path)
     data = {
         "report": tp.report(),
@@ -184,7 +212,41 @@ def apt_lines(tp: ToolPath, options: PostOptions = PostOptions()) -> list[str]:
 
 
 def write_apt(path, tp: ToolPath, options: PostOptions = PostOptions()) -> Path:
-    """Write APT CLDATA (see the module docstring); returns the path."""
+    """Write APT CLDATA (see the module docstring for the statements).
+
+    Parameters
+    ----------
+    path : str or Path
+        File to write.
+    tp : ToolPath
+        The tool path; it must carry its cutter (``CUTTER/``).
+    options : PostOptions
+        Feeds, spindle speed, tool number, part name.
+
+    Returns
+    -------
+    Path
+        The file written; read it back with :func:`read_apt`.
+
+    Raises
+    ------
+    InputError
+        The tool path has no cutter.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, os
+    >>> from machsurf_cad import BallEndMill, ToolPath, read_apt
+    >>> tp = ToolPath.from_passes([np.array([[0.0, 0, 0], [10, 0, 0]])], [np.array([[0.0, 0.6, 0.8]] * 2)],
+    ...                           cutter=BallEndMill(10))
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     lines = write_apt(os.path.join(d, "p.apt"), tp).read_text().splitlines()
+    ...     back = read_apt(os.path.join(d, "p.apt"))
+    >>> lines[3:7]
+    ['CUTTER/10.0000,5.0000,0.0000,5.0000,0.0000,0.0000,30.0000', 'LOADTL/1', 'SPINDL/RPM,10000.0000,CLW', 'MULTAX/ON']
+    >>> bool(np.abs(back.tip - tp.tip).max() < 1e-5), back.cutter == tp.cutter
+    (True, True)
+    """
     path = Path(path)
     path.write_text("\n".join(apt_lines(tp, options)) + "\n")
     return path
@@ -230,6 +292,19 @@ def read_apt(path, *, name: str | None = None) -> ToolPath:
     others are cuts. Passes are counted at each rapid that follows feed moves. Without
     ``MULTAX/ON`` (or with 3-value GOTOs) the axis is +Z. The ``CUTTER`` statement gives the
     cutter (:func:`~machsurf_cad.cutters.cutter_from_apt`).
+
+    Parameters
+    ----------
+    path : str or Path
+        APT CLDATA text file.
+    name : str, optional
+        Name of the tool path (default: the file's stem).
+
+    Returns
+    -------
+    ToolPath
+        Positions, axes, moves, passes, feeds (mm/min) and the cutter; ``info`` holds the raw
+        ``CUTTER`` values and the statements skipped.
 
     Raises
     ------
@@ -320,7 +395,23 @@ def read_apt(path, *, name: str | None = None) -> ToolPath:
 
 
 def read_csv(path) -> ToolPath:
-    """Read a tool path written by :func:`write_csv` (positions, axes, moves, passes, CC, feeds)."""
+    """Read a tool path written by :func:`write_csv` (positions, axes, moves, passes, CC, feeds).
+
+    Parameters
+    ----------
+    path : str or Path
+        A CSV file with at least the columns ``pass,index,move,tip_x,tip_y,tip_z,i,j,k``.
+
+    Returns
+    -------
+    ToolPath
+        Without a cutter (CSV has none); axes renormalised.
+
+    Raises
+    ------
+    InputError
+        Missing file, other columns, malformed rows.
+    """
     p = Path(path)
     if not p.is_file():
         raise InputError(f"CSV tool path not found: {p}")

@@ -93,10 +93,19 @@ def example(name: str, view: ExampleView = "surface"):
         ``surface`` gives a :class:`~machsurf_cad.geometry.BSplineSurface`, ``ruled`` a
         :class:`~machsurf_cad.flank_milling.RuledSurface`, ``motion`` a :class:`~machsurf_cad.sweep.Motion`.
 
+    Returns
+    -------
+    BSplineSurface, RuledSurface or Motion
+
     Raises
     ------
     InputError
         Unknown name, or the example has no such view; the message lists the known ones.
+
+    Examples
+    --------
+    >>> example("bezier5").degree_u, example("sine", "motion").t_range
+    (5, (0.0, 1.0))
     """
     known = sorted(n for n, e in EXAMPLES.items() if getattr(e, view, None) is not None)
     e = EXAMPLES.get(name)

@@ -82,10 +82,6 @@ class FlankPath(Result):
         }
 
 
-def _tip_and_length(s: Setting, overhang: float):
-    return s.placement(overhang)
-
-
 def flank_path(
     surface: RuledSurface,
     R: float,
@@ -105,6 +101,41 @@ def flank_path(
     is halved until the axis interpolated between its ends is within the tolerance of the exact
     setting at its middle, down to 1e-5 of the range (a jump of the setting there is reported
     in ``discontinuities``). Each setting starts from its neighbour's (continuation).
+
+    Parameters
+    ----------
+    surface : RuledSurface
+        The ruled surface.
+    R : float
+        Cylinder radius, mm.
+    kind : {"standard-tangent", "standard-distributed", "optimum", "minimax"}
+        The setting on each rule.
+    side : {1, -1}
+        Tool side.
+    tolerance : float
+        Step criterion, mm.
+    overhang : float
+        Tool length beyond each directrix, mm.
+    progress : Progress, optional
+        ``progress(done, total, message)``.
+
+    Returns
+    -------
+    FlankPath
+        Settings, tips and axes per rule, max gouge and undercut; ``toolpath()`` gives the
+        :class:`~machsurf_cad.cam.ToolPath`.
+
+    Raises
+    ------
+    NoAdmissibleSetting
+        The setting does not exist on some rule.
+
+    Examples
+    --------
+    >>> from machsurf_cad import examples
+    >>> p = flank_path(examples.liu_ruled(), 10.0, "optimum", n_rules=9)
+    >>> len(p.settings), p.max_gouge < 0.5
+    (9, True)
     """
     if not tolerance > 0:
         raise InputError("tolerance must be > 0 mm")
@@ -131,7 +162,7 @@ def flank_path(
             m = 0.5 * (a + b)
             sa, sb = setting(a), setting(b)
             sm = setting(m, sa)
-            (ta, aa, La), (tb, ab, Lb), (tm, am, Lm) = (_tip_and_length(x, overhang) for x in (sa, sb, sm))
+            (ta, aa, La), (tb, ab, Lb), (tm, am, Lm) = (x.placement(overhang) for x in (sa, sb, sm))
             L = max(La, Lb, Lm)
             ti, ai = 0.5 * (ta + tb), (aa + ab) / np.linalg.norm(aa + ab)
             err = max(np.linalg.norm((ti + s_ * ai) - (tm + s_ * am)) for s_ in (0.0, 0.5 * L, L))
@@ -144,7 +175,7 @@ def flank_path(
                 progress(i, len(us), "settings along the surface")
             i += 1
     sets = tuple(setting(u) for u in us)
-    tips, axes, lengths = zip(*(_tip_and_length(s, overhang) for s in sets))
+    tips, axes, lengths = zip(*(s.placement(overhang) for s in sets))
     worst: dict = {}
     g, uc = 0.0, 0.0
     for s in sets:

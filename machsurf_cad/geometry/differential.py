@@ -75,8 +75,25 @@ def tangent_to_parameter(props: LocalProperties, vec: np.ndarray):
 def local_properties(surface: BSplineSurface, u, v, *, check: bool = True) -> LocalProperties:
     """Fundamental forms, normals, principal curvatures and directions at ``(u, v)``.
 
-    Raises :class:`~machsurf_cad.errors.DegenerateGeometryError` where the normal does not
-    exist unless ``check=False`` (then NaN there).
+    Parameters
+    ----------
+    surface : BSplineSurface
+        The surface (mm).
+    u, v : float or array_like
+        Parameters (broadcast together).
+    check : bool
+        Raise where the normal does not exist (else NaN there).
+
+    Returns
+    -------
+    LocalProperties
+        Points, unit normals ``su x sv``, first and second fundamental forms, principal
+        curvatures ``k1 >= k2`` (1/mm, signed against the normal as OCCT's GeomLProp) and directions.
+
+    Raises
+    ------
+    DegenerateGeometryError
+        Where the normal does not exist, unless ``check=False``.
 
     Examples
     --------

@@ -81,6 +81,15 @@ def run_job(spec: JobSpec, out, *, say: Say = quiet, progress: Progress | None =
     MachsurfError
         Bad input (:class:`~machsurf_cad.errors.InputError`, exit code 1 at the CLI) or a tolerance
         the fit could not reach (:class:`~machsurf_cad.errors.ToleranceError`, exit code 2).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     out = run_job(ReffJob(example="bezier5", tool="ball:D=10", grid=8, render=False), d + "/reff")
+    ...     files = out.files
+    >>> out.exit_code, files, out.report["directions"][0]["r_eff_max_mm"]
+    (0, ('report.json',), 5.0)
     """
     return _runner(spec)(spec, Path(out), say, progress)
 

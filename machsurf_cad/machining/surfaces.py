@@ -324,6 +324,23 @@ def machining_surface(
     progress : callable, optional
         :data:`~machsurf_cad.results.Progress`, passed to :func:`~machsurf_cad.approx.fit_surface`.
 
+    Returns
+    -------
+    MachiningSurface
+        S1 (and S2 in 5 axes) as trimmed faces with their fits (errors measured on unseen
+        points), the loop report, alpha_max and the measured axis error; ``report()`` for the figures.
+
+    Raises
+    ------
+    InputError
+        Not a ball, flat or bull-nose end mill, bad axes/strategy/angles.
+    LoopError
+        Loops found with ``loops="error"`` (the regions are named).
+    DegenerateGeometryError
+        Zero normals, or a 3-axis filleted point where the normal is parallel to the axis.
+    ToleranceError
+        The pole budget ran out before the tolerance (the error reached is in the message).
+
     Examples
     --------
     >>> from machsurf_cad import examples

@@ -58,6 +58,21 @@ def tool_paths(
         ``K`` (S1), ``CL`` (S2 / ball centre) and ``level``; ``info`` holds the measured chordal
         error and, in 5 axes, the measured axis error. Points outside the trimmed face are
         dropped (a pass is split there).
+
+    Raises
+    ------
+    InputError
+        Non-positive step-over or tolerance, no pass crossing the face, a strategy without a feed.
+
+    Examples
+    --------
+    >>> from machsurf_cad import example, machining_surface
+    >>> ms = machining_surface(example("bezier5"), "bull:D=28,r=4", lead=20, tolerance=1e-3)
+    >>> tp = tool_paths(ms, stepover=10.0, chordal_tolerance=0.01)
+    >>> import numpy as np
+    >>> lv = tp.extras["level"]
+    >>> np.unique(lv[~np.isnan(lv)]).tolist()[:3], tp.info["chordal_error_measured_mm"] <= 0.01
+    ([0.0, 10.0, 20.0], True)
     """
     if not stepover > 0 or not chordal_tolerance > 0:
         raise InputError("stepover and chordal tolerance must be > 0 mm")
