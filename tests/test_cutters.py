@@ -106,7 +106,9 @@ def test_cone_family_matches_envelope_paper_formula():
     a = np.linspace(seg.a0, seg.a1, 50)
     # in the paper's frame the tip plane is not at a = 0: shift by the tip offset
     a_paper = a - 0.0
-    assert np.allclose(seg.r(a), (R0 / math.cos(phi)) + (a_paper - R0 * math.tan(phi)) * math.sin(phi))
+    assert np.allclose(
+        seg.r(a), (R0 / math.cos(phi)) + (a_paper - R0 * math.tan(phi)) * math.sin(phi), rtol=0, atol=1e-9
+    )
     assert math.isclose(seg.a0, R0 * math.tan(phi))  # starts at the real tip, not below it
     assert math.isclose(seg.r(seg.a0), R0 / math.cos(phi))
 
@@ -116,7 +118,7 @@ def test_ball_family_is_one_sphere_and_bull_corner_is_hyperbolic():
     assert fam[0].kind == "point" and fam[0].radius == 5 and fam[0].a0 == 5
     corner = parse_cutter("bull:D=20,r=4").sphere_family()[0]
     a = np.linspace(corner.a0, corner.a1, 20)
-    assert np.allclose(corner.r(a), 4 + np.sqrt(36 + (a - 4) ** 2))
+    assert np.allclose(corner.r(a), 4 + np.sqrt(36 + (a - 4) ** 2), rtol=0, atol=1e-9)
 
 
 def test_profiles_are_continuous():

@@ -40,7 +40,7 @@ def test_face_orientation_flips_the_sign():
     ref = builders.plane_patch()
     cand = builders.plane_patch(origin=(0, 0, 1))
     d = deviation(Face(ref, reversed=True), cand, samples=10)
-    assert np.allclose(d.signed, -1.0)
+    assert np.allclose(d.signed, -1.0, rtol=0, atol=1e-9)
 
 
 def test_projection_matches_brute_force_on_free_form(rng):

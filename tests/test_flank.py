@@ -118,7 +118,7 @@ def test_whole_surface_path_envelope_and_its_deviation():
     s = examples.hypar_ruled(20.0, 80.0)
     path = flank_path(s, 15.0, "optimum", tolerance=0.01)
     assert len(path.settings) >= 9 and path.axis.shape == (len(path.settings), 3)
-    assert np.allclose(np.linalg.norm(path.axis, axis=1), 1.0)
+    assert np.allclose(np.linalg.norm(path.axis, axis=1), 1.0, rtol=0, atol=1e-9)
     env = envelope_surface(path, tolerance=1e-3)
     assert env.max_error <= 1e-3
     # the fitted envelope lies on the cylinder of the position at its own time t: at R from that axis

@@ -99,12 +99,18 @@ def test_lead_and_tilt_sign_convention():
     n = np.array([[0.0, 0.0, 1.0]])
     fr = LocalFrame(np.zeros((1, 3)), np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]), n, np.zeros(1), np.zeros(1))
     feed = PlanesFeed((1, 0, 0))
-    assert np.allclose(feed.feed(fr), [[0, 1, 0]])  # planes parallel to yOz feed along +y on a face facing +z
+    assert np.allclose(
+        feed.feed(fr), [[0, 1, 0]], rtol=0, atol=1e-9
+    )  # planes parallel to yOz feed along +y on a face facing +z
     a = LeadTilt(20, 0, feed).axis(fr)[0]
-    assert np.allclose(a, [0, math.sin(math.radians(20)), math.cos(math.radians(20))])  # leans towards the feed
+    assert np.allclose(
+        a, [0, math.sin(math.radians(20)), math.cos(math.radians(20))], rtol=0, atol=1e-9
+    )  # leans towards the feed
     a = LeadTilt(20, 90, feed).axis(fr)[0]
-    assert np.allclose(a, [-math.sin(math.radians(20)), 0, math.cos(math.radians(20))])  # turned about n to n x f
-    assert np.allclose(LeadTilt(0, 45, feed).axis(fr)[0], [0, 0, 1])  # tilt alone does nothing
+    assert np.allclose(
+        a, [-math.sin(math.radians(20)), 0, math.cos(math.radians(20))], rtol=0, atol=1e-9
+    )  # turned about n to n x f
+    assert np.allclose(LeadTilt(0, 45, feed).axis(fr)[0], [0, 0, 1], rtol=0, atol=1e-9)  # tilt alone does nothing
 
 
 def _tilted_wave():
@@ -240,14 +246,14 @@ def test_tool_paths_on_planes_and_cl_files(tmp_path):
     ms = machining_surface(F, "bull:D=28,r=4", axes=5, strategy="planes:x", lead=20, tolerance=TOL)
     tp = tool_paths(ms, stepover=5.0, chordal_tolerance=0.01)
     levels = sorted({round(p.extras["level"][0], 9) for p in tp.cutting_passes()})
-    assert np.allclose(np.diff(levels), 5.0)
+    assert np.allclose(np.diff(levels), 5.0, rtol=0, atol=1e-9)
     for p in tp.cutting_passes():
         assert np.abs(p.extras["K"][:, 0] - p.extras["level"][0]).max() < 1e-8  # C1 lies in its plane x = level
-        assert np.allclose(np.linalg.norm(p.axis, axis=1), 1.0)
+        assert np.allclose(np.linalg.norm(p.axis, axis=1), 1.0, rtol=0, atol=1e-9)
         # tip = CL - r u and CL = K + R_t v: |CL - K| = R_t, (CL - K) . u = 0
         w = p.extras["CL"] - p.extras["K"]
         assert np.abs(np.linalg.norm(w, axis=1) - 10.0).max() < 3 * TOL
-        assert np.allclose(p.tip, p.extras["CL"] - 4.0 * p.axis)
+        assert np.allclose(p.tip, p.extras["CL"] - 4.0 * p.axis, rtol=0, atol=1e-9)
     assert tp.info["chordal_error_measured_mm"] <= 0.01
     assert tp.info["axis_error_deg_measured"] <= ms.alpha_max_deg_measured
     rows = write_csv(tmp_path / "p.csv", tp).read_text().splitlines()
@@ -278,9 +284,11 @@ def test_iso_paths_three_axis(tmp_path):
     tp = tool_paths(ms, stepover=4.0, chordal_tolerance=0.005)
     assert len(tp.cutting_passes()) >= 10
     for p in tp.cutting_passes():
-        assert np.allclose(p.extras["uv"][:, 1], p.extras["level"][0])  # v constant along an iso-u pass
-        assert np.allclose(p.axis, [0, 0, 1])
-        assert np.allclose(p.tip, p.extras["K"] - [0, 0, 5.0])
+        assert np.allclose(
+            p.extras["uv"][:, 1], p.extras["level"][0], rtol=0, atol=1e-9
+        )  # v constant along an iso-u pass
+        assert np.allclose(p.axis, [0, 0, 1], rtol=0, atol=1e-9)
+        assert np.allclose(p.tip, p.extras["K"] - [0, 0, 5.0], rtol=0, atol=1e-9)
 
 
 def _dimpled_plate():

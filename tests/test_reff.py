@@ -144,15 +144,15 @@ def test_maps_on_a_tilted_plane_match_closed_forms():
     plane = builders.plane_patch(origin=(0, 0, 0), du=(100, 0, 0), dv=(0, 80, 80 * t))  # steepest slope along y
     m = reff_maps(plane, "bull:D=10,r=2", directions=[0, 90, 45], grid=32, scallop=0.01)
     d0, d90, d45 = m.directions
-    assert np.allclose(d0.slope_deg, S0) and np.allclose(d0.alpha_deg, 90.0)
-    assert np.allclose(d0.r_eff, 2.0)  # feed along X: perpendicular to the slope
-    assert np.allclose(d90.r_eff, 3.0 / math.sin(math.radians(S0)) + 2.0)
+    assert np.allclose(d0.slope_deg, S0, rtol=0, atol=1e-9) and np.allclose(d0.alpha_deg, 90.0, rtol=0, atol=1e-9)
+    assert np.allclose(d0.r_eff, 2.0, rtol=0, atol=1e-9)  # feed along X: perpendicular to the slope
+    assert np.allclose(d90.r_eff, 3.0 / math.sin(math.radians(S0)) + 2.0, rtol=0, atol=1e-9)
     # theta = 45: the feed's projection normal to the axis makes 45 deg with the steepest slope
-    assert np.allclose(d45.alpha_deg, 45.0)
-    assert np.allclose(d45.r_eff, effective_radius("bull:D=10,r=2", S0, 45.0))
+    assert np.allclose(d45.alpha_deg, 45.0, rtol=0, atol=1e-9)
+    assert np.allclose(d45.r_eff, effective_radius("bull:D=10,r=2", S0, 45.0), rtol=0, atol=1e-9)
     # flat surface: step-over 2 sqrt(h (2 R_eff - h)); ball the same with R
-    assert np.allclose(d90.stepover, 2 * np.sqrt(0.01 * (2 * d90.r_eff - 0.01)))
-    assert np.allclose(d90.stepover_ball, 2 * np.sqrt(0.01 * (10 - 0.01)))
+    assert np.allclose(d90.stepover, 2 * np.sqrt(0.01 * (2 * d90.r_eff - 0.01)), rtol=0, atol=1e-9)
+    assert np.allclose(d90.stepover_ball, 2 * np.sqrt(0.01 * (10 - 0.01)), rtol=0, atol=1e-9)
     rep = m.report()
     assert rep["directions"][0]["area_fraction_torus_beats_ball"] == 0.0
     assert rep["directions"][1]["area_fraction_torus_beats_ball"] == 1.0
@@ -163,8 +163,8 @@ def test_five_axis_lead_on_a_plane():
     plane = builders.plane_patch()
     m = reff_maps(plane, "bull:D=10,r=2", directions=[30], grid=8, axes=5, lead=10.0)
     d = m.directions[0]
-    assert np.allclose(d.slope_deg, 10.0) and np.allclose(d.alpha_deg, 0.0, atol=1e-6)
-    assert np.allclose(d.r_eff, 3.0 / math.sin(math.radians(10)) + 2.0)
+    assert np.allclose(d.slope_deg, 10.0, rtol=0, atol=1e-9) and np.allclose(d.alpha_deg, 0.0, atol=1e-6)
+    assert np.allclose(d.r_eff, 3.0 / math.sin(math.radians(10)) + 2.0, rtol=0, atol=1e-9)
     flat = reff_maps(plane, "bull:D=10,r=2", directions=[30], grid=8, axes=3)
     assert np.all(np.isinf(flat.directions[0].r_eff)) and flat.report()["directions"][0]["n_infinite_r_eff"] == 64
 
@@ -185,7 +185,7 @@ def test_stepover_on_a_cylinder_uses_the_section_radius():
     d = m.directions[0]  # feed along x = the cylinder axis: the section across it is the 40 mm circle
     assert np.allclose(d.rho, 40.0, rtol=1e-9)
     ref, _ = stepover(0.01, d.r_eff, 40.0)
-    assert np.allclose(d.stepover, ref)
+    assert np.allclose(d.stepover, ref, rtol=0, atol=1e-9)
 
 
 def test_bad_inputs():

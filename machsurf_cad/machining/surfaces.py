@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -286,7 +286,7 @@ def machining_surface(
     tolerance: float = 1e-3,
     degree=(3, 3),
     max_poles: int = 40000,
-    loops: str = "error",
+    loops: Literal["error", "flag", "trim"] = "error",
     axis_length: float | None = None,
     tip: bool = False,
     loop_grid: int = 121,
