@@ -62,6 +62,9 @@ class DeviationResult(Result):
     stats: dict = field(default_factory=dict)
     grid_points: np.ndarray | None = None
     grid_index: np.ndarray | None = None
+    outside_trim: np.ndarray | None = None
+    """For a trimmed reference face: True where the candidate point's closest surface point lies
+    outside the trimmed region, so it was measured to the face's boundary edges instead."""
 
     @property
     def max_abs(self) -> float:
@@ -237,8 +240,10 @@ def deviation(
     ----------
     reference : BSplineSurface or Face
         The surface measured against. For a :class:`Face` the sign follows the face's
-        outward normal (flipped when the face is reversed); feet are searched over the
-        whole parameter box of the underlying surface.
+        outward normal (flipped when the face is reversed). Feet are the closest points of
+        the trimmed face: on the surface where that lies inside the trimmed region, else on
+        its boundary edges (those points are flagged in ``outside_trim`` and counted in the
+        report as ``n_outside_trimmed_region``).
     candidate : BSplineSurface, Face or array_like (n, 3)
         A surface (sampled on a ``samples`` x ``samples`` grid, trimming honoured for a
         Face) or points, e.g. mesh vertices.
@@ -291,8 +296,18 @@ def deviation(
     if pts.shape[0] == 0:
         raise InputError("candidate has no points to measure")
     proj = project_points(ref_surface, pts, progress=progress)
+    outside = None
+    if isinstance(reference, Face) and reference.is_trimmed:
+        # the closest point of a trimmed face: the surface's where that lies inside the trimmed
+        # region, else a point of a boundary edge (the face is a subset of its surface)
+        outside = ~reference.contains_uv(proj.uv[:, 0], proj.uv[:, 1])
+        if outside.any():
+            proj = _to_boundary(reference, pts, proj, outside)
     signed = signed_distances(pts, proj, flip)
     stats = deviation_stats(signed, pts, proj.uv, proj.on_boundary, proj.converged)
+    if outside is not None:
+        stats["n_outside_trimmed_region"] = int(outside.sum())
+        stats["max_abs_outside_trimmed_region"] = float(np.abs(signed[outside]).max()) if outside.any() else 0.0
     return DeviationResult(
         pts,
         signed,
@@ -305,7 +320,55 @@ def deviation(
         stats,
         grid_points,
         grid_index,
+        outside,
     )
+
+
+def _to_boundary(face: Face, pts: np.ndarray, proj: Projection, outside: np.ndarray, n: int = 256) -> Projection:
+    """Closest points on the trimming loops' 3-D curves ``S(c(t))`` for the points whose surface foot
+    lies outside the trimmed region: dense samples, nearest by k-d tree, then golden-section search
+    on the curve parameter between the neighbouring samples (to 1e-12 of the curve's range)."""
+    s = face.surface
+    curves = [c for loop in face.loops for c in loop]
+    ts = [np.linspace(*c.bounds, n) for c in curves]
+    xyz = np.concatenate([s.evaluate(*c.evaluate(t).T) for c, t in zip(curves, ts)])
+    cid = np.repeat(np.arange(len(curves)), n)
+    k = np.arange(len(curves) * n) % n
+    idx = np.nonzero(outside)[0]
+    q = pts[idx]
+    near = cKDTree(xyz).query(q)[1]
+    uv = proj.uv.copy()
+    for ci, (c, t) in enumerate(zip(curves, ts)):
+        sel = np.nonzero(cid[near] == ci)[0]
+        if sel.size == 0:
+            continue
+        kk = k[near[sel]]
+        a = t[np.maximum(kk - 1, 0)]
+        b = t[np.minimum(kk + 1, n - 1)]
+        p = q[sel]
+
+        def f(tt, c=c, p=p):
+            return np.einsum("ij,ij->i", s.evaluate(*c.evaluate(tt).T) - p, s.evaluate(*c.evaluate(tt).T) - p)
+
+        g = (np.sqrt(5.0) - 1) / 2
+        x1, x2 = b - g * (b - a), a + g * (b - a)
+        f1, f2 = f(x1), f(x2)
+        for _ in range(60):
+            left = f1 < f2
+            b = np.where(left, x2, b)
+            a = np.where(left, a, x1)
+            x2n = np.where(left, x1, a + g * (b - a))
+            x1n = np.where(left, b - g * (b - a), x2)
+            x1, x2 = x1n, x2n
+            f1, f2 = f(x1), f(x2)
+            if np.max(b - a) <= 1e-12 * (t[-1] - t[0]):
+                break
+        uv[idx[sel]] = c.evaluate(0.5 * (a + b))
+    d = s.derivatives(uv[:, 0], uv[:, 1], 1)
+    nrm = np.cross(d.su, d.sv)
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    on_b = proj.on_boundary | outside
+    return Projection(uv, d.point, nrm, on_b, proj.converged)
 
 
 def signed_distances(pts: np.ndarray, proj: Projection, flip: float = 1.0) -> np.ndarray:

@@ -93,6 +93,16 @@ def run_inspect(spec: InspectJob, out, say: Say, progress=None) -> JobOutcome:
         f"worst at xyz = ({', '.join(f'{x:.4f}' for x in rep['worst_xyz_mm'])}) mm, "
         f"uv = ({rep['worst_uv'][0]:.6f}, {rep['worst_uv'][1]:.6f})"
     )
+    if result.outside_trim is not None:
+        n_out = int(result.outside_trim.sum())
+        say(
+            f"nominal is trimmed: {n_out} candidate point(s) lie beyond its trimmed region"
+            + (
+                f" (measured to its boundary edges, up to {rep['max_abs_outside_trimmed_region']:.6g} mm)"
+                if n_out
+                else ""
+            )
+        )
     if spec.tol is not None:
         say(f"tolerance {spec.tol:g} mm: {'met' if result.within_tolerance else 'NOT met'}")
     code = EXIT_TOLERANCE if (spec.tol is not None and not result.within_tolerance) else EXIT_OK
@@ -100,12 +110,16 @@ def run_inspect(spec: InspectJob, out, say: Say, progress=None) -> JobOutcome:
         if spec.render:
             from ..viz import render_deviation
 
+            outside = []
+            if result.outside_trim is not None and result.outside_trim.any():
+                outside = [(result.points[result.outside_trim], "magenta", "beyond the nominal's trimmed region")]
             render_deviation(
                 result,
                 st.path("deviation.png"),
                 vtp_path=st.path("deviation.vtp"),
                 title=f"{cand_path.name} vs {nominal.name}",
                 tolerance=spec.tol,
+                extra_points=outside,
             )
         report = {
             "nominal": str(spec.nominal),

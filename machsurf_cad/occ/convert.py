@@ -125,35 +125,127 @@ def pcurve_of_edge(edge, face) -> BSplineCurve:
 
 
 def face_from_surface(surface: BSplineSurface, loops: list[list[BSplineCurve]] | None = None) -> TopoDS_Face:
-    """A ``TopoDS_Face`` on ``surface``, natural bounds or trimmed by parameter-space loops.
+    """A valid ``TopoDS_Face`` on ``surface``, natural bounds or trimmed by parameter-space loops.
 
     ``loops[0]`` is the outer loop, further loops are holes; each loop is a list of 2-D
-    B-spline curves in the surface's (u, v) domain, joined end to end. The face is fixed
-    with ``ShapeFix_Face`` and checked with ``BRepCheck_Analyzer``; an invalid face raises.
+    B-spline curves in the surface's (u, v) domain, joined end to end. Loops from other
+    systems often have small gaps between their curves (CATIA: 3e-5 mm, Autodesk: 1e-3 mm):
+    consecutive ends closer than 1e-3 of the loop's parameter size are joined at their mid
+    point (:func:`close_loop`). Every edge gets a 3-D curve built at a tolerance that scales
+    with the surface's size, its tolerance is raised to cover the measured distance between
+    its 3-D curve and its curve on the surface (what OCCT's booleans check), and the face must
+    pass ``BRepCheck_Analyzer``; an invalid face raises :class:`InputError`.
     """
     geom = to_geom_surface(surface)
+    size = _size(surface)
     if not loops:
         u0, u1, v0, v1 = surface.bounds
         face = BRepBuilderAPI_MakeFace(geom, u0, u1, v0, v1, Precision.Confusion_s()).Face()
     else:
-        wires = [_wire_on_surface(loop, geom) for loop in loops]
+        wires = [_wire_on_surface(close_loop(loop)[0], geom, size) for loop in loops]
         mk = BRepBuilderAPI_MakeFace(geom, wires[0], True)
         for w in wires[1:]:
             mk.Add(w)
         if not mk.IsDone():
             raise InputError("could not build a trimmed face from the given loops")
         fixer = ShapeFix_Face(mk.Face())
+        fixer.SetPrecision(_build_tolerance(size))
         fixer.Perform()
         face = TopoDS.Face_s(fixer.Face())
+        settle_tolerances(face)
     check_valid(face, what=f"face '{surface.name}'")
     return face
 
 
-def _wire_on_surface(loop: list[BSplineCurve], geom):
+def _size(surface: BSplineSurface) -> float:
+    """Diagonal of the pole box (mm): the scale every build tolerance follows."""
+    p = surface.poles.reshape(-1, 3)
+    return float(max(np.linalg.norm(p.max(axis=0) - p.min(axis=0)), 1e-9))
+
+
+def _build_tolerance(size: float) -> float:
+    """3-D curve approximation tolerance of trimming edges: 1e-5 mm up to 1 m, then 1e-8 of the size."""
+    return max(1e-5, 1e-8 * size)
+
+
+def close_loop(loop, rel_gap: float = 1e-3) -> tuple[list[BSplineCurve], float]:
+    """The loop with each pair of consecutive curve ends joined at their mid point in (u, v).
+
+    Only gaps smaller than ``rel_gap`` times the loop's parameter-box diagonal are closed (a
+    larger jump, e.g. across a periodic seam, is left to the kernel). Returns the curves and
+    the largest gap closed (in parameter units). Clamped B-splines pass through their end
+    poles, so moving an end pole moves the curve by at most the half gap, only near that end.
+    """
+    loop = list(loop)
+    n = len(loop)
+    if n == 0:
+        return loop, 0.0
+    ends = np.array([[c.poles[0], c.poles[-1]] for c in loop])
+    diag = float(np.linalg.norm(ends.reshape(-1, 2).max(axis=0) - ends.reshape(-1, 2).min(axis=0))) or 1.0
+    poles = [np.array(c.poles, dtype=float) for c in loop]
+    worst = 0.0
+    for i in range(n):
+        j = (i + 1) % n
+        if loop[i].periodic or loop[j].periodic:
+            continue
+        a, b = poles[i][-1], poles[j][0]
+        gap = float(np.linalg.norm(a - b))
+        if 0.0 < gap <= rel_gap * diag:
+            m = 0.5 * (a + b)
+            poles[i][-1] = m
+            poles[j][0] = m
+            worst = max(worst, gap)
+    out = [
+        c if np.array_equal(p, c.poles) else BSplineCurve(c.degree, c.knots, c.mults, p, c.weights, c.periodic)
+        for c, p in zip(loop, poles)
+    ]
+    return out, worst
+
+
+def curve_on_surface_distance(edge, face, n: int = 33) -> float:
+    """Largest distance (mm) between an edge's 3-D curve and its curve on the face, at ``n`` parameters."""
+    from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Curve2d, BRepAdaptor_Surface
+
+    c3 = BRepAdaptor_Curve(edge)
+    c2 = BRepAdaptor_Curve2d(edge, face)
+    srf = BRepAdaptor_Surface(face, False)
+    d = 0.0
+    for t in np.linspace(c3.FirstParameter(), c3.LastParameter(), n):
+        uv = c2.Value(float(t))
+        d = max(d, c3.Value(float(t)).Distance(srf.Value(uv.X(), uv.Y())))
+    return d
+
+
+def settle_tolerances(face) -> float:
+    """Raise each edge's tolerance to 1.5 times its measured curve-on-surface distance where it is
+    smaller, and the vertices' to cover their edges; returns the largest edge tolerance (mm)."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+
+    builder = BRep_Builder()
+    worst = 0.0
+    exp = TopExp_Explorer(face, TopAbs_EDGE)
+    while exp.More():
+        e = TopoDS.Edge_s(exp.Current())
+        d = curve_on_surface_distance(e, face)
+        tol = BRep_Tool.Tolerance_s(e)
+        if d > tol:
+            builder.UpdateEdge(e, 1.5 * d)
+        worst = max(worst, BRep_Tool.Tolerance_s(e))
+        exp.Next()
+    BRepLib.UpdateTolerances_s(face, False)
+    return worst
+
+
+def _wire_on_surface(loop: list[BSplineCurve], geom, size: float = 100.0):
     mk = BRepBuilderAPI_MakeWire()
+    tol = _build_tolerance(size)
+    from OCP.GeomAbs import GeomAbs_C1
+
     for c in loop:
         e = BRepBuilderAPI_MakeEdge(to_geom2d_curve(c), geom).Edge()
-        BRepLib.BuildCurves3d_s(e)
+        BRepLib.BuildCurves3d_s(e, tol, GeomAbs_C1, 14, 400)
         mk.Add(e)
     if not mk.IsDone():
         raise InputError("trimming loop is not closed or its curves do not join")
