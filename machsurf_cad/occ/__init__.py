@@ -21,7 +21,7 @@ from .convert import (
     to_geom_surface,
 )
 from .mesh import read_stl, triangulate_face, write_stl
-from .step import read_step_face, read_step_faces, write_step
+from .step import read_step_face, read_step_faces, step_face_summaries, write_step
 
 __all__ = [
     "to_geom_surface",
@@ -32,6 +32,7 @@ __all__ = [
     "check_valid",
     "is_valid",
     "read_step_faces",
+    "step_face_summaries",
     "read_step_face",
     "write_step",
     "write_stl",

@@ -133,31 +133,84 @@ def _iter(shape, kind):
         exp.Next()
 
 
-def read_step_faces(path) -> list[Face]:
-    """Every face of a STEP file as a numpy :class:`Face`, with its index and name.
-
-    Any surface type is converted to NURBS by the kernel (``BRepBuilderAPI_NurbsConvert``);
-    parameter bounds and trimming loops are kept. Unnamed faces are called ``face_<index>``.
-    """
+def _named_faces(path):
+    """``[(TopoDS_Face, name)]`` of a STEP file, in file order (names from the faces' entities)."""
     shape, reader = read_step_shape(path)
     tr = reader.WS().TransferReader()
-    faces = []
+    out = []
     for i, f in enumerate(iter_faces(shape)):
         ent = tr.EntityFromShapeResult(f, -1)
         name = ""
         if ent is not None and hasattr(ent, "Name") and ent.Name() is not None:
             name = ent.Name().ToCString()
-        faces.append(face_record(f, i, name or f"face_{i}"))
-    if not faces:
+        out.append((f, name or f"face_{i}"))
+    if not out:
         raise InputError(f"STEP file {path} holds no faces")
-    return faces
+    return out
+
+
+def read_step_faces(path, indices=None) -> list[Face]:
+    """Faces of a STEP file as numpy :class:`Face` objects, with their index and name.
+
+    Any surface type is converted to NURBS by the kernel (``BRepBuilderAPI_NurbsConvert``);
+    parameter bounds and trimming loops are kept. Unnamed faces are called ``face_<index>``.
+    With ``indices`` only those faces are converted (conversion is the costly part: a cylinder
+    with 200 edges takes seconds); an index out of range raises with the face count.
+    """
+    named = _named_faces(path)
+    if indices is None:
+        indices = range(len(named))
+    out = []
+    for i in indices:
+        if not 0 <= int(i) < len(named):
+            raise InputError(f"face index {i} out of range: {path} has {len(named)} face(s) (0..{len(named) - 1})")
+        f, name = named[int(i)]
+        out.append(face_record(f, int(i), name))
+    return out
 
 
 def read_step_face(path, index: int) -> Face:
-    faces = read_step_faces(path)
-    if not 0 <= index < len(faces):
-        raise InputError(f"face index {index} out of range: {path} has {len(faces)} face(s) (0..{len(faces) - 1})")
-    return faces[index]
+    """Face ``index`` of a STEP file (only that face is converted to NURBS)."""
+    return read_step_faces(path, [index])[0]
+
+
+def step_face_summaries(path) -> list[dict]:
+    """What ``info`` shows of every face, without converting any to NURBS: index, name, surface type,
+    degrees and poles (B-spline and Bezier faces only), loops, uv bounds, area (mm^2), orientation."""
+    from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface
+
+    rows = []
+    for i, (f, name) in enumerate(_named_faces(path)):
+        surf = BRep_Tool.Surface_s(f)
+        kind = _SURFACE_TYPES.get(int(GeomAdaptor_Surface(surf).GetType()), "OtherSurface")
+        deg = poles = None
+        rational = False
+        if isinstance(surf, (Geom_BSplineSurface, Geom_BezierSurface)):
+            deg = [surf.UDegree(), surf.VDegree()]
+            poles = [surf.NbUPoles(), surf.NbVPoles()]
+            rational = bool(surf.IsURational() or surf.IsVRational())
+        u0, u1, v0, v1 = BRepTools.UVBounds_s(f)
+        n_wires = sum(1 for _ in _iter(f, TopAbs_WIRE))
+        su0, su1, sv0, sv1 = surf.Bounds()
+        natural = n_wires == 1 and all(abs(a - b) < 1e-9 for a, b in zip((u0, u1, v0, v1), (su0, su1, sv0, sv1)))
+        props = GProp_GProps()
+        BRepGProp.SurfaceProperties_s(f, props)
+        rows.append(
+            {
+                "index": i,
+                "name": name,
+                "source_type": kind,
+                "degrees": deg,
+                "poles": poles,
+                "rational": rational,
+                "n_loops": n_wires,
+                "trimmed": not natural,
+                "uv_bounds": [u0, u1, v0, v1],
+                "area_mm2": float(props.Mass()),
+                "reversed": f.Orientation() == TopAbs_REVERSED,
+            }
+        )
+    return rows
 
 
 def write_step(path, faces: list[Face], *, extra_shapes: list | None = None) -> Path:
