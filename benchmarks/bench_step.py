@@ -36,8 +36,20 @@ def step_rows(quick=False):
         t_all = time.perf_counter() - t
     assert len(rows_info) == len(allf) == n_faces
     return [
-        {"name": f"info, plate with holes ({n_faces} faces)", "n": n_faces, "ours_s": t_info, "ref_s": t_all,
-         "ref": "convert every face", "max_diff": 0.0},
-        {"name": f"one face of {n_faces} (--face N)", "n": 1, "ours_s": t_one, "ref_s": t_all,
-         "ref": "convert every face", "max_diff": 0.0},
+        {
+            "name": f"info, plate with holes ({n_faces} faces)",
+            "n": n_faces,
+            "ours_s": t_info,
+            "ref_s": t_all,
+            "ref": "convert every face",
+            "max_diff": 0.0,
+        },
+        {
+            "name": f"one face of {n_faces} (--face N)",
+            "n": 1,
+            "ours_s": t_one,
+            "ref_s": t_all,
+            "ref": "convert every face",
+            "max_diff": 0.0,
+        },
     ]

@@ -243,6 +243,14 @@ def test_reff_command_report_and_maps(tmp_path):
     assert sum(rep["best_direction"]["histogram_deg"].values()) == 64 * 64
     for name in ("reff_thetam45.png", "reff_theta90.vtp", "best_direction.png"):
         assert (out / name).is_file()
+    import pyvista as pv
+
+    # the .vtp holds true values (only colours clip at 2R = 10 mm): its max is the report's max
+    for d in rep["directions"]:
+        tag = f"{d['theta_deg']:g}".replace("-", "m")
+        arr = np.asarray(pv.read(out / f"reff_theta{tag}.vtp").point_data["R_eff [mm]"])
+        assert abs(np.nanmax(arr[np.isfinite(arr)]) - d["r_eff_max_mm"]) <= 1e-9 * d["r_eff_max_mm"]
+    assert max(d["r_eff_max_mm"] for d in rep["directions"]) > 10.0  # beyond the colour range somewhere
 
 
 def test_reff_command_bad_input(tmp_path):

@@ -11,7 +11,7 @@ import shutil
 import subprocess
 
 import pytest
-from conftest import ROOT
+from conftest import HAS_OCP, ROOT
 
 FREECADCMD = shutil.which("freecadcmd") or shutil.which("FreeCADCmd")
 FREECAD = shutil.which("freecad") or shutil.which("FreeCAD")
@@ -31,7 +31,7 @@ def _home(tmp_path):
     return tmp_path / "home"
 
 
-def _run(cmd, tmp_path, script, timeout=600):
+def _run(cmd, tmp_path, script, timeout=600, **extra_env):
     assert None not in cmd, f"missing program in {cmd} (CI installs freecad and xvfb)"
     out = tmp_path / "result.json"
     env = dict(
@@ -40,6 +40,7 @@ def _run(cmd, tmp_path, script, timeout=600):
         MACHSURF_FC_OUT=str(out),
         MACHSURF_ROOT=str(ROOT),
         QTWEBENGINE_DISABLE_SANDBOX="1",
+        **extra_env,
     )
     env.pop("PYTHONPATH", None)  # FreeCAD's Python must not pick up the venv's packages
     subprocess.run(
@@ -100,3 +101,27 @@ def test_gui_command_on_a_selected_face(tmp_path):
 
     img = np.asarray(Image.open(r["png"]).convert("RGB"))
     assert img.shape[:2] == (900, 1200) and len(np.unique(img.reshape(-1, 3), axis=0)) > 100
+
+
+@pytest.mark.skipif(not HAS_OCP, reason="cadquery-ocp is needed to write the STEP files")
+def test_freecad_imports_every_multi_face_step_we_write(tmp_path):
+    """FreeCAD 0.20 crashed (SIGSEGV) on our multi-face STEP files (OCCT's assembly structure): each file
+    the project writes must import, with every face, under the product name we give it."""
+    import machsurf_cad as ms
+    from machsurf_cad.occ import write_step
+
+    res = ms.machining_surface(ms.example("bezier5"), "bull:D=28,r=4", lead=20, tolerance=1e-3)
+    env = ms.envelope("cone:D=10,angle=10", ms.example("sine", "motion"), passes=3)
+    fl = ms.flank(ms.example("liu", "ruled"), "cyl:D=20", whole=True, tolerance=0.5)
+    files = {
+        "machining_surface.step": [f for f in res.faces()],
+        "envelopes.step": [ms.Face(f.surface, name=e.name) for e, f in zip(env.chain.passes, env.chain.fits)],
+        "envelope.step": [ms.Face(fl.envelope.surface, name="flank_envelope")],
+    }
+    paths = [write_step(tmp_path / name, faces, author="QA") for name, faces in files.items()]
+    r = _run([FREECADCMD], tmp_path, "import_check.py", MACHSURF_STEP_FILES=os.pathsep.join(map(str, paths)))
+    for name, faces in files.items():
+        got = r["files"][name]
+        assert got["faces"] == len(faces), (name, got)
+        assert name[: -len(".step")] in got["labels"], got["labels"]  # the product carries our name
+        assert not any("Open CASCADE" in lab for lab in got["labels"])

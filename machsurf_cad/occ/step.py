@@ -17,7 +17,7 @@ from OCP.Interface import Interface_Static
 from OCP.STEPConstruct import STEPConstruct
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader, STEPControl_Writer
 from OCP.TCollection import TCollection_HAsciiString
-from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED, TopAbs_WIRE
+from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED, TopAbs_SHELL, TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS, TopoDS_Compound
 
@@ -213,42 +213,102 @@ def step_face_summaries(path) -> list[dict]:
     return rows
 
 
-def write_step(path, faces: list[Face], *, extra_shapes: list | None = None) -> Path:
+def write_step(
+    path, faces: list[Face], *, extra_shapes: list | None = None, author: str = "", organization: str = ""
+) -> Path:
     """Write faces (and optional named solids, e.g. cutters) to a STEP AP214 file, each face named.
 
     Surfaces are written as B_SPLINE_SURFACE_WITH_KNOTS (never OFFSET_SURFACE) so that any CAM
-    system reads them. ``extra_shapes`` holds ``(TopoDS_Shape, name)`` pairs. The file is
-    written under a temporary name and moved into place: a failure leaves no half-written file.
+    system reads them. The file holds one product named like the file, without assembly
+    structure (FreeCAD 0.20 crashes on OCCT's default assembly of several faces, and on several
+    products), and each face sits in its own shell; faces and shells carry the face's name (the
+    shells' names are what FreeCAD shows). ``extra_shapes`` holds ``(TopoDS_Shape, name)`` pairs. The header
+    names machsurf_cad and its version as the originating system, and ``author``/``organization``.
+    The file is written under a temporary name and moved into place: a failure leaves no
+    half-written file.
+
+    Raises
+    ------
+    InputError
+        No face to write, an invalid face, or OCCT failing to write.
     """
+    if not faces and not extra_shapes:
+        raise InputError(f"nothing to write to {path}: no face")
+    from OCP.TopoDS import TopoDS_Shell
+
     builder = BRep_Builder()
     comp = TopoDS_Compound()
     builder.MakeCompound(comp)
     named = []
     for f in faces:
         tf = face_from_surface(f.surface, [list(loop) for loop in f.loops] or None)
-        named.append((tf, f.name or f.surface.name))
-        builder.Add(comp, tf)
+        shell = TopoDS_Shell()  # each face in its own named shell: FreeCAD labels shells, not faces
+        builder.MakeShell(shell)
+        builder.Add(shell, tf)
+        name = f.name or f.surface.name or "face"
+        builder.Add(comp, shell)
+        named += [(tf, name), (shell, name)]
     for shape, name in extra_shapes or []:
         builder.Add(comp, shape)
         named.append((shape, name))
-    return write_step_shape(path, comp, named)
+    product = Path(path).stem
+    return write_step_shapes(path, [(comp, product)], sub_names=named, author=author, organization=organization)
 
 
 def write_step_shape(path, shape, named: list | None = None) -> Path:
-    """Write any shape to STEP AP214 (mm), naming the listed sub-shapes ``(TopoDS_Shape, name)``."""
+    """Write one shape to STEP AP214 (mm), naming the listed sub-shapes ``(TopoDS_Shape, name)``."""
+    return write_step_shapes(path, [(shape, Path(path).stem)], sub_names=named or [])
+
+
+def write_step_shapes(
+    path, shapes: list, *, sub_names: list | None = None, author: str = "", organization: str = ""
+) -> Path:
+    """Write ``(shape, name)`` pairs to STEP AP214 (mm), each shape a product of that name, no assembly
+    structure; ``sub_names`` names sub-shapes (faces, shells) inside them."""
+    from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
+
+    from .._version import __version__
+
     path = Path(path)
     writer = STEPControl_Writer()
     Interface_Static.SetCVal_s("write.step.schema", "AP214IS")
     Interface_Static.SetCVal_s("write.step.unit", "MM")
-    with quiet_occt():
-        status = writer.Transfer(shape, STEPControl_AsIs)
-    if status != IFSelect_RetDone:
-        raise InputError(f"OCCT could not translate the shape to STEP for {path}")
+    Interface_Static.SetIVal_s("write.step.assembly", 0)
+    for shape, name in shapes:
+        Interface_Static.SetCVal_s("write.step.product.name", name or "shape")
+        with quiet_occt():
+            status = writer.Transfer(shape, STEPControl_AsIs)
+        if status != IFSelect_RetDone:
+            raise InputError(f"OCCT could not translate {name!r} to STEP for {path}")
     fp = writer.WS().TransferWriter().FinderProcess()
-    for sub, name in named or []:
+    for sub, name in list(shapes) + list(sub_names or []):
         item = STEPConstruct.FindEntity_s(fp, sub)
         if item is not None and name:
             item.SetName(TCollection_HAsciiString(name))
+    from OCP.StepBasic import StepBasic_Product
+
+    model = writer.Model()
+    products = [model.Value(i) for i in range(1, model.NbEntities() + 1)]
+    products = [e for e in products if isinstance(e, StepBasic_Product)]
+    if len(products) == len(shapes):  # OCCT appends " 1", " 2"...: give each product its exact name
+        for prod, (_, name) in zip(products, shapes):
+            prod.SetName(TCollection_HAsciiString(name or "shape"))
+            prod.SetId(TCollection_HAsciiString(name or "shape"))
+    shell_names = [name for sub, name in sub_names or [] if sub.ShapeType() == TopAbs_SHELL]
+    from OCP.StepShape import StepShape_OpenShell
+
+    shells = [model.Value(i) for i in range(1, model.NbEntities() + 1)]
+    shells = [e for e in shells if isinstance(e, StepShape_OpenShell)]
+    if len(shells) == len(shell_names):
+        for sh, name in zip(shells, shell_names):
+            sh.SetName(TCollection_HAsciiString(name))
+    header = APIHeaderSection_MakeHeader(model)
+    system = TCollection_HAsciiString(f"machsurf_cad {__version__}")
+    header.SetOriginatingSystem(system)
+    header.SetPreprocessorVersion(system)
+    header.SetAuthorValue(1, TCollection_HAsciiString(author or "machsurf_cad user"))
+    header.SetOrganizationValue(1, TCollection_HAsciiString(organization or "unspecified"))
+    header.SetName(TCollection_HAsciiString(path.name))
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(suffix=".step", dir=str(path.parent))
     os.close(fd)

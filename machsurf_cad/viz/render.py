@@ -176,19 +176,22 @@ def render_scalar_map(
 
     ``clim`` fixes the colour scale (values beyond it saturate; ``inf`` shows at the top),
     ``contour_level`` draws iso-lines (e.g. the zone boundary R_eff = R), ``mask`` hides grid
-    points outside a trimmed face. All arrays are saved in the .vtp.
+    points outside a trimmed face. All arrays are saved in the .vtp with their true values
+    (``inf`` included); only the colours saturate, through a separate ``<label> (colour)`` array.
     """
     pts = np.asarray(points, dtype=float)
     mesh = grid_polydata(pts)
     vals = np.asarray(values, dtype=float).ravel()
     shown = np.where(np.isinf(vals), np.sign(vals) * 1e300, vals)
-    mesh.point_data[label] = shown if clim is None else np.clip(shown, clim[0], clim[1])
+    colour = f"{label} (colour)"
+    mesh.point_data[label] = vals  # the data: true values
+    mesh.point_data[colour] = shown if clim is None else np.clip(shown, clim[0], clim[1])
     for k, v in (extra_arrays or {}).items():
         mesh.point_data[k] = np.asarray(v, dtype=float).ravel()
     if mask is not None:
         m = np.asarray(mask, bool).ravel()
         faces = mesh.faces.reshape(-1, 5)[:, 1:]
-        mesh = mesh.extract_cells(np.nonzero(m[faces].all(axis=1))[0]).extract_geometry()
+        mesh = mesh.extract_cells(np.nonzero(m[faces].all(axis=1))[0]).extract_surface(algorithm=None)
     p = pv.Plotter(off_screen=True, window_size=list(window_size))
     p.set_background(background)
     sargs = dict(
@@ -203,10 +206,10 @@ def render_scalar_map(
         width=0.06,
     )
     p.add_mesh(
-        mesh, scalars=label, cmap=cmap, clim=clim, scalar_bar_args=sargs, annotations=annotations or {}, lighting=False
+        mesh, scalars=colour, cmap=cmap, clim=clim, scalar_bar_args=sargs, annotations=annotations or {}, lighting=False
     )  # a map: colours must read true against the legend
     if contour_level is not None and mesh.n_points > 3:
-        lines = mesh.contour([contour_level], scalars=label)
+        lines = mesh.contour([contour_level], scalars=colour)
         if lines.n_points:
             p.add_mesh(lines, color=contour_color, line_width=3)
     if title:
