@@ -25,7 +25,12 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _say(msg: str = "") -> None:
-    print(msg, flush=True)
+    try:
+        print(msg, flush=True)
+    except BrokenPipeError:  # `machsurf info part.step | head`: keep working, stop printing
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def _axis(text: str | None):
@@ -85,6 +90,7 @@ def build_parser() -> argparse.ArgumentParser:
     n.add_argument("--tol", type=float, default=None, help="tolerance, max |deviation| in mm (exit 2 if not met)")
     n.add_argument("--samples", type=int, default=200, help="grid samples per direction on a STEP candidate")
     n.add_argument("--no-render", dest="render", action="store_false", help="skip the PNG/VTP (numbers only)")
+    n.add_argument("--max-memory", type=float, default=4096.0, help="memory budget, MB: bigger work is refused")
     n.add_argument("-o", "--out", default="out/inspect", help="output folder (default: out/inspect)")
 
     m = sub.add_parser("machining-surface", help="guiding S1 and orientation S2 surfaces of a face (Table 1)")
@@ -123,6 +129,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--lead", type=float, default=0.0, help="lead angle, degrees (5 axes)")
     e.add_argument("--tilt", type=float, default=0.0, help="tilt angle, degrees (5 axes)")
     e.add_argument("--no-render", dest="render", action="store_false", help="numbers only")
+    e.add_argument("--max-memory", type=float, default=4096.0, help="memory budget, MB: bigger work is refused")
     e.add_argument("-o", "--out", default="out/reff", help="output folder")
 
     f = sub.add_parser("flank", help="flank milling settings of a cylindrical cutter on a ruled surface")
@@ -164,6 +171,12 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--tol", type=float, default=1e-3, help="fit tolerance per pass, mm (default 0.001)")
     v.add_argument("--chordal", type=float, default=0.01, help="chordal tolerance of the tool path, mm (default 0.01)")
     v.add_argument(
+        "--seam-angle-tol",
+        type=float,
+        default=0.05,
+        help="G1 is claimed only when the written faces meet within this normal angle, deg (default 0.05); else exit 2",
+    )
+    v.add_argument(
         "--no-theta-scan", dest="theta_scan", action="store_false", help="skip the scan of the admissible theta range"
     )
     v.add_argument("--no-render", dest="render", action="store_false", help="skip the zebra picture")
@@ -180,14 +193,25 @@ _BAR_TITLES = {
 }
 
 
+class _Terminated(BaseException):
+    """SIGTERM, raised like Ctrl-C so staged outputs are removed on the way out."""
+
+
+def _on_sigterm(signum, frame):
+    raise _Terminated()
+
+
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "command", None):
         parser.print_help()
         return EXIT_INPUT
+    import signal
+
     from .progress import Bar
 
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if _main_thread() else None
     try:
         spec = _spec(args)
         with Bar(_BAR_TITLES.get(args.command, args.command)) as bar:
@@ -196,8 +220,20 @@ def main(argv=None) -> int:
         print(f"machsurf: error: {exc}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:
-        print("machsurf: interrupted", file=sys.stderr)
+        print("machsurf: interrupted (nothing written)", file=sys.stderr)
         return 130
+    except _Terminated:
+        print("machsurf: terminated (nothing written)", file=sys.stderr)
+        return 143
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _main_thread() -> bool:
+    import threading
+
+    return threading.current_thread() is threading.main_thread()
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -832,10 +832,14 @@ def parse_cutter(text: str) -> Cutter:
         raise InputError(f"unknown cutter kind {kind!r}; known: {', '.join(sorted(_KINDS))}")
     cls, names = _KINDS[kind]
     kwargs = {}
+    seen: set[str] = set()
     for part in filter(None, (p.strip() for p in rest.split(","))):
         if "=" not in part:
             raise InputError(f"cutter parameter {part!r} is not K=V")
         k, v = (s.strip() for s in part.split("=", 1))
+        if k in seen:
+            raise InputError(f"cutter parameter {k} is given twice in {text!r}")
+        seen.add(k)
         if k not in names:
             raise InputError(f"unknown parameter {k!r} for {kind} cutter; expected {', '.join(names)}")
         kwargs[names[k]] = _num(k, v)

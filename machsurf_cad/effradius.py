@@ -306,6 +306,7 @@ def reff_maps(
     axes: int = 3,
     lead: float = 0.0,
     tilt: float = 0.0,
+    max_memory_mb: float = 4096.0,
 ) -> ReffMaps:
     """Effective radius (and step-over) maps of ``tool`` over a face, for machining directions.
 
@@ -328,6 +329,8 @@ def reff_maps(
         3: axis z. 5: the axis is leaned by ``lead`` towards the feed and turned by ``tilt``
         about the normal (conventions of :mod:`machsurf_cad.machining.strategies`); S and alpha
         are then measured in the tool frame.
+    max_memory_mb : float
+        Work-size bound: a grid and set of directions needing more memory is refused with the estimate.
 
     Returns
     -------
@@ -362,11 +365,19 @@ def reff_maps(
         comp.end_mill_radii(_PURPOSE)
     if axes not in (3, 5):
         raise InputError("axes must be 3 or 5")
-    if axes == 3 and (lead or tilt):
-        raise InputError("lead/tilt need axes=5")
+    from .checks import lead_tilt
+
+    lead, tilt = lead_tilt(lead, tilt, axes=axes)
     if not 2 <= grid <= 4096:
         raise InputError("grid must be between 2 and 4096")
     dirs = parse_directions(directions)
+    # work-size bound: about 20 float64 arrays per grid point shared, 10 more per direction
+    need = grid * grid * 8 * (20 + 10 * len(dirs)) / 2**20
+    if need > max_memory_mb:
+        raise InputError(
+            f"grid {grid} with {len(dirs)} direction(s) needs about {need / 1024:.3g} GiB, over the "
+            f"{max_memory_mb / 1024:.3g} GiB budget: reduce --grid or the directions"
+        )
     if scallop is not None and not scallop > 0:
         raise InputError("scallop height must be > 0 mm")
     if scallop is not None and scallop >= min(R, comp.D / 2 if comp else R):

@@ -89,6 +89,8 @@ class DeviationResult(Result):
         return out
 
 
+_BYTES_PER_POINT = 1024  # measured peak of projection + statistics + map per candidate point, rounded up
+
 _MM_KEYS = {
     "max_abs",
     "max",
@@ -232,7 +234,14 @@ def _newton(surface: BSplineSurface, p: np.ndarray, uv: np.ndarray, max_iter: in
 
 
 def deviation(
-    reference, candidate, *, samples: int = 200, tolerance: float | None = None, triangles=None, progress=None
+    reference,
+    candidate,
+    *,
+    samples: int = 200,
+    tolerance: float | None = None,
+    triangles=None,
+    progress=None,
+    max_memory_mb: float = 4096.0,
 ) -> DeviationResult:
     """Signed deviation of ``candidate`` from ``reference`` (mm).
 
@@ -255,6 +264,9 @@ def deviation(
         Mesh connectivity of candidate points (kept for rendering).
     progress : callable, optional
         :data:`~machsurf_cad.results.Progress` called after each chunk of projected points.
+    max_memory_mb : float
+        Work-size bound: a candidate whose measurement would need more memory (about 1 kB per
+        point) is refused with the memory it would need.
 
     Returns
     -------
@@ -274,6 +286,20 @@ def deviation(
     >>> round(d.stats["min"], 12), d.within_tolerance
     (-0.2, None)
     """
+    if tolerance is not None:
+        from .checks import positive
+
+        tolerance = positive("tolerance", tolerance)
+    if isinstance(candidate, (BSplineSurface, Face)):
+        if int(samples) < 2:
+            raise InputError(f"samples must be >= 2 per direction, got {samples}")
+        need = samples * samples * _BYTES_PER_POINT / 2**20
+        if need > max_memory_mb:
+            raise InputError(
+                f"samples = {samples} ({samples * samples} points) needs about {need / 1024:.3g} GiB, over the "
+                f"{max_memory_mb / 1024:.3g} GiB budget: reduce --samples "
+                f"(at most {int((max_memory_mb * 2**20 / _BYTES_PER_POINT) ** 0.5)})"
+            )
     ref_surface = reference.surface if isinstance(reference, Face) else reference
     flip = -1.0 if isinstance(reference, Face) and reference.reversed else 1.0
     if not isinstance(ref_surface, BSplineSurface):

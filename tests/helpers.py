@@ -1,6 +1,13 @@
 """Test helpers shared by several modules (numpy only)."""
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def random_surface(rng, rational=False, degree=(3, 2), n=(7, 5), size=100.0):
@@ -43,3 +50,34 @@ def assert_close(actual, expected, atol, what="value"):
     d = np.abs(np.asarray(actual, float) - np.asarray(expected, float))
     worst = float(np.max(d)) if d.size else 0.0
     assert worst <= atol, f"{what}: max difference {worst:.3g} > {atol:.3g}"
+
+
+def run(*args):
+    """The CLI in-process through ``main(argv)``: exit code, stdout and stderr."""
+    import contextlib
+    import io
+    from types import SimpleNamespace
+
+    from machsurf_cad.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main([str(a) for a in args])
+        except SystemExit as exc:  # argparse usage errors
+            code = exc.code
+    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
+
+
+def run_process(*args, cwd=None):
+    """The CLI as a user runs it (a new process): keeps exit codes and 'no traceback' honest."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    return subprocess.run(
+        [sys.executable, "-m", "machsurf_cad", *map(str, args)],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        timeout=600,
+    )

@@ -1,47 +1,14 @@
 """The command line: figures in the JSON report, exit codes 0/1/2, one-line errors, no partial output."""
 
 import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 from conftest import ROOT, needs_kernel, needs_pyvista
+from helpers import run, run_process
 
 pytestmark = needs_kernel
 BLOCK = ROOT / "example_parts" / "freeform_block.step"
-
-
-def run(*args):
-    """The CLI in-process through ``main(argv)``: exit code, stdout and stderr."""
-    import contextlib
-    import io
-    from types import SimpleNamespace
-
-    from machsurf_cad.cli import main
-
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            code = main([str(a) for a in args])
-        except SystemExit as exc:  # argparse usage errors
-            code = exc.code
-    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
-
-
-def run_process(*args, cwd=None):
-    """The CLI as a user runs it (a new process): keeps exit codes and 'no traceback' honest."""
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    return subprocess.run(
-        [sys.executable, "-m", "machsurf_cad", *map(str, args)],
-        capture_output=True,
-        text=True,
-        cwd=cwd,
-        env=env,
-        stdin=subprocess.DEVNULL,
-        timeout=600,
-    )
 
 
 def test_info_reports_every_face(tmp_path):

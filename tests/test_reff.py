@@ -200,5 +200,11 @@ def test_bad_inputs():
     collapsed = builders.bezier_surface([[[0, 0, 0], [50, 50, 10]], [[100, 0, 0], [50, 50, 10]]])
     with pytest.raises(DegenerateGeometryError, match="normal undefined"):
         reff_maps(collapsed, "bull:D=10,r=2", grid=9)
-    with pytest.raises(InputError, match="lead/tilt need axes=5"):
+    with pytest.raises(InputError, match="lead and tilt apply to 5 axes"):
         reff_maps(plane, "bull:D=10,r=2", lead=10)
+    with pytest.raises(InputError, match="at or below the tangent plane"):  # the same limit as machining surfaces
+        reff_maps(plane, "bull:D=10,r=2", axes=5, lead=90)
+    with pytest.raises(InputError, match="tilt angle 1e"):
+        reff_maps(plane, "bull:D=10,r=2", axes=5, tilt=1e6)
+    with pytest.raises(InputError, match="GiB, over the"):
+        reff_maps(plane, "bull:D=10,r=2", grid=4096, directions="all")

@@ -104,8 +104,30 @@ def local_properties(surface: BSplineSurface, u, v, *, check: bool = True) -> Lo
     (1.0, 1.0)
     """
     u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
+    _check_domain(surface, u, v)
     d = surface.derivatives(u, v, 2)
     return properties_from_derivatives(u, v, d, surface.scale, check=check)
+
+
+def _check_domain(surface: BSplineSurface, u, v, rel: float = 1e-9) -> None:
+    """Refuse parameters outside the surface's domain (beyond ``rel`` of its size; periodic
+    directions wrap and are not checked): a B-spline extrapolated there is not the surface."""
+    u0, u1, v0, v1 = surface.bounds
+    bad = np.zeros(np.shape(u), bool)
+    if not surface.periodic_u:
+        tol = rel * (u1 - u0)
+        bad |= (u < u0 - tol) | (u > u1 + tol)
+    if not surface.periodic_v:
+        tol = rel * (v1 - v0)
+        bad |= (v < v0 - tol) | (v > v1 + tol)
+    if np.any(bad) or not (np.all(np.isfinite(u)) and np.all(np.isfinite(v))):
+        from ..errors import InputError
+
+        i = int(np.argmax(bad)) if np.any(bad) else 0
+        raise InputError(
+            f"(u, v) outside the surface's domain [{u0:g}, {u1:g}] x [{v0:g}, {v1:g}] (or not finite), "
+            f"e.g. ({np.ravel(u)[i]:g}, {np.ravel(v)[i]:g})"
+        )
 
 
 def local_properties_grid(surface: BSplineSurface, us, vs, *, check: bool = True) -> LocalProperties:

@@ -21,17 +21,33 @@ def quiet(msg: str = "") -> None:
     """A :data:`Say` that prints nothing."""
 
 
-class Staging:
-    """Write outputs into a hidden sibling folder, move them into ``out_dir`` on success.
+REPORT = "report.json"
 
-    Use as a context manager: the files move into place when the block ends normally and are
-    removed when it raises, so a failed job leaves nothing half-written.
+
+class Staging:
+    """Write outputs into a hidden sibling folder, then make it the output folder, whole.
+
+    Use as a context manager: when the block ends normally the staged folder replaces ``out_dir``
+    (an output folder holds exactly one run: files of an earlier run never mix with this one's);
+    when it raises (including Ctrl-C or SIGTERM), the staged folder is removed and ``out_dir`` is
+    left as it was. ``out_dir`` must be new, empty, or an earlier machsurf output folder (it holds a
+    ``report.json``); anything else is refused rather than deleted.
     """
 
     def __init__(self, out_dir):
         self.out_dir = Path(out_dir)
-        self.out_dir.parent.mkdir(parents=True, exist_ok=True)
-        self.dir = Path(tempfile.mkdtemp(prefix=f".{self.out_dir.name}.partial-", dir=str(self.out_dir.parent)))
+        if self.out_dir.exists() and not self.out_dir.is_dir():
+            raise InputError(f"output folder {self.out_dir} is an existing file: choose another -o")
+        if self.out_dir.is_dir() and any(self.out_dir.iterdir()) and not (self.out_dir / REPORT).is_file():
+            raise InputError(
+                f"output folder {self.out_dir} is not empty and holds no machsurf report.json: "
+                "choose a new or empty folder (machsurf replaces its own output folders whole)"
+            )
+        try:
+            self.out_dir.parent.mkdir(parents=True, exist_ok=True)
+            self.dir = Path(tempfile.mkdtemp(prefix=f".{self.out_dir.name}.partial-", dir=str(self.out_dir.parent)))
+        except OSError as exc:
+            raise InputError(f"cannot write output folder {self.out_dir}: {exc.strerror or exc}") from None
         self.files: list[str] = []
 
     def path(self, name: str) -> Path:
@@ -40,17 +56,22 @@ class Staging:
             self.files.append(name)
         return self.dir / name
 
-    def commit(self) -> list[Path]:
-        self.out_dir.mkdir(parents=True, exist_ok=True)
-        moved = []
-        for f in sorted(self.dir.iterdir()):
-            dest = self.out_dir / f.name
-            if dest.exists() and dest.is_dir():
-                shutil.rmtree(dest)
-            shutil.move(str(f), str(dest))
-            moved.append(dest)
-        shutil.rmtree(self.dir, ignore_errors=True)
-        return moved
+    def commit(self) -> Path:
+        """Replace ``out_dir`` by the staged folder (an earlier run's folder is removed after the swap)."""
+        old = None
+        if self.out_dir.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{self.out_dir.name}.old-", dir=str(self.out_dir.parent)))
+            old.rmdir()
+            self.out_dir.rename(old)
+        try:
+            self.dir.rename(self.out_dir)
+        except OSError:
+            if old is not None:
+                old.rename(self.out_dir)
+            raise
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+        return self.out_dir
 
     def abort(self) -> None:
         shutil.rmtree(self.dir, ignore_errors=True)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .base import JobOutcome, Say, Staging, finish, write_toolpath
+from .base import EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, finish, write_toolpath
 from .specs import EnvelopeJob
 
 
@@ -47,6 +47,19 @@ def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
         )
     if res.max_theta_deg is not None:
         say(f"largest |theta| without fold-back or loss of envelope (5 deg steps): {res.max_theta_deg:g} deg")
+    check = res.seam_check(spec.seam_angle_tol)
+    rep["seams_measured_on_written_faces"] = check
+    code = EXIT_OK
+    if spec.passes > 1:
+        say(
+            f"written faces: seams gap up to {check['max_gap_mm']:.3g} mm (limit {check['gap_limit_mm']:.3g}), "
+            f"normal angle up to {check['max_normal_angle_deg']:.3g} deg (G1 limit {spec.seam_angle_tol:g}): "
+            f"{check['achieved']}"
+        )
+        wanted_met = check["g1_met"] if spec.continuity == "g1" else check["g0_met"]
+        if not wanted_met:
+            say(f"{spec.continuity.upper()} NOT met by the written faces")
+            code = EXIT_TOLERANCE
     tp = res.toolpath
     say(
         f"tool path: {tp.n_passes} pass(es), {tp.n_cut} cutting positions, chordal error "
@@ -75,6 +88,6 @@ def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
                 ],
                 st.path("zebra.png"),
             )
-        outcome = finish(st, "envelope", rep, result=res)
+        outcome = finish(st, "envelope", rep, code, result=res)
     say(f"outputs in {out}/: {', '.join(outcome.files)}")
     return outcome

@@ -75,7 +75,9 @@ def run_inspect(spec: InspectJob, out, say: Say, progress=None) -> JobOutcome:
     suffix = cand_path.suffix.lower()
     if suffix == ".stl":
         pts, tris = _mesh_candidate(cand_path)
-        result = deviation(nominal, pts, tolerance=spec.tol, triangles=tris, progress=progress)
+        result = deviation(
+            nominal, pts, tolerance=spec.tol, triangles=tris, progress=progress, max_memory_mb=spec.max_memory
+        )
         cand_desc = f"STL mesh {cand_path.name} ({tris.shape[0] // 16} triangles, sampled inside triangles)"
     elif suffix in (".step", ".stp"):
         idx = spec.candidate_face if spec.candidate_face is not None else spec.face
@@ -83,7 +85,9 @@ def run_inspect(spec: InspectJob, out, say: Say, progress=None) -> JobOutcome:
             cand = read_step_face(cand_path, idx)
         except InputError as exc:
             raise InputError(f"candidate: {exc}") from None
-        result = deviation(nominal, cand, samples=spec.samples, tolerance=spec.tol, progress=progress)
+        result = deviation(
+            nominal, cand, samples=spec.samples, tolerance=spec.tol, progress=progress, max_memory_mb=spec.max_memory
+        )
         cand_desc = f"STEP face {idx} '{cand.name}' of {cand_path.name}"
     else:
         raise InputError(f"candidate must be .step/.stp or .stl, got {cand_path.name}")

@@ -10,6 +10,11 @@ from .base import JobOutcome, Say, Staging, face_input, finish
 from .specs import ReffJob
 
 
+def _f(x, fmt: str = ".4g") -> str:
+    """A figure, or "n/a" where it does not exist (e.g. R_eff on a horizontal plane: infinite everywhere)."""
+    return "n/a" if x is None else format(x, fmt)
+
+
 def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
     from ..cutters import parse_cutter
     from ..effradius import parse_directions, reff_maps
@@ -29,6 +34,7 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
         axes=spec.axes,
         lead=spec.lead,
         tilt=spec.tilt,
+        max_memory_mb=spec.max_memory,
     )
     rep = maps.report()
     R = cutter.D / 2
@@ -40,8 +46,8 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
     )
     for d in rep["directions"]:
         line = (
-            f"theta {d['theta_deg']:>6g} deg: R_eff min {d['r_eff_min_mm']:.4g} / mean {d['r_eff_mean_mm']:.4g} / "
-            f"max {d['r_eff_max_mm']:.4g} mm; torus beats ball on {100 * d['area_fraction_torus_beats_ball']:.1f} % "
+            f"theta {d['theta_deg']:>6g} deg: R_eff min {_f(d['r_eff_min_mm'])} / mean {_f(d['r_eff_mean_mm'])} / "
+            f"max {_f(d['r_eff_max_mm'])} mm; torus beats ball on {_f(d['area_fraction_torus_beats_ball'], '.1%')} "
             f"of the area"
         )
         if d.get("n_infinite_r_eff"):
@@ -49,9 +55,9 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
         say(line)
         if spec.scallop:
             say(
-                f"    step-over for scallop {spec.scallop:g} mm: torus {d['stepover_mean_mm']:.4g} mm, ball "
-                f"{d['stepover_ball_mean_mm']:.4g} mm (ratio {d['stepover_ratio_mean']:.3f}); unreachable "
-                f"{d['n_unreachable']} sample(s)"
+                f"    step-over for scallop {spec.scallop:g} mm: torus {_f(d.get('stepover_mean_mm'))} mm, ball "
+                f"{_f(d.get('stepover_ball_mean_mm'))} mm (ratio {_f(d.get('stepover_ratio_mean'), '.3f')}); "
+                f"unreachable {d.get('n_unreachable', 0)} sample(s)"
             )
     with Staging(out) as st:
         if spec.render:

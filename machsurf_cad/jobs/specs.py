@@ -25,6 +25,11 @@ def _positive(name: str, v, allow_none: bool = False) -> None:
         raise InputError(f"{name} must be > 0, got {v!r}")
 
 
+def _one_input(part, example, other: str = "a STEP file") -> None:
+    if part and example:
+        raise InputError(f"give either {other} or --example, not both")
+
+
 def _choice(name: str, v, choices) -> None:
     if v not in choices:
         raise InputError(f"{name} must be one of {', '.join(map(str, choices))}, got {v!r}")
@@ -89,6 +94,7 @@ class InspectJob(JobSpec):
     tol: float | None = None
     samples: int = 200
     render: bool = True
+    max_memory: float = 4096.0
     command = "inspect"
 
     def __post_init__(self) -> None:
@@ -122,6 +128,7 @@ class MachiningSurfaceJob(_Post, JobSpec):
     command = "machining-surface"
 
     def __post_init__(self) -> None:
+        _one_input(self.part, self.example)
         _choice("axes", self.axes, (3, 5))
         _choice("loops", self.loops, ("error", "flag", "trim"))
         for n in ("tol", "stl_deflection", "stepover", "chordal"):
@@ -147,9 +154,11 @@ class ReffJob(JobSpec):
     lead: float = 0.0
     tilt: float = 0.0
     render: bool = True
+    max_memory: float = 4096.0
     command = "reff"
 
     def __post_init__(self) -> None:
+        _one_input(self.part, self.example)
         _choice("axes", self.axes, (3, 5))
         _positive("scallop (mm)", self.scallop, allow_none=True)
 
@@ -175,6 +184,7 @@ class FlankJob(_Post, JobSpec):
     command = "flank"
 
     def __post_init__(self) -> None:
+        _one_input(self.part, self.example)
         _choice("setting", self.setting, ("standard-tangent", "standard-distributed", "optimum", "minimax"))
         _choice("side", self.side, (1, -1))
         if not 0.0 <= self.rule <= 1.0:
@@ -198,18 +208,21 @@ class EnvelopeJob(_Post, JobSpec):
     theta: str = "0"
     side: int = 1
     tol: float = 1e-3
+    seam_angle_tol: float = 0.05
     theta_scan: bool = True
     render: bool = True
     chordal: float = 0.01
     command = "envelope"
 
     def __post_init__(self) -> None:
+        _one_input(self.path, self.example, "--path")
         _choice("continuity", self.continuity, ("g0", "g1"))
         _choice("side", self.side, (1, -1))
         if int(self.passes) < 1:
             raise InputError("passes must be >= 1")
         _positive("tol (mm)", self.tol)
         _positive("chordal (mm)", self.chordal)
+        _positive("seam_angle_tol (deg)", self.seam_angle_tol)
         self._check_post()
 
     def thetas(self) -> list[float]:
@@ -220,6 +233,11 @@ class EnvelopeJob(_Post, JobSpec):
         for t in th:
             if not -180 < t < 180:
                 raise InputError(f"theta {t:g} deg is outside (-180, 180)")
+        if len(th) not in (1, max(int(self.passes) - 1, 1)):
+            raise InputError(
+                f"--theta needs one angle, or one per new pass ({int(self.passes) - 1} for {self.passes} passes); "
+                f"got {len(th)}"
+            )
         return th
 
 

@@ -127,16 +127,11 @@ class LeadTilt:
     feed: Any
 
     def __post_init__(self):
-        for name in ("lead_deg", "tilt_deg"):
-            x = float(getattr(self, name))
-            if not np.isfinite(x):
-                raise InputError(f"{name.replace('_deg', '')} angle must be finite")
-            object.__setattr__(self, name, x)
-        if not -89.0 <= self.lead_deg <= 89.0:
-            raise InputError(
-                f"lead angle {self.lead_deg:g} deg puts the axis at or below the tangent plane "
-                "(|lead| must be <= 89 deg)"
-            )
+        from ..checks import lead_tilt
+
+        lead, tilt = lead_tilt(self.lead_deg, self.tilt_deg)
+        object.__setattr__(self, "lead_deg", lead)
+        object.__setattr__(self, "tilt_deg", tilt)
 
     def axis(self, frame: LocalFrame) -> np.ndarray:
         f = self.feed.feed(frame)

@@ -267,6 +267,9 @@ def _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field):
         return axis_field if isinstance(axis_field, AxisField) else AxisField(axis_field, feed)
     feed = parse_strategy(strategy) if isinstance(strategy, str) else strategy
     if axes == 3:
+        from ..checks import lead_tilt
+
+        lead_tilt(lead, tilt, axes=3)  # refuses a lead or tilt that 3 axes would ignore
         return FixedAxis(axis if axis is not None else (0.0, 0.0, 1.0), feed)
     if axis is not None:
         raise InputError("a fixed axis with axes=5 is 3+2 machining: use axes=3 with axis=...")

@@ -34,6 +34,7 @@ def tool_paths(
     grid: int = 401,
     zigzag: bool = True,
     clearance: float = 5.0,
+    max_passes: int = 5000,
 ) -> ToolPath:
     """Tool paths on S1: plane sections (``PlanesFeed``) or iso-parametric lines (``IsoFeed``).
 
@@ -50,6 +51,8 @@ def tool_paths(
         Defaults to the machining surface's feed.
     clearance : float
         Approach and retract distance along the tool axis, mm.
+    max_passes : int
+        Work-size bound: more passes than this is refused (with the smallest admissible step-over).
 
     Returns
     -------
@@ -109,6 +112,11 @@ def tool_paths(
         n_lines = max(1, int(math.floor(total / stepover)))
         targets = (np.arange(n_lines) + 0.5) * total / n_lines
         levels = np.interp(targets, s_len, across)
+    if len(levels) > max_passes:
+        raise InputError(
+            f"step-over {stepover:g} mm gives {len(levels)} passes over this face (at most {max_passes}, "
+            f"--stepover >= {stepover * len(levels) / max_passes:.3g} mm)"
+        )
     import contourpy
 
     gen = contourpy.contour_generator(x=vs, y=us, z=g_masked, line_type="Separate")

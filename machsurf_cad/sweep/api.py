@@ -30,6 +30,26 @@ class EnvelopeResult(Result):
     max_theta_deg: float | None = None
     time_s: dict | None = None
 
+    def seam_check(self, angle_tol_deg: float = 0.05) -> dict:
+        """What the written faces achieve at their seams (measured on the fitted faces, not claimed):
+        the largest gap (mm) against twice the fit tolerance, the largest normal angle (degrees)
+        against ``angle_tol_deg`` for G1."""
+        seams = self.chain.seams_fitted
+        gap = max((s["max_gap_mm"] for s in seams), default=0.0)
+        ang = max((s["max_normal_angle_deg"] for s in seams), default=0.0)
+        tol = max(f.tolerance for f in self.chain.fits)
+        g0 = gap <= 2 * tol
+        g1 = g0 and ang <= angle_tol_deg
+        return {
+            "max_gap_mm": gap,
+            "gap_limit_mm": 2 * tol,
+            "max_normal_angle_deg": ang,
+            "angle_limit_deg": angle_tol_deg,
+            "g0_met": g0,
+            "g1_met": g1,
+            "achieved": "G1" if g1 else ("G0" if g0 else "none"),
+        }
+
     def report(self) -> dict:
         rep = self.chain.report()
         rep["chain_time_s"] = rep.pop("time_s")
@@ -142,6 +162,8 @@ def envelope(
     thetas = np.atleast_1d(np.asarray(theta_deg, float))
     if np.any(~np.isfinite(thetas)) or np.any(np.abs(thetas) >= 180):
         raise InputError(f"theta must be in (-180, 180) degrees, got {theta_deg!r}")
+    if thetas.size not in (1, max(passes - 1, 1)):
+        raise InputError(f"theta needs one angle or one per new pass ({passes - 1}); got {thetas.size}")
     th = thetas.tolist() if thetas.size > 1 else float(thetas[0])
     first = make_envelope(motion, tool, side=side)
     chain = build_chain(first, passes, continuity=continuity, theta_deg=th, tolerance=tolerance)

@@ -31,6 +31,17 @@ from ..results import Result
 _FD = np.array([1.0, -8.0, 0.0, 8.0, -1.0]) / 12.0  # 5-point first-derivative stencil, O(h^4)
 
 
+def _finite_array(values, what: str) -> np.ndarray:
+    """``values`` as a float array of finite numbers, or a one-line :class:`InputError`."""
+    try:
+        a = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{what} must be numbers in rows of equal length") from None
+    if not np.all(np.isfinite(a)):
+        raise InputError(f"{what} must be finite numbers (NaN or inf found)")
+    return a
+
+
 def _unit(v):
     n = np.linalg.norm(v, axis=-1, keepdims=True)
     return v / n
@@ -128,32 +139,52 @@ class Motion:
 
     @classmethod
     def from_points(cls, points, axes=None, axis=(0.0, 0.0, 1.0), label="CL points") -> Motion:
-        """Cubic interpolation of cutter-location (tip) points, with per-point axes or a constant one."""
+        """Cubic interpolation of cutter-location (tip) points, with per-point axes or a constant one.
+
+        The motion's derivatives are the interpolating splines' exact derivatives (no finite
+        differences, so they are right up to the ends of the path).
+        """
         from ..geometry.builders import interpolate_curve
 
-        pts = np.asarray(points, float)
+        pts = _finite_array(points, "path points")
         if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] < 4:
             raise InputError("a path needs at least 4 points (x, y, z)")
         d = np.linalg.norm(np.diff(pts, axis=0), axis=1)
         if np.any(d < 1e-9):
             raise InputError("the path has repeated points (a cusp: P'(t) = 0)")
         c = interpolate_curve(pts, 3)
+
+        def tip(t):
+            return c.evaluate(np.clip(t, 0, 1))
+
+        def dtip(t):
+            return c.derivatives(np.clip(np.asarray(t, float), 0, 1), 1)[..., 1, :]
+
         if axes is None:
-            a = np.asarray(axis, float)
-            if np.linalg.norm(a) == 0:
-                raise InputError("zero-length axis vector")
+            a = _finite_array(axis, "axis")
+            if a.shape != (3,) or np.linalg.norm(a) == 0:
+                raise InputError("zero-length axis vector" if a.shape == (3,) else "the axis needs 3 components")
             return cls(
-                lambda t: c.evaluate(np.clip(t, 0, 1)),
+                tip,
                 lambda t: np.broadcast_to(a, np.shape(t) + (3,)),
                 (0.0, 1.0),
                 label,
+                dtip,
+                lambda t: np.zeros(np.shape(t) + (3,)),
             )
-        ax = np.asarray(axes, float)
+        ax = _finite_array(axes, "axes")
         if ax.shape != pts.shape or np.any(np.linalg.norm(ax, axis=1) == 0):
             raise InputError("one non-zero axis vector per path point is needed")
         params = np.concatenate([[0.0], np.cumsum(d)]) / d.sum()
         ca = interpolate_curve(ax / np.linalg.norm(ax, axis=1, keepdims=True), 3, params=params)
-        return cls(lambda t: c.evaluate(np.clip(t, 0, 1)), lambda t: ca.evaluate(np.clip(t, 0, 1)), (0.0, 1.0), label)
+        return cls(
+            tip,
+            lambda t: ca.evaluate(np.clip(t, 0, 1)),
+            (0.0, 1.0),
+            label,
+            dtip,
+            lambda t: ca.derivatives(np.clip(np.asarray(t, float), 0, 1), 1)[..., 1, :],
+        )
 
     @classmethod
     def interpolated_axis(cls, tip, axis0, axis1, t_range=(0.0, 1.0), label="motion") -> Motion:
