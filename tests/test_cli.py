@@ -7,6 +7,8 @@ import pytest
 from conftest import ROOT, needs_kernel, needs_pyvista
 from helpers import run, run_process
 
+import machsurf_cad as ms
+
 pytestmark = needs_kernel
 BLOCK = ROOT / "example_parts" / "freeform_block.step"
 
@@ -166,8 +168,8 @@ def test_degenerate_surface_is_a_one_line_error(tmp_path):
     from machsurf_cad.geometry.face import Face
     from machsurf_cad.occ import write_step
 
-    # a patch with its v = 1 edge collapsed to a point: normals undefined there
-    tri = builders.bezier_surface([[[0, 0, 0], [50, 50, 5], [50, 90, 0]], [[100, 0, 0], [60, 50, 8], [50, 90, 0]]])
+    # a cone with its tip inside the face: the normal has no limit there
+    tri = builders.revolve_profile(ms.BSplineCurve(1, [0, 1], [2, 2], [[30.0, 0.0], [0.0, 30.0]]), 300.0)
     try:
         path = write_step(tmp_path / "tri.step", [Face(tri, name="tri")])
     except Exception as exc:  # the kernel may refuse the degenerate face already: that is a clear error too
@@ -176,7 +178,7 @@ def test_degenerate_surface_is_a_one_line_error(tmp_path):
     out = tmp_path / "o"
     r = run("machining-surface", path, "--tool", "ball:D=10", "--lead", "10", "-o", out)
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
-    assert "normal undefined" in r.stderr or "not valid" in r.stderr
+    assert "no limit normal" in r.stderr or "not valid" in r.stderr
     assert not out.exists()
 
 

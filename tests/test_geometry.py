@@ -136,13 +136,23 @@ def test_periodic_surface_wraps_and_is_continuous(rng):
     assert np.abs(s.derivatives(0.0, v, 2).suu - s.derivatives(6.0, v, 2).suu).max() < 1e-10
 
 
-def test_degenerate_normal_is_reported():
-    # a triangle-like patch: the whole v = 1 edge collapsed to one point
+def cone_with_tip():
+    """A cone of half angle 45 deg, its tip at u = 1 (the whole u = 1 iso-line collapsed)."""
+    prof = BSplineCurve(1, [0, 1], [2, 2], [[30.0, 0.0], [0.0, 30.0]])
+    return builders.revolve_profile(prof, 360.0)
+
+
+def test_collapsed_edge_gets_its_limit_normal_and_a_cone_tip_is_reported():
+    # a triangle-like patch: the whole v = 1 edge collapsed to one point of a plane: its normal is the plane's
     poles = [[[0, 0, 0], [50, 50, 0]], [[100, 0, 0], [50, 50, 0]]]
     s = builders.bezier_surface(poles)
-    with pytest.raises(DegenerateGeometryError, match="normal undefined"):
-        s.normals(np.array([0.5, 0.2]), np.array([1.0, 0.5]))
-    n = s.normals(np.array([0.5]), np.array([1.0]), check=False)
+    n = s.normals(np.array([0.5, 0.2, 0.9]), np.array([1.0, 1.0, 1.0]))
+    assert np.abs(n - [0, 0, 1.0]).max() < 1e-9
+    # a cone's tip: the normals around it turn all the way round, no limit
+    cone = cone_with_tip()
+    with pytest.raises(DegenerateGeometryError, match="no limit normal"):
+        cone.normals(np.array([1.0, 0.5]), np.array([0.3, 0.5]))
+    n = cone.normals(np.array([1.0]), np.array([0.3]), check=False)
     assert np.isnan(n).all()
 
 

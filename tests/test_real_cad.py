@@ -195,3 +195,23 @@ def test_step_header_names_and_refusals(tmp_path):
     assert "OPEN_SHELL('S1_guiding'" in text and [f.name for f in read_step_faces(path)] == ["S1_guiding"]
     with pytest.raises(ms.InputError, match="no face"):
         write_step(tmp_path / "empty.step", [])
+
+
+def test_faces_with_a_pole_machine_and_a_cone_tip_is_refused():
+    """A sphere patch containing its pole (su x sv = 0 on a collapsed edge): the normal there is the limit
+    of the normals around it, so S1 of a ball is the sphere of radius R + r; a cone's tip has no limit."""
+    from machsurf_cad.geometry import builders
+
+    s = builders.sphere_patch(50.0, lat_deg=(30.0, 90.0), lon_deg=360.0)  # u = 1 is the pole
+    n = s.normals(np.array([1.0, 1.0, 1.0]), np.array([0.0, 0.3, 0.8]))
+    assert_points_close(n, np.broadcast_to([0, 0, -1.0], (3, 3)), atol=1e-9)  # su x sv points to the centre
+    p = ms.local_properties(s, np.array([1.0]), np.array([0.4]))
+    assert_close([p.k1[0] * 50, p.k2[0] * 50], [1.0, 1.0], 1e-3)  # curvatures 1 mm from the pole's neighbour
+    res = ms.machining_surface(ms.Face(s, reversed=True), "ball:D=10", axes=3, tolerance=1e-3)
+    us = np.linspace(0, 1, 61)
+    g = res.s1.surface.evaluate_grid(us, us)
+    assert np.abs(np.linalg.norm(g, axis=-1) - 55.0).max() <= 1e-3  # the ball centre's sphere, pole included
+    prof = ms.BSplineCurve(1, [0, 1], [2, 2], [[30.0, 0.0], [0.0, 30.0]])  # a cone, its tip at u = 1
+    cone = builders.revolve_profile(prof, 360.0)
+    with pytest.raises(ms.DegenerateGeometryError, match="no limit normal"):
+        ms.machining_surface(ms.Face(cone, reversed=True), "ball:D=10", axes=3, tolerance=1e-3)

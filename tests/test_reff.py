@@ -197,9 +197,10 @@ def test_bad_inputs():
     plane = builders.plane_patch(dv=(0, 100, 30))
     with pytest.raises(InputError, match="larger than the tool radius"):
         reff_maps(plane, "bull:D=10,r=2", scallop=6.0)
-    collapsed = builders.bezier_surface([[[0, 0, 0], [50, 50, 10]], [[100, 0, 0], [50, 50, 10]]])
-    with pytest.raises(DegenerateGeometryError, match="normal undefined"):
-        reff_maps(collapsed, "bull:D=10,r=2", grid=9)
+    from test_geometry import cone_with_tip
+
+    with pytest.raises(DegenerateGeometryError, match="normal undefined"):  # a cone's tip: no limit normal
+        reff_maps(cone_with_tip(), "bull:D=10,r=2", grid=9)
     with pytest.raises(InputError, match="lead and tilt apply to 5 axes"):
         reff_maps(plane, "bull:D=10,r=2", lead=10)
     with pytest.raises(InputError, match="at or below the tangent plane"):  # the same limit as machining surfaces

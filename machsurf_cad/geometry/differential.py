@@ -12,6 +12,7 @@ Conventions
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -106,7 +107,51 @@ def local_properties(surface: BSplineSurface, u, v, *, check: bool = True) -> Lo
     u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
     _check_domain(surface, u, v)
     d = surface.derivatives(u, v, 2)
-    return properties_from_derivatives(u, v, d, surface.scale, check=check)
+    return _with_limits(surface, properties_from_derivatives(u, v, d, surface.scale, check=False), check)
+
+
+_LIMIT_FIELDS = ("normal", "L", "M", "N", "gaussian", "mean", "k1", "k2", "dir1", "dir2")
+
+
+def _with_limits(surface: BSplineSurface, p: LocalProperties, check: bool) -> LocalProperties:
+    """Degenerate points (``su x sv = 0``: a sphere's pole, a revolved face on its axis) get the limit
+    normal (:func:`~machsurf_cad.geometry.bspline.limit_normals`) and the curvatures of the nearest
+    regular neighbour (1e-6 of the domain away); where the limit does not exist (a cone's tip) the
+    normal stays undefined: :class:`DegenerateGeometryError` when ``check``, NaN otherwise."""
+    from .bspline import limit_normals
+
+    bad = ~np.all(np.isfinite(p.normal), axis=-1)
+    if not np.any(bad):
+        return p
+    ub, vb = p.u[bad], p.v[bad]
+    lim = limit_normals(surface, ub, vb)
+    ok = np.all(np.isfinite(lim), axis=-1)
+    if check and not np.all(ok):
+        unit_normals(p.su[bad][~ok], p.sv[bad][~ok], surface.scale, ub[~ok], vb[~ok], check=True)
+    if not np.any(ok):
+        return p
+    # curvatures: at the regular neighbour towards the interior (the same probe as the limit normal)
+    u0, u1, v0, v1 = surface.bounds
+    nu, nv = ub[ok], vb[ok]
+    best_u, best_v = nu.copy(), nv.copy()
+    found = np.zeros(nu.size, bool)
+    for a, b in ((0.0, -1.0), (0.0, 1.0), (-1.0, 0.0), (1.0, 0.0)):
+        uu = np.clip(nu + a * 1e-6 * (u1 - u0), u0, u1)
+        vv = np.clip(nv + b * 1e-6 * (v1 - v0), v0, v1)
+        dd = surface.derivatives(uu, vv, 1)
+        n = _cross(dd.su, dd.sv)
+        good = ~found & (np.sqrt(np.einsum("ij,ij->i", n, n)) > 1e-9 * surface.scale**2)
+        best_u[good], best_v[good] = uu[good], vv[good]
+        found |= good
+    dn = surface.derivatives(best_u, best_v, 2)
+    q = properties_from_derivatives(best_u, best_v, dn, surface.scale, check=False)
+    fields = {f: np.array(getattr(p, f), copy=True) for f in _LIMIT_FIELDS}
+    idx = np.nonzero(bad)
+    sel = tuple(i[ok] for i in idx)
+    for f in _LIMIT_FIELDS:
+        fields[f][sel] = getattr(q, f)
+    fields["normal"][sel] = lim[ok]
+    return dataclasses.replace(p, **fields)
 
 
 def _check_domain(surface: BSplineSurface, u, v, rel: float = 1e-9) -> None:
@@ -139,7 +184,7 @@ def local_properties_grid(surface: BSplineSurface, us, vs, *, check: bool = True
     vs = np.asarray(vs, dtype=float).ravel()
     U, V = np.meshgrid(us, vs, indexing="ij")
     d = surface.derivatives_grid(us, vs, 2)
-    return properties_from_derivatives(U, V, d, surface.scale, check=check)
+    return _with_limits(surface, properties_from_derivatives(U, V, d, surface.scale, check=False), check)
 
 
 def properties_from_derivatives(u, v, d, scale: float, *, check: bool = True) -> LocalProperties:

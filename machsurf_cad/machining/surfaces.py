@@ -75,7 +75,7 @@ class MachiningMaps:
         vs = np.asarray(vs, dtype=float).ravel()
         U, V = np.meshgrid(us, vs, indexing="ij")
         d = self.face.surface.derivatives_grid(us, vs, 1)
-        n = unit_normals(d.su, d.sv, self.face.surface.scale, U, V)
+        n = unit_normals(d.su, d.sv, self.face.surface.scale, U, V, surface=self.face.surface)
         if self.face.reversed:
             n = -n
         return LocalFrame(d.point, d.su, d.sv, n, U, V)
