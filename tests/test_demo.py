@@ -23,6 +23,7 @@ def test_demo_outputs_and_figures(tmp_path):
         timeout=600,
     )
     assert r.returncode == 0, r.stderr
+    assert "Warning" not in r.stderr and "deprecated" not in r.stderr.lower(), r.stderr  # nothing a user should not see
     rep = json.loads((out / "report.json").read_text())
     for f in rep["files"]:
         assert (out / f).is_file(), f

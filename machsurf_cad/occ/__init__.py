@@ -4,12 +4,13 @@ Everything crossing this boundary is plain numpy data (B-spline arrays, :class:`
 Tested with cadquery 2.8.0 and cadquery-ocp 7.9.3.1.1 (OCP 7.9: static methods end in ``_s``).
 """
 
-try:
-    import OCP  # noqa: F401
-except ImportError as exc:  # pragma: no cover - exercised only without the kernel
+import importlib.util as _util
+
+if _util.find_spec("OCP") is None:  # pragma: no cover - exercised only without the kernel
     from ..errors import InputError
 
-    raise InputError("the OpenCASCADE kernel (cadquery-ocp) is not installed: pip install 'machsurf_cad[occ]'") from exc
+    raise InputError("the OpenCASCADE kernel (cadquery-ocp) is not installed: pip install 'machsurf_cad[occ]'")
+import OCP  # noqa: F401  (any other failure, Ctrl-C included, propagates as itself)
 
 from .convert import (
     check_valid,

@@ -163,7 +163,11 @@ def read_step_faces(path, indices=None) -> list[Face]:
     out = []
     for i in indices:
         if not 0 <= int(i) < len(named):
-            raise InputError(f"face index {i} out of range: {path} has {len(named)} face(s) (0..{len(named) - 1})")
+            names = ", ".join(f"{k} {n}" for k, (_, n) in enumerate(named[:8])) + (", ..." if len(named) > 8 else "")
+            raise InputError(
+                f"face index {i} out of range: {path} has {len(named)} face(s) (0..{len(named) - 1}: {names}); "
+                "`machsurf info` lists them"
+            )
         f, name = named[int(i)]
         out.append(face_record(f, int(i), name))
     return out
