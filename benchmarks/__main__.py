@@ -10,7 +10,7 @@ import json
 import platform
 import sys
 
-from . import bench_envelope, bench_eval, bench_flank, bench_offset, bench_reff, bench_step
+from . import bench_envelope, bench_eval, bench_flank, bench_offset, bench_reff, bench_step, bench_verify
 
 
 def main(argv=None) -> int:
@@ -31,6 +31,9 @@ def main(argv=None) -> int:
         _print_row(row, header=False)
     print("* brute force: 10 positions measured (2000 x 400 points each) and scaled to 200")
     for row in bench_flank.flank_rows(quick=args.quick):
+        rows.append(row)
+        _print_row(row, header=False)
+    for row in bench_verify.verify_rows(quick=args.quick):
         rows.append(row)
         _print_row(row, header=False)
     for row in bench_step.step_rows(quick=args.quick):

@@ -50,6 +50,7 @@ from .flank_milling import (
 )
 from .geometry import BSplineCurve, BSplineSurface, builders, local_properties
 from .geometry.face import Face
+from .gougecheck import VerifyResult, verify
 from .jobs import (
     DemoJob,
     EnvelopeJob,
@@ -60,6 +61,7 @@ from .jobs import (
     JobSpec,
     MachiningSurfaceJob,
     ReffJob,
+    VerifyJob,
     run_job,
 )
 from .machining import (
@@ -91,6 +93,7 @@ __all__ = [
     "flank",
     "flank_path",
     "envelope",
+    "verify",
     "deviation",
     "project_points",
     "fit_surface",
@@ -117,6 +120,7 @@ __all__ = [
     "ReffJob",
     "FlankJob",
     "EnvelopeJob",
+    "VerifyJob",
     "DemoJob",
     "JobOutcome",
     # results
@@ -127,6 +131,7 @@ __all__ = [
     "FlankPath",
     "Setting",
     "Interference",
+    "VerifyResult",
     "EnvelopeResult",
     "PassChain",
     "Envelope",

@@ -61,6 +61,17 @@ def _face_input(p, example_help: str, part_help: str = "STEP file (or use --exam
     p.add_argument("--face", type=int, default=0, help="face index (default 0)")
 
 
+def _gouge(p, default: str) -> None:
+    g = p.add_argument_group("tool-body check against every face of the part (before writing the path)")
+    g.add_argument(
+        "--gouge-tol",
+        type=float,
+        default=None if default == "--tol" else float(default),
+        help=f"deepest the tool may go into the part, mm (default {default}); deeper: the path is not written, exit 2",
+    )
+    g.add_argument("--allow-gouge", action="store_true", help="write a gouging path anyway, gouges listed in report")
+
+
 def _post(p) -> None:
     g = p.add_argument_group("tool-path output (APT CLDATA, CSV, JSON)")
     g.add_argument("--clearance", type=float, default=5.0, help="approach/retract along the tool axis, mm (default 5)")
@@ -114,7 +125,10 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--stl-deflection", type=float, default=0.01, help="STL linear deflection, mm (default 0.01)")
     m.add_argument("--toolpath", action="store_true", help="also write the tool path (CSV, APT CLDATA, JSON)")
     m.add_argument("--stepover", type=float, default=2.0, help="distance between passes, mm (default 2)")
-    m.add_argument("--chordal", type=float, default=0.01, help="chordal tolerance of the positions, mm (default 0.01)")
+    m.add_argument(
+        "--chordal", type=float, default=0.005, help="chordal tolerance of the positions, mm (default 0.005)"
+    )
+    _gouge(m, "0.01")
     _post(m)
     m.add_argument("-o", "--out", default="out/machining_surface", help="output folder")
 
@@ -153,8 +167,23 @@ def build_parser() -> argparse.ArgumentParser:
         help="smallest and largest R keeping the whole surface within TOL mm",
     )
     f.add_argument("--no-render", dest="render", action="store_false", help="numbers and files, no pictures")
+    _gouge(f, "--tol")
     _post(f)
     f.add_argument("-o", "--out", default="out/flank", help="output folder")
+
+    w = sub.add_parser("verify", help="tool-body gouges and collisions of a tool path against every face of a part")
+    w.add_argument("part", help="STEP file of the part")
+    w.add_argument("--toolpath", required=True, help="tool path: our CSV, or APT CLDATA (.apt, .cls)")
+    w.add_argument("--tool", default=None, help="cutter, e.g. bull:D=16,r=3 (default: the APT file's CUTTER)")
+    w.add_argument("--shank", default=None, help="shank cylinder above the cutting length: D=..,L=.. (mm)")
+    w.add_argument("--holder", default=None, help="holder cylinder above the shank: D=..,L=.. (mm)")
+    w.add_argument("--faces", default="all", help="faces to check: all (default) or indices 0,3,5")
+    w.add_argument("--tol", type=float, default=0.01, help="gouge / collision tolerance, mm (default 0.01)")
+    w.add_argument("--step", type=float, default=1.0, help="largest tip step along each move, mm (default 1)")
+    w.add_argument("--step-deg", type=float, default=1.0, help="largest axis step along each move, deg (default 1)")
+    w.add_argument("--spacing", type=float, default=None, help="part sample spacing, mm (default min(1, D/8))")
+    w.add_argument("--no-render", dest="render", action="store_false", help="numbers only")
+    w.add_argument("-o", "--out", default="out/verify", help="output folder")
 
     v = sub.add_parser("envelope", help="swept envelopes of a rotational tool and G1/G0 adjacent passes")
     v.add_argument(
@@ -190,6 +219,7 @@ _BAR_TITLES = {
     "machining-surface": "fitting S1/S2",
     "flank": "settings along the surface",
     "demo": "measuring the STL",
+    "verify": "checking the tool body",
 }
 
 

@@ -308,6 +308,33 @@ class Cutter:
             d = np.minimum(d, _region_distance(box, rho, z))
         return d.reshape(np.shape(points)[:-1])
 
+    def cutting_distance_rz(self, rho, z) -> np.ndarray:
+        """Signed distance (mm) of half-plane points ``(rho, z)`` (tool frame) to the cutting part's body
+        (the revolved profile closed by its top): negative inside."""
+        rho = np.asarray(rho, float)
+        z = np.asarray(z, float)
+        return _region_distance(self._outline(), rho, z)
+
+    def holder_distance_rz(self, rho, z) -> np.ndarray:
+        """Signed distance (mm) of ``(rho, z)`` to the shank and holder cylinders (``inf`` without them)."""
+        rho = np.asarray(rho, float)
+        z = np.asarray(z, float)
+        d = np.full(np.broadcast_shapes(rho.shape, z.shape), np.inf)
+        for R_, z0, z1 in self.body_parts():
+            box = [LineSegment(0.0, z0, R_, z0), LineSegment(R_, z0, R_, z1), LineSegment(R_, z1, 0.0, z1)]
+            d = np.minimum(d, _region_distance(box, rho, z))
+        return d
+
+    def max_radius(self) -> float:
+        """Largest radius of the whole body (cutting part, shank, holder), mm."""
+        r = float(self.profile_points(16)[:, 0].max())
+        return max([r] + [p[0] for p in self.body_parts()])
+
+    def body_length(self) -> float:
+        """Height of the whole body above the tip (cutting length plus shank and holder), mm."""
+        parts = self.body_parts()
+        return parts[-1][2] if parts else float(self.length)
+
     def _outline(self) -> list:
         """The closed half-section boundary without the axis: profile and top cap."""
         segs = list(self.profile())

@@ -117,8 +117,33 @@ def test_machining_surface_command_with_toolpath(tmp_path):
         "-o",
         out,
     )
+    # lead 20 deg leaves R_t / sin(20) + r = 33 mm in the feed section: the concave corner near
+    # (85, 7) is tighter, the tool's heel gouges there and the path is refused (exit 2), not written
+    assert r.returncode == 2 and "tool path NOT written" in r.stdout, r.stderr
+    assert not (out / "toolpath.apt").exists()
+    v = json.loads((out / "report.json").read_text())["verify"]
+    assert v["n_gouging_positions"] > 0 and 0.02 < v["max_gouge_mm"] < 0.06
+    assert v["worst"][0]["face"] == "bezier5" and abs(v["worst"][0]["part_point_mm"][0] - 85) < 5
+    r = run(
+        "machining-surface",
+        "--example",
+        "bezier5",
+        "--tool",
+        "bull:D=28,r=4",
+        "--lead",
+        "20",
+        "--tol",
+        "0.001",
+        "--toolpath",
+        "--stepover",
+        "5",
+        "--allow-gouge",
+        "-o",
+        out,
+    )
     assert r.returncode == 0, r.stderr
     rep = json.loads((out / "report.json").read_text())
+    assert rep["verify"]["max_gouge_mm"] == pytest.approx(v["max_gouge_mm"], rel=1e-12)  # written, gouges listed
     assert rep["S1"]["max_error_mm"] <= 0.001 and rep["S2"]["max_error_mm"] <= 0.001
     assert f"{rep['S1']['max_error_mm']:.3g}" in r.stdout
     assert rep["loops"]["found"] is False
@@ -271,9 +296,11 @@ def test_flank_command(tmp_path):
 
     tp = read_apt(out / "toolpath.apt")
     assert [Move(m).name for m in tp.move[[0, 1, 2, -1]]] == ["RAPID", "APPROACH", "CUT", "RETRACT"]
-    # approach from and retract to 5 mm along the tool axis, on the shank side
-    assert np.allclose(tp.tip[0] - tp.tip[1], 5.0 * tp.axis[1], atol=2e-5)
-    assert np.allclose(tp.tip[-1] - tp.tip[-2], 5.0 * tp.axis[-2], atol=2e-5)
+    # a flank tool lies along the surface: it approaches and leaves 5 mm sideways (normal to its axis)
+    for a, b in ((0, 1), (-1, -2)):
+        w = tp.tip[a] - tp.tip[b]
+        assert abs(np.linalg.norm(w) - 5.0) < 2e-5 and abs(w @ tp.axis[b]) < 2e-5
+    assert rep["whole"]["verify"]["clean"] and rep["whole"]["verify"]["n_collisions"] == 0
     for name in ("envelope.step", "envelope.stl", "deviation.png"):
         assert (out / name).is_file()
     # the whole surface is not within 0.01 mm with R = 10: exit 2, outputs still written

@@ -55,8 +55,7 @@ def test_reused_output_folder_holds_exactly_one_run(tmp_path):
         "--toolpath",
         "--stepover",
         "20",
-        "--chordal",
-        "0.05",
+        "--allow-gouge",
         "-o",
         out,
     )

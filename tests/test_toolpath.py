@@ -71,11 +71,17 @@ def test_three_plus_two_keeps_its_axis(tmp_path):
     assert all(len(ln.split(",")) == 3 for ln in lines3 if ln.startswith("GOTO/"))
 
 
-def test_flank_path_approaches_and_retracts_along_the_axis(tmp_path):
+def test_flank_path_approaches_and_retracts_sideways(tmp_path):
     res = ms.flank(ms.example("liu", "ruled"), "cyl:D=20", whole=True, tolerance=0.5, clearance=6.0)
     tp = res.toolpath
     assert tp.n_passes == 1 and tp.n_cut == len(res.path.settings)
-    _check_linking(tp, 6.0)
+    # sideways, away from the rule: normal to the axis, towards the axis from the contact M2
+    for a, b, s in ((0, 1, res.path.settings[0]), (-1, -2, res.path.settings[-1])):
+        w = tp.tip[a] - tp.tip[b]
+        assert abs(np.linalg.norm(w) - 6.0) < 1e-12 and abs(w @ tp.axis[b]) < 1e-12
+        assert w @ (s.q - np.asarray(s.contacts["M2"])) > 0
+    clear = ms.verify(ms.example("liu"), tp, tolerance=0.5)
+    assert clear.report()["n_collisions"] == 0
     lines, back = _round_trip(tp, tmp_path)
     assert lines[3] == f"CUTTER/20.0000,0.0000,10.0000,0.0000,0.0000,0.0000,{tp.cutter.length:.4f}"
     # the cutting positions are the settings: tip on the axis, axis unit and along the setting's axis

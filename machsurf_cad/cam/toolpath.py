@@ -129,6 +129,7 @@ class ToolPath(Result):
         cutter=None,
         name: str = "toolpath",
         info=None,
+        linking: Sequence | None = None,
     ) -> ToolPath:
         """Cutting passes linked the safe way: rapid to ``clearance`` mm above each pass start along
         its tool axis, approach along the axis, cut, retract ``clearance`` mm along the axis.
@@ -143,6 +144,9 @@ class ToolPath(Result):
             Per-pass dicts of per-position arrays (linking rows get NaN / -1).
         clearance : float
             Approach and retract distance along the tool axis, mm (> 0).
+        linking : sequence of (start_dir, end_dir), optional
+            Per pass, the unit directions to approach from and retract to instead of the tool
+            axis (a flank tool lies along the surface: it leaves sideways, away from it).
 
         Examples
         --------
@@ -167,7 +171,9 @@ class ToolPath(Result):
                 continue
             a = a / np.linalg.norm(a, axis=1, keepdims=True)
             m = t.shape[0]
-            T += [t[:1] + clearance * a[:1], t, t[-1:] + clearance * a[-1:]]
+            d0, d1 = (a[0], a[-1]) if linking is None else (np.asarray(x, float) for x in linking[i])
+            d0, d1 = d0 / np.linalg.norm(d0), d1 / np.linalg.norm(d1)
+            T += [t[:1] + clearance * d0[None, :], t, t[-1:] + clearance * d1[None, :]]
             A += [a[:1], a, a[-1:]]
             M += [[Move.RAPID, Move.APPROACH], [Move.CUT] * (m - 1), [Move.RETRACT]]
             P.append(np.full(m + 2, i))

@@ -45,7 +45,9 @@ class FlankPath(Result):
     def toolpath(self, cutter=None, *, clearance: float = 5.0) -> ToolPath:
         """The settings as one 5-axis pass of the one :class:`~machsurf_cad.cam.ToolPath` type: tips on
         the axis below the C0 end (``overhang`` mm beyond the surface), axes towards C1 (tip to shank),
-        CC at the rule contact M2 where the setting has one, approach and retract along the axis."""
+        CC at the rule contact M2 where the setting has one. The tool lies along the surface, so it
+        approaches and leaves sideways, away from the rule (from the contact M2 towards its axis),
+        not along its axis (which would slide it along the surface)."""
         from ..cutters import FlatEndMill
 
         c = cutter if cutter is not None else FlatEndMill(2 * self.R, self.length)
@@ -55,6 +57,13 @@ class FlankPath(Result):
             "gamma_deg": np.array([s.gamma_deg for s in self.settings]),
             "h0_mm": np.array([s.h0 for s in self.settings]),
         }
+
+        def away(s):  # from the rule contact towards the axis: the side the tool leaves by
+            m2 = np.asarray(s.contacts.get("M2", s.frame.p0 + 0.5 * (s.frame.p1 - s.frame.p0)), float)
+            w = s.q - m2
+            w = w - (w @ s.a) * s.a
+            return w / np.linalg.norm(w)
+
         return ToolPath.from_passes(
             [self.tip],
             [self.axis],
@@ -64,6 +73,7 @@ class FlankPath(Result):
             cutter=c,
             name=f"flank_{self.kind}",
             info={"setting": self.kind, "n_rules": len(self.settings), "step_tolerance_mm": self.step_tolerance},
+            linking=[(away(self.settings[0]), away(self.settings[-1]))],
         )
 
     def report(self) -> dict:

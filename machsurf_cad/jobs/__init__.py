@@ -21,7 +21,18 @@ from pathlib import Path
 
 from ..results import Progress
 from .base import EXIT_INPUT, EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, quiet
-from .specs import SPECS, DemoJob, EnvelopeJob, FlankJob, InfoJob, InspectJob, JobSpec, MachiningSurfaceJob, ReffJob
+from .specs import (
+    SPECS,
+    DemoJob,
+    EnvelopeJob,
+    FlankJob,
+    InfoJob,
+    InspectJob,
+    JobSpec,
+    MachiningSurfaceJob,
+    ReffJob,
+    VerifyJob,
+)
 
 
 def _runner(spec: JobSpec) -> Callable:
@@ -49,6 +60,10 @@ def _runner(spec: JobSpec) -> Callable:
         from .run_envelope import run_envelope
 
         return run_envelope
+    if isinstance(spec, VerifyJob):
+        from .run_verify import run_verify
+
+        return run_verify
     if isinstance(spec, DemoJob):
         from .run_demo import run_demo
 
@@ -95,6 +110,7 @@ def run_job(spec: JobSpec, out, *, say: Say = quiet, progress: Progress | None =
 
 
 __all__ = [
+    "VerifyJob",
     "run_job",
     "JobOutcome",
     "JobSpec",

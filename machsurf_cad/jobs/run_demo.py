@@ -23,6 +23,8 @@ DEFAULT_PART = Path(__file__).resolve().parents[2] / "example_parts" / "freeform
 STL_DEFLECTION_MM = 0.01
 STL_ANGLE_DEG = 5.0
 MS_TOL_MM = 1e-3
+CHORDAL_MM = 0.005
+GOUGE_TOL_MM = 0.01
 
 
 def default_part_path(work_dir: Path) -> Path:
@@ -118,7 +120,7 @@ def run_demo(spec: DemoJob, out, say: Say, progress=None) -> JobOutcome:
         )
         write_step(st.path("machining_surface.step"), ms.faces())
         ms_dev = fit_deviation(ms, "S1")
-        tp = tool_paths(ms, stepover=4.0, chordal_tolerance=0.01)
+        tp = tool_paths(ms, stepover=4.0, chordal_tolerance=CHORDAL_MM)
         render_deviation(
             ms_dev,
             st.path("deviation_S1.png"),
@@ -127,6 +129,12 @@ def run_demo(spec: DemoJob, out, say: Say, progress=None) -> JobOutcome:
             tolerance=MS_TOL_MM,
             extra_lines=[(p.extras["K"], "darkgreen") for p in tp.cutting_passes() if p.n_positions > 1],
         )
+        from .run_verify import check_path
+
+        # the tool body against all 8 faces of the block before the path is written
+        _, verify_rep = check_path(st, say, tp, faces, tolerance=GOUGE_TOL_MM, render=True)
+        if not verify_rep["clean"]:
+            raise InputError("the demo's tool path gouges the block: " + str(verify_rep["worst"][:1]))
         write_csv(st.path("toolpath.csv"), tp)
         write_apt(st.path("toolpath.apt"), tp)
         assert ms.s2_fit is not None  # 5 axes
@@ -165,6 +173,7 @@ def run_demo(spec: DemoJob, out, say: Say, progress=None) -> JobOutcome:
             "machining_surface": ms.report(),
             "S1_deviation_map": ms_dev.report(),
             "toolpath": tp.report(),
+            "verify": verify_rep,
             "time_s": {"total_s": time.perf_counter() - t0},
         }
         (st.dir / "freeform_block.step").unlink(missing_ok=True)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .base import EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, finish, step_face, write_toolpath
+from .base import EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, finish, step_face
 from .specs import FlankJob
 
 
@@ -16,6 +16,13 @@ def _ruled_input(spec: FlankJob):
     tol = spec.fit_ruled if spec.fit_ruled is not None else 1e-6
     s = RuledSurface.from_surface(f.surface, tolerance=tol, name=f.name)
     return s, f"face {f.index} '{f.name}' of {spec.part} (deviation from ruled: {s.source_deviation:.3g} mm)"
+
+
+def _example_face(name: str):
+    from ..examples import example
+    from ..geometry.face import Face
+
+    return Face(example(name, "surface"), name=name)
 
 
 def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
@@ -67,9 +74,15 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
         if res.path is not None:
             from ..geometry.face import Face
             from ..occ import write_step, write_stl
+            from .run_verify import part_faces, write_checked_toolpath
 
             path, env, dev = res.path, res.envelope, res.envelope_deviation
-            write_toolpath(st, res.toolpath, spec)
+            # the tool body against the part: every face of a STEP part, or the example's surface
+            faces = part_faces(spec.part) if spec.part else [_example_face(spec.example)]
+            gtol = spec.gouge_tol if spec.gouge_tol is not None else spec.tol
+            rep["whole"]["verify"], vcode = write_checked_toolpath(
+                st, say, res.toolpath, faces, spec, tolerance=gtol, render=spec.render
+            )
             env_face = Face(env.surface, name="flank_envelope")
             write_step(st.path("envelope.step"), [env_face])
             write_stl(st.path("envelope.stl"), [env_face], linear_deflection=0.01)
@@ -94,6 +107,7 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
             if (res.whole_error_mm or 0.0) > spec.tol:
                 say(f"tolerance {spec.tol:g} mm NOT met on the whole surface")
                 code = EXIT_TOLERANCE
+            code = max(code, vcode)
         if res.study is not None:
             data = res.study
             if spec.render:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 
-from .base import JobOutcome, Say, Staging, face_input, finish, write_toolpath
+from .base import EXIT_OK, JobOutcome, Say, Staging, face_input, finish
 from .specs import MachiningSurfaceJob
 
 
@@ -53,6 +53,7 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
         )
     say("loops: " + ("none" if not ms.loops.found else "; ".join(r.describe() for r in ms.loops.regions)))
     tp = None
+    code = EXIT_OK
     with Staging(out) as st:
         from ..occ import write_step, write_stl
         from ..viz import render_deviation
@@ -73,17 +74,27 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
         rep["S1_deviation_map"] = dev.report()
         if spec.toolpath:
             from ..machining.toolpath import tool_paths
+            from .run_verify import part_faces, write_checked_toolpath
 
             tp = tool_paths(ms, stepover=spec.stepover, chordal_tolerance=spec.chordal, clearance=spec.clearance)
-            write_toolpath(st, tp, spec)
             rep["toolpath"] = tp.report()
             say(
                 f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions ({tp.n_positions} with approach and "
                 f"retract), chordal error {tp.info['chordal_error_measured_mm']:.3g} mm (tol {spec.chordal:g})"
                 + (", MULTAX (axis not +Z)" if tp.is_multiaxis else "")
             )
+            if spec.chordal + spec.tol >= spec.gouge_tol:
+                say(
+                    f"warning: chordal {spec.chordal:g} + fit tolerance {spec.tol:g} mm reach the gouge tolerance "
+                    f"{spec.gouge_tol:g} mm: chords on convex regions may be refused as gouges"
+                )
+            # every face of the part the face came from (an example is its own part)
+            faces = part_faces(spec.part) if spec.part else [face]
+            rep["verify"], code = write_checked_toolpath(
+                st, say, tp, faces, spec, tolerance=spec.gouge_tol, render=True
+            )
         rep["nominal"] = desc
         rep["time_s"] = {"fit_s": t_fit, "total_s": time.perf_counter() - t0}
-        outcome = finish(st, "machining-surface", rep, result=ms)
+        outcome = finish(st, "machining-surface", rep, code, result=ms)
     say(f"outputs in {out}/: {', '.join(outcome.files)}")
     return outcome

@@ -124,7 +124,9 @@ class MachiningSurfaceJob(_Post, JobSpec):
     stl_deflection: float = 0.01
     toolpath: bool = False
     stepover: float = 2.0
-    chordal: float = 0.01
+    chordal: float = 0.005
+    gouge_tol: float = 0.01
+    allow_gouge: bool = False
     command = "machining-surface"
 
     def __post_init__(self) -> None:
@@ -181,6 +183,8 @@ class FlankJob(_Post, JobSpec):
     study: bool = False
     radius_range: float | None = None
     render: bool = True
+    gouge_tol: float | None = None
+    allow_gouge: bool = False
     command = "flank"
 
     def __post_init__(self) -> None:
@@ -242,6 +246,32 @@ class EnvelopeJob(_Post, JobSpec):
 
 
 @dataclass(frozen=True)
+class VerifyJob(JobSpec):
+    """Gouges and collisions of a tool path's tool body against every face of a part."""
+
+    part: str = ""
+    toolpath: str = ""
+    tool: str | None = None
+    shank: str | None = None
+    holder: str | None = None
+    faces: str = "all"
+    tol: float = 0.01
+    step: float = 1.0
+    step_deg: float = 1.0
+    spacing: float | None = None
+    render: bool = True
+    command = "verify"
+
+    def __post_init__(self) -> None:
+        if not self.part or not self.toolpath:
+            raise InputError("verify needs a STEP part and --toolpath")
+        _positive("tol (mm)", self.tol)
+        _positive("step (mm)", self.step)
+        _positive("step_deg (deg)", self.step_deg)
+        _positive("spacing (mm)", self.spacing, allow_none=True)
+
+
+@dataclass(frozen=True)
 class DemoJob(JobSpec):
     """The main job on the embedded example part (``make demo``)."""
 
@@ -249,7 +279,7 @@ class DemoJob(JobSpec):
 
 
 SPECS: dict[str, type[JobSpec]] = {
-    c.command: c for c in (InfoJob, InspectJob, MachiningSurfaceJob, ReffJob, FlankJob, EnvelopeJob, DemoJob)
+    c.command: c for c in (InfoJob, InspectJob, MachiningSurfaceJob, ReffJob, FlankJob, EnvelopeJob, VerifyJob, DemoJob)
 }
 """Spec type by command name."""
 
@@ -261,6 +291,7 @@ __all__ = [
     "ReffJob",
     "FlankJob",
     "EnvelopeJob",
+    "VerifyJob",
     "DemoJob",
     "SPECS",
     "LoopPolicy",

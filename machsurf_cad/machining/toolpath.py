@@ -29,7 +29,7 @@ def tool_paths(
     ms: MachiningSurface,
     *,
     stepover: float,
-    chordal_tolerance: float = 0.01,
+    chordal_tolerance: float = 0.005,
     strategy=None,
     grid: int = 401,
     zigzag: bool = True,

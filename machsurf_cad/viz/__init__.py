@@ -4,6 +4,6 @@ Off-screen PNGs and .vtp files for interactive review. Numbers first: every pict
 is drawn from a result object whose figures are already in the JSON report.
 """
 
-from .render import deviation_polydata, render_deviation, render_scalar_map, render_zebra
+from .render import deviation_polydata, render_deviation, render_gouge_map, render_scalar_map, render_zebra
 
-__all__ = ["deviation_polydata", "render_deviation", "render_scalar_map", "render_zebra"]
+__all__ = ["deviation_polydata", "render_deviation", "render_gouge_map", "render_scalar_map", "render_zebra"]

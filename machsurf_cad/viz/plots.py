@@ -29,3 +29,29 @@ def plot_ratio_curves(curves, png_path, *, label_key: str, label_fmt: str, title
     fig.savefig(png_path)
     plt.close(fig)
     return png_path
+
+
+def plot_path_distance(distance, status, png_path, *, tolerance: float, title: str = "") -> Path:
+    """Smallest signed distance between the tool's cutting part and the part along the path (mm), per
+    position: below -tolerance a gouge (red), collisions marked in black."""
+    import numpy as np
+
+    d = np.asarray(distance, float)
+    x = np.arange(d.size)
+    fig, ax = plt.subplots(figsize=(10, 4.5), dpi=120)
+    shown = np.clip(d, -10 * max(tolerance, 1e-9) - np.nanmax(-d[np.isfinite(d)], initial=0), 5.0)
+    ax.plot(x, shown, lw=0.8, color="tab:blue", label="tool to part, mm")
+    ax.axhline(-tolerance, color="tab:red", ls="--", lw=1, label=f"-tolerance ({tolerance:g} mm)")
+    st = np.asarray(status)
+    ax.scatter(x[st == 1], shown[st == 1], s=10, color="tab:red", label="gouge", zorder=3)
+    ax.scatter(x[st == 2], shown[st == 2], s=14, color="black", marker="x", label="collision", zorder=3)
+    ax.set_xlabel("position (GOTO index)")
+    ax.set_ylabel("smallest distance tool-part [mm] (clipped at 5)")
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="lower right")
+    png_path = Path(png_path)
+    fig.tight_layout()
+    fig.savefig(png_path)
+    plt.close(fig)
+    return png_path

@@ -258,3 +258,50 @@ def render_zebra(
         p.add_text(title, position="upper_left", font_size=12, color="black")
         p.view_isometric()
     return _save(p, png_path)
+
+
+def render_gouge_map(
+    points, depth, png_path, *, tolerance: float, title: str = "", vtp_path=None, worst=None, window_size=(1200, 900)
+) -> Path:
+    """Off-screen PNG of the part's samples coloured by how deep the tool went into them (mm): white
+    where it never did, yellow to red up to the deepest, the tolerance marked on the legend. The
+    .vtp holds the true depths (``gouge_depth_mm``); ``worst`` points are drawn in magenta."""
+    pts = np.asarray(points, float)
+    d = np.maximum(np.asarray(depth, float), 0.0)
+    cloud = pv.PolyData(pts)
+    cloud.point_data["gouge_depth_mm"] = d
+    vmax = max(float(d.max()), 2 * tolerance, 1e-9)
+    p = pv.Plotter(off_screen=True, window_size=list(window_size))
+    p.set_background("white")
+    sargs = dict(
+        title="tool depth into the part [mm]",
+        color="black",
+        fmt="%.3g",
+        n_labels=5,
+        vertical=True,
+        position_x=0.86,
+        position_y=0.15,
+        height=0.7,
+        width=0.06,
+    )
+    p.add_mesh(
+        cloud,
+        scalars="gouge_depth_mm",
+        cmap="YlOrRd",
+        clim=[0.0, vmax],
+        point_size=3,
+        render_points_as_spheres=False,
+        scalar_bar_args=sargs,
+        annotations={tolerance: f"tol {tolerance:g}"},
+    )
+    if worst is not None and len(worst):
+        p.add_mesh(
+            pv.PolyData(np.asarray(worst, float).reshape(-1, 3)),
+            color="magenta",
+            point_size=12,
+            render_points_as_spheres=True,
+        )
+    p.add_text(title, position="upper_left", font_size=11, color="black")
+    p.show_axes()
+    p.view_isometric()
+    return _save(p, png_path, cloud, vtp_path)

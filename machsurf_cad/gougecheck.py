@@ -1,0 +1,404 @@
+"""Verification of a tool path against every face of a part: gouges and collisions of the tool body (mm, degrees).
+
+For every tool position, and for the motion between consecutive positions as a CNC makes it
+(tip and axis interpolated linearly between the positions, then the axis normalised, sampled at
+most ``step_mm`` and ``step_deg`` apart), the signed distance between the tool body and the part
+is computed on the exact surfaces:
+
+1. every face (trimmed region only) is sampled on a parameter grid about ``spacing_mm`` apart;
+   a k-d tree of the samples gives, per placement, those within the tool's bounding sphere;
+2. the signed distance of each such sample to the body is computed exactly from the tool's
+   profile in its (rho, z) half-plane (:meth:`~machsurf_cad.cutters.Cutter.cutting_distance_rz`,
+   shank and holder separately);
+3. around the closest sample of every placement that comes within ``tolerance + spacing`` of the
+   part, the face is searched again on the exact NURBS: four nested 5 x 5 parameter patches, each
+   a third of the previous, down to 1/162 of the sample spacing, inside the trimmed region.
+
+Negative distances are depths inside the tool: a point of the part inside the cutting part is a
+**gouge** (the tool removes material beyond the surface by about that depth), inside the shank or
+holder a **collision**; a rapid move whose cutting part touches the part is a collision too.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .cam.toolpath import Move, ToolPath
+from .errors import InputError
+from .geometry.bspline import BSplineSurface
+from .geometry.face import Face
+from .results import Progress, Result
+
+CLEAR, GOUGE, COLLISION = 0, 1, 2
+STATUS = {CLEAR: "clear", GOUGE: "gouge", COLLISION: "collision"}
+
+
+@dataclass(frozen=True, eq=False)
+class VerifyResult(Result):
+    """Per position of the tool path: the smallest signed distance (mm) between the cutting part and
+    the part over the motion that ends there, the same for shank and holder, where it happens, and
+    the status (0 clear, 1 gouge, 2 collision); per part sample: the deepest the tool went into it."""
+
+    toolpath: ToolPath
+    cutter: object
+    tolerance: float
+    cut_distance: np.ndarray
+    holder_distance: np.ndarray
+    worst_face: np.ndarray
+    worst_xyz: np.ndarray
+    status: np.ndarray
+    sample_points: np.ndarray
+    sample_face: np.ndarray
+    sample_depth: np.ndarray
+    face_names: tuple
+    spacing_mm: float
+    step_mm: float
+    step_deg: float
+    n_placements: int
+    warnings: tuple = ()
+    time_s: dict | None = None
+
+    @property
+    def gouge_depth(self) -> np.ndarray:
+        """Depth (mm, >= 0) of the cutting part inside the part per position."""
+        return np.maximum(0.0, -self.cut_distance)
+
+    @property
+    def max_gouge(self) -> float:
+        cutting = self.toolpath.move != Move.RAPID
+        return float(self.gouge_depth[cutting].max()) if cutting.any() else 0.0
+
+    @property
+    def clean(self) -> bool:
+        return bool(np.all(self.status == CLEAR))
+
+    def worst(self, k: int = 10) -> list[dict]:
+        """The ``k`` deepest gouging or colliding positions (GOTO index, tip, depth, face)."""
+        bad = np.nonzero(self.status != CLEAR)[0]
+        depth = np.maximum(-self.cut_distance[bad], -self.holder_distance[bad])
+        order = bad[np.argsort(-depth)][:k]
+        return [
+            {
+                "index": int(i),
+                "pass": int(self.toolpath.pass_index[i]),
+                "move": Move(int(self.toolpath.move[i])).name.lower(),
+                "status": STATUS[int(self.status[i])],
+                "tip_mm": self.toolpath.tip[i].tolist(),
+                "depth_mm": float(max(-self.cut_distance[i], -self.holder_distance[i])),
+                "face": self.face_names[int(self.worst_face[i])] if self.worst_face[i] >= 0 else None,
+                "face_index": int(self.worst_face[i]),
+                "part_point_mm": self.worst_xyz[i].tolist(),
+            }
+            for i in order
+        ]
+
+    def report(self) -> dict:
+        rapid = self.toolpath.move == Move.RAPID
+        clearances = [x for x in list(self.holder_distance) + list(self.cut_distance[rapid]) if np.isfinite(x)]
+        return {
+            "n_positions": int(self.toolpath.n_positions),
+            "n_placements_checked": int(self.n_placements),
+            "n_faces": len(self.face_names),
+            "n_part_samples": int(self.sample_points.shape[0]),
+            "sample_spacing_mm": self.spacing_mm,
+            "motion_step_mm": self.step_mm,
+            "motion_step_deg": self.step_deg,
+            "tolerance_mm": self.tolerance,
+            "n_gouging_positions": int(np.count_nonzero(self.status == GOUGE)),
+            "max_gouge_mm": self.max_gouge,
+            "n_collisions": int(np.count_nonzero(self.status == COLLISION)),
+            "min_clearance_mm": float(min(clearances)) if clearances else None,
+            "min_cut_distance_mm": float(self.cut_distance.min()),
+            "clean": self.clean,
+            "worst": self.worst(),
+            "warnings": list(self.warnings),
+            "time_s": dict(self.time_s or {}),
+        }
+
+
+def _faces(part) -> list[Face]:
+    items = part if isinstance(part, (list, tuple)) else [part]
+    out = []
+    for i, f in enumerate(items):
+        if isinstance(f, BSplineSurface):
+            f = Face(f, name=f.name or f"face_{i}")
+        if not isinstance(f, Face):
+            raise InputError("verify needs the part's faces (Face or BSplineSurface objects)")
+        out.append(f)
+    if not out:
+        raise InputError("verify needs at least one face of the part")
+    return out
+
+
+def _sample_face(face: Face, spacing: float):
+    """Trim-aware parameter grid about ``spacing`` mm apart; returns points, u, v, du, dv."""
+    s = face.surface
+    u0, u1, v0, v1 = face.uv_bounds
+    g = s.evaluate_grid(np.linspace(u0, u1, 9), np.linspace(v0, v1, 9))
+    lu = np.linalg.norm(np.diff(g, axis=0), axis=-1).sum(axis=0).max()
+    lv = np.linalg.norm(np.diff(g, axis=1), axis=-1).sum(axis=1).max()
+    nu = int(np.clip(math.ceil(lu / spacing) + 1, 8, 3000))
+    nv = int(np.clip(math.ceil(lv / spacing) + 1, 8, 3000))
+    us, vs = np.linspace(u0, u1, nu), np.linspace(v0, v1, nv)
+    U, V = np.meshgrid(us, vs, indexing="ij")
+    P = s.evaluate_grid(us, vs).reshape(-1, 3)
+    keep = face.contains_uv(U.ravel(), V.ravel()) if face.is_trimmed else np.ones(U.size, bool)
+    return P[keep], U.ravel()[keep], V.ravel()[keep], (u1 - u0) / (nu - 1), (v1 - v0) / (nv - 1)
+
+
+def _placements(tp: ToolPath, step_mm: float, step_deg: float):
+    """Tips, axes and owning position of every checked placement (positions and the motion between)."""
+    tips, axes, owner = [tp.tip[:1]], [tp.axis[:1]], [np.array([0])]
+    for k in range(1, tp.n_positions):
+        a, b = tp.tip[k - 1], tp.tip[k]
+        ta, tb = tp.axis[k - 1], tp.axis[k]
+        ang = math.degrees(math.acos(float(np.clip(ta @ tb, -1.0, 1.0))))
+        n = max(1, math.ceil(float(np.linalg.norm(b - a)) / step_mm), math.ceil(ang / step_deg))
+        s = (np.arange(1, n + 1) / n)[:, None]
+        ax = (1 - s) * ta + s * tb
+        nrm = np.linalg.norm(ax, axis=1, keepdims=True)
+        if np.any(nrm < 1e-9):
+            raise InputError(f"the axis turns by 180 deg between positions {k - 1} and {k}: no linear motion")
+        tips.append((1 - s) * a + s * b)
+        axes.append(ax / nrm)
+        owner.append(np.full(n, k))
+    return np.concatenate(tips), np.concatenate(axes), np.concatenate(owner)
+
+
+def verify(
+    part,
+    toolpath: ToolPath,
+    cutter=None,
+    *,
+    tolerance: float = 0.01,
+    step_mm: float = 1.0,
+    step_deg: float = 1.0,
+    spacing_mm: float | None = None,
+    progress: Progress | None = None,
+) -> VerifyResult:
+    """Gouges and collisions of a tool path's tool body against every face of a part.
+
+    Parameters
+    ----------
+    part : Face, BSplineSurface or sequence of them
+        Every face of the part (trimmed regions respected).
+    toolpath : ToolPath
+        Positions, axes and move kinds; its cutter is used unless ``cutter`` is given.
+    cutter : Cutter, optional
+        The tool with its shank and holder.
+    tolerance : float
+        A part point deeper than this inside the cutting part is a gouge (mm); shank or holder
+        within it of the part, or a rapid move's cutting part inside it, is a collision.
+    step_mm, step_deg : float
+        Largest step of the tip (mm) and of the axis (degrees) between checked placements along
+        each linear move.
+    spacing_mm : float, optional
+        Part sample spacing (default min(1, D/8) mm); every close approach is refined on the exact
+        surface to 1/162 of it.
+    progress : Progress, optional
+        ``progress(done, total, message)`` over the placements.
+
+    Returns
+    -------
+    VerifyResult
+
+    Raises
+    ------
+    InputError
+        No cutter, no face, non-positive steps or tolerance, a 180 deg axis flip between positions.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from machsurf_cad import BallEndMill, ToolPath
+    >>> from machsurf_cad.geometry import builders
+    >>> plane = builders.plane_patch()  # z = 0, 100 x 100 mm
+    >>> tips = [np.array([[20.0, 50, z], [80, 50, z]]) for z in (0.0, -0.05)]  # on it, then 0.05 mm into it
+    >>> tp = ToolPath.from_passes(tips, [np.array([[0.0, 0, 1]] * 2)] * 2, cutter=BallEndMill(10))
+    >>> res = verify(plane, tp, tolerance=0.01)
+    >>> round(res.max_gouge, 6), res.report()["n_gouging_positions"]
+    (0.05, 2)
+    """
+    import time
+
+    t0 = time.perf_counter()
+    c = cutter if cutter is not None else toolpath.cutter
+    if c is None:
+        raise InputError("verify needs the tool: give --tool (the tool path carries none)")
+    from .checks import positive
+
+    tolerance = positive("tolerance", tolerance)
+    step_mm = positive("step_mm", step_mm)
+    step_deg = positive("step_deg", step_deg, "deg")
+    faces = _faces(part)
+    h = positive("spacing_mm", spacing_mm) if spacing_mm is not None else min(1.0, c.D / 8.0)
+    pts, fid, us, vs, dus, dvs = [], [], [], [], [], []
+    for i, f in enumerate(faces):
+        P, U, V, du, dv = _sample_face(f, h)
+        pts.append(P)
+        fid.append(np.full(P.shape[0], i))
+        us.append(U)
+        vs.append(V)
+        dus.append(du)
+        dvs.append(dv)
+    P = np.concatenate(pts)
+    F = np.concatenate(fid)
+    SU, SV = np.concatenate(us), np.concatenate(vs)
+    if P.shape[0] == 0:
+        raise InputError("the part's faces have no sample inside their trimmed regions")
+    tree = cKDTree(P)
+    T, A, owner = _placements(toolpath, step_mm, step_deg)
+    m = T.shape[0]
+    L_cut = float(c.length)
+    r_cut = float(c.profile_points(16)[:, 0].max())
+    L_all, r_all = c.body_length(), c.max_radius()
+    has_holder = bool(c.body_parts())
+    reach = math.hypot(L_all / 2, r_all) + h + tolerance
+    cut_d = np.full(m, np.inf)
+    hold_d = np.full(m, np.inf)
+    seed = np.full(m, -1)
+    depth = np.zeros(P.shape[0])
+    t1 = time.perf_counter()
+    chunk = 256
+    for start in range(0, m, chunk):
+        sl = slice(start, min(m, start + chunk))
+        centers = T[sl] + A[sl] * (L_all / 2)
+        lists = tree.query_ball_point(centers, reach)
+        counts = np.fromiter((len(x) for x in lists), int, len(lists))
+        if counts.sum() == 0:
+            continue
+        pl = np.repeat(np.arange(sl.start, sl.stop), counts)
+        pi = np.concatenate([np.asarray(x, int) for x in lists if x])
+        rel = P[pi] - T[pl]
+        z = np.einsum("ij,ij->i", rel, A[pl])
+        rho = np.linalg.norm(rel - z[:, None] * A[pl], axis=1)
+        near = (z > -h - tolerance) & (z < L_cut + h + tolerance) & (rho < r_cut + h + tolerance)
+        sd = np.full(pi.size, np.inf)
+        sd[near] = c.cutting_distance_rz(rho[near], z[near])
+        np.maximum.at(depth, pi, -sd)
+        _group_min(cut_d, seed, pl, sd, pi)
+        if has_holder:
+            hd = c.holder_distance_rz(rho, z)
+            np.minimum.at(hold_d, pl, hd)
+        if progress is not None:
+            progress(sl.stop, m, "tool placements")
+    t2 = time.perf_counter()
+    # refine every close approach on the exact surfaces
+    close = np.nonzero((seed >= 0) & (cut_d < tolerance + h))[0]
+    best_xyz = np.full((m, 3), np.nan)
+    best_face = np.full(m, -1)
+    if close.size:
+        best_face[close] = F[seed[close]]
+        best_xyz[close] = P[seed[close]]
+        for fi in np.unique(F[seed[close]]):
+            sel = close[F[seed[close]] == fi]
+            d_new, xyz = _refine(faces[fi], c, T[sel], A[sel], SU[seed[sel]], SV[seed[sel]], dus[fi], dvs[fi])
+            better = d_new < cut_d[sel]
+            cut_d[sel[better]] = d_new[better]
+            best_xyz[sel[better]] = xyz[better]
+    far = seed < 0
+    best_face[far] = -1
+    # per position: the worst placement of the motion ending there
+    n = toolpath.n_positions
+    pos_cut = np.full(n, np.inf)
+    pos_hold = np.full(n, np.inf)
+    np.minimum.at(pos_cut, owner, cut_d)
+    np.minimum.at(pos_hold, owner, hold_d)
+    order = np.lexsort((cut_d, owner))
+    first = np.r_[True, owner[order][1:] != owner[order][:-1]]
+    wp = order[first]
+    pos_face = np.full(n, -1)
+    pos_xyz = np.full((n, 3), np.nan)
+    pos_face[owner[wp]] = best_face[wp]
+    pos_xyz[owner[wp]] = best_xyz[wp]
+    status = np.full(n, CLEAR, np.int8)
+    rapid = toolpath.move == Move.RAPID
+    status[(~rapid) & (pos_cut < -tolerance)] = GOUGE
+    status[rapid & (pos_cut < tolerance)] = COLLISION
+    status[pos_hold < tolerance] = COLLISION
+    warns = []
+    if np.all(~np.isfinite(pos_cut)) or (np.isfinite(pos_cut).any() and np.nanmin(pos_cut) > c.D):
+        warns.append(f"the tool never comes within {c.D:g} mm of the part: is this the part the path was made for?")
+    for w in warns:
+        warnings.warn(w, stacklevel=2)
+    t3 = time.perf_counter()
+    times = {"sample_s": t1 - t0, "coarse_s": t2 - t1, "refine_s": t3 - t2, "total_s": t3 - t0}
+    return VerifyResult(
+        toolpath,
+        c,
+        float(tolerance),
+        pos_cut,
+        pos_hold,
+        pos_face,
+        pos_xyz,
+        status,
+        P,
+        F,
+        depth,
+        tuple(f.name or f"face_{i}" for i, f in enumerate(faces)),
+        float(h),
+        float(step_mm),
+        float(step_deg),
+        int(m),
+        tuple(warns),
+        times,
+    )
+
+
+def _group_min(best: np.ndarray, arg: np.ndarray, group: np.ndarray, values: np.ndarray, payload: np.ndarray) -> None:
+    """Per group: the smallest value (into ``best``) and its payload (into ``arg``), where smaller."""
+    order = np.lexsort((values, group))
+    g = group[order]
+    first = np.r_[True, g[1:] != g[:-1]]
+    gi = g[first]
+    v = values[order][first]
+    better = v < best[gi]
+    best[gi[better]] = v[better]
+    arg[gi[better]] = payload[order][first][better]
+
+
+def _refine(face: Face, c, T, A, u, v, du, dv, levels: int = 4, k: int = 5):
+    """Nested parameter patches around ``(u, v)``: the smallest signed distance of the face to the
+    cutting part placed at ``T``, ``A`` (one per seed) and the part point where it is."""
+    s = face.surface
+    u0, u1, v0, v1 = face.uv_bounds
+    m = u.size
+    best = np.full(m, np.inf)
+    xyz = np.full((m, 3), np.nan)
+    cu, cv = u.copy(), v.copy()
+    hu, hv = du, dv
+    off = np.linspace(-1.0, 1.0, k)
+    grid_u, grid_v = np.meshgrid(off, off, indexing="ij")
+    OU, OV = grid_u.ravel(), grid_v.ravel()
+    for _ in range(levels):
+        uu = np.clip(cu[:, None] + hu * OU[None, :], u0, u1)
+        vv = np.clip(cv[:, None] + hv * OV[None, :], v0, v1)
+        Q = s.evaluate(uu.ravel(), vv.ravel()).reshape(m, -1, 3)
+        rel = Q - T[:, None, :]
+        z = np.einsum("mkj,mj->mk", rel, A)
+        rho = np.linalg.norm(rel - z[..., None] * A[:, None, :], axis=-1)
+        d = c.cutting_distance_rz(rho, z)
+        if face.is_trimmed:  # the trimming test only where it can matter (a candidate better than the best)
+            cand = d < best[:, None]
+            if cand.any():
+                inside = face.contains_uv(uu[cand], vv[cand])
+                dc = d[cand]
+                dc[~inside] = np.inf
+                d[cand] = dc
+        j = np.argmin(d, axis=1)
+        dj = d[np.arange(m), j]
+        better = dj < best
+        best[better] = dj[better]
+        xyz[better] = Q[np.arange(m), j][better]
+        cu = np.where(better, uu[np.arange(m), j], cu)
+        cv = np.where(better, vv[np.arange(m), j], cv)
+        hu, hv = hu / 3.0, hv / 3.0
+    return best, xyz
+
+
+__all__ = ["verify", "VerifyResult", "CLEAR", "GOUGE", "COLLISION", "STATUS"]

@@ -1,0 +1,173 @@
+"""The ``verify`` job, and the check every path-writing job makes before writing a tool path."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError
+from .base import EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, finish, write_toolpath
+from .specs import VerifyJob
+
+
+def _shank(text: str | None, what: str):
+    """``D=..,L=..`` (mm) as a :class:`~machsurf_cad.cutters.Shank`."""
+    if not text:
+        return None
+    from ..cutters import Shank
+
+    kw = {}
+    for part in text.split(","):
+        k, _, v = part.partition("=")
+        k = k.strip().upper()
+        if k not in ("D", "L") or not v.strip():
+            raise InputError(f"--{what} must be D=..,L=.. (mm), got {text!r}")
+        try:
+            kw[k] = float(v)
+        except ValueError:
+            raise InputError(f"--{what} {k} must be a number, got {v!r}") from None
+    if set(kw) != {"D", "L"}:
+        raise InputError(f"--{what} needs D and L (mm), got {text!r}")
+    return Shank(kw["D"], kw["L"])
+
+
+def part_faces(part: str, faces: str = "all"):
+    """Faces of a STEP part: ``all`` or a comma list of indices."""
+    from ..occ import read_step_faces
+
+    if faces.strip().lower() == "all":
+        return read_step_faces(part)
+    try:
+        idx = [int(x) for x in faces.split(",") if x.strip()]
+    except ValueError:
+        raise InputError(f"--faces must be all or indices like 0,3,5; got {faces!r}") from None
+    return read_step_faces(part, idx)
+
+
+def check_path(
+    st: Staging,
+    say: Say,
+    tp,
+    faces,
+    *,
+    tolerance: float,
+    render: bool,
+    cutter=None,
+    step_mm=1.0,
+    step_deg=1.0,
+    spacing_mm=None,
+    progress=None,
+):
+    """Verify ``tp`` against ``faces``; say and draw the result; return ``(VerifyResult, report)``."""
+    from ..gougecheck import verify
+
+    res = verify(
+        faces,
+        tp,
+        cutter,
+        tolerance=tolerance,
+        step_mm=step_mm,
+        step_deg=step_deg,
+        spacing_mm=spacing_mm,
+        progress=progress,
+    )
+    rep = res.report()
+    say(
+        f"tool body against {rep['n_faces']} face(s) ({rep['n_placements_checked']} placements, motion steps "
+        f"{res.step_mm:g} mm / {res.step_deg:g} deg, part sampled every {res.spacing_mm:.3g} mm and refined on the "
+        f"exact faces): {rep['n_gouging_positions']} gouging position(s), max gouge {rep['max_gouge_mm']:.4g} mm "
+        f"(tol {tolerance:g}), {rep['n_collisions']} collision(s)"
+        + (f", min clearance {rep['min_clearance_mm']:.4g} mm" if rep["min_clearance_mm"] is not None else "")
+    )
+    for w in rep["worst"][:3]:
+        say(
+            f"  {w['status']} at position {w['index']} (pass {w['pass']}, {w['move']}): {w['depth_mm']:.4g} mm into "
+            f"face {w['face_index']} '{w['face']}' near ({', '.join(f'{x:.3f}' for x in w['part_point_mm'])})"
+        )
+    for w in rep["warnings"]:
+        say(f"warning: {w}")
+    if render:
+        from ..viz import render_gouge_map
+        from ..viz.plots import plot_path_distance
+
+        worst = [w["part_point_mm"] for w in rep["worst"]]
+        render_gouge_map(
+            res.sample_points,
+            res.sample_depth,
+            st.path("verify_part.png"),
+            vtp_path=st.path("verify_part.vtp"),
+            tolerance=tolerance,
+            worst=worst,
+            title=f"{tp.name}: tool depth into the part (max {rep['max_gouge_mm']:.3g} mm)",
+        )
+        plot_path_distance(
+            res.cut_distance,
+            res.status,
+            st.path("verify_path.png"),
+            tolerance=tolerance,
+            title=f"{tp.name}: smallest distance between the cutting part and the part",
+        )
+    return res, rep
+
+
+def write_checked_toolpath(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool):
+    """Check ``tp`` against the part, then write it unless it gouges (``spec.allow_gouge`` writes it
+    anyway, listed in the report). Returns ``(verify report, exit code)``."""
+    _, rep = check_path(st, say, tp, faces, tolerance=tolerance, render=render)
+    if rep["clean"]:
+        write_toolpath(st, tp, spec)
+        return rep, EXIT_OK
+    if spec.allow_gouge:
+        write_toolpath(st, tp, spec)
+        say("tool path written with its gouges and collisions (--allow-gouge): see verify.worst in the report")
+        return rep, EXIT_OK
+    say("tool path NOT written: it gouges or collides beyond the tolerance (--allow-gouge writes it anyway)")
+    return rep, EXIT_TOLERANCE
+
+
+def run_verify(spec: VerifyJob, out, say: Say, progress=None) -> JobOutcome:
+    from ..cam import read_apt, read_csv
+    from ..cutters import parse_cutter
+
+    path = Path(spec.toolpath)
+    suffix = path.suffix.lower()
+    if suffix == ".csv":
+        tp = read_csv(path)
+    elif suffix in (".apt", ".cls", ".cl", ".aptsource", ".txt"):
+        tp = read_apt(path)
+    else:
+        raise InputError(f"tool path must be .csv (ours) or APT CLDATA (.apt, .cls, .cl), got {path.name}")
+    cutter: Any = parse_cutter(spec.tool) if spec.tool else tp.cutter
+    if cutter is None:
+        raise InputError(f"{path.name} names no usable CUTTER: give --tool")
+    cutter = dataclasses.replace(cutter, shank=_shank(spec.shank, "shank"), holder=_shank(spec.holder, "holder"))
+    if cutter.holder is not None and cutter.shank is not None and cutter.holder.diameter < cutter.shank.diameter:
+        say("warning: the holder is narrower than the shank")
+    faces = part_faces(spec.part, spec.faces)
+    say(
+        f"part: {spec.part} ({len(faces)} face(s) checked); tool path: {path.name}, {tp.n_positions} positions, "
+        f"{tp.n_passes} pass(es); tool {cutter.spec()}"
+        + (f", shank D{cutter.shank.diameter:g} L{cutter.shank.length:g}" if cutter.shank else "")
+        + (f", holder D{cutter.holder.diameter:g} L{cutter.holder.length:g}" if cutter.holder else "")
+    )
+    with Staging(out) as st:
+        res, rep = check_path(
+            st,
+            say,
+            tp,
+            faces,
+            tolerance=spec.tol,
+            render=spec.render,
+            cutter=cutter,
+            step_mm=spec.step,
+            step_deg=spec.step_deg,
+            spacing_mm=spec.spacing,
+            progress=progress,
+        )
+        code = EXIT_OK if res.clean else EXIT_TOLERANCE
+        say("clean" if res.clean else "NOT clean: gouges or collisions beyond the tolerance")
+        report = {"part": str(spec.part), "toolpath": str(path), "tool": cutter.to_dict(), "verify": rep}
+        outcome = finish(st, "verify", report, code, res)
+    say(f"outputs in {out}/: {', '.join(outcome.files)}")
+    return outcome

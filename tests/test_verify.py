@@ -1,0 +1,184 @@
+"""The tool-body check: closed forms, an independent brute force, the demo's path on the whole block."""
+
+import math
+
+import numpy as np
+import pytest
+from conftest import ROOT, needs_kernel
+from helpers import assert_close
+
+import machsurf_cad as ms
+
+
+def _trough(rho: float, half_angle_deg: float = 60.0, length: float = 60.0):
+    """The inside of a cylinder of radius ``rho`` (axis x at height rho), +-half_angle around its bottom line
+    z = 0; the outward normal (into the tool, out of the material) points to the axis."""
+    from machsurf_cad.geometry import builders
+
+    a = math.radians(half_angle_deg)
+    arc = builders.circular_arc(rho, -90.0 - half_angle_deg, -90.0 + half_angle_deg, center=(0.0, rho))
+    # sweep the (y, z) arc along x: a ruled surface between the arc at x = 0 and at x = length
+    c0 = ms.BSplineCurve(arc.degree, arc.knots, arc.mults, np.c_[np.zeros(len(arc.poles)), arc.poles], arc.weights)
+    c1 = ms.BSplineCurve(
+        arc.degree, arc.knots, arc.mults, np.c_[np.full(len(arc.poles), length), arc.poles], arc.weights
+    )
+    s = builders.ruled_surface(c0, c1)
+    p = ms.local_properties(s, 0.5, 0.5)
+    up = float(p.normal[2]) > 0  # the material is below the trough's surface: outward normal points up
+    assert abs(math.sin(a)) > 0
+    return ms.Face(s, name="trough", reversed=not up)
+
+
+def _ball_path(r: float, length: float = 60.0):
+    tips = [np.array([[10.0, 0.0, 0.0], [length - 10.0, 0.0, 0.0]])]
+    return ms.ToolPath.from_passes(tips, [np.array([[0.0, 0.0, 1.0]] * 2)], cutter=ms.BallEndMill(2 * r))
+
+
+@pytest.mark.parametrize("r,rho", [(9.9, 10.0), (10.5, 10.0), (12.0, 10.0)])
+def test_ball_in_a_concave_cylinder_gouges_iff_r_exceeds_rho(r, rho):
+    face = _trough(rho)
+    res = ms.verify(face, _ball_path(r), tolerance=1e-3)
+    # closed form: with the tip on the bottom line, the distance from the ball's centre to the trough's
+    # points at angle t is sqrt(r^2 - 2 rho (r - rho)(1 - cos t)): the depth is largest at the edge t = 60 deg
+    depth = r - math.sqrt(r * r - 2 * rho * (r - rho) * (1 - math.cos(math.radians(60.0)))) if r > rho else 0.0
+    cut = res.toolpath.move == ms.Move.CUT
+    assert_close(res.gouge_depth[cut].max(), depth, 1e-3, "gouge depth")
+    assert (res.report()["n_gouging_positions"] > 0) == (r > rho)
+
+
+def _brute_depth(face, cutter, tip, axis, n=1200):
+    """Independent: the part sampled densely in (u, v), the bull-nose body from its closed form in (rho, z)."""
+    s = face.surface
+    u0, u1, v0, v1 = face.uv_bounds
+    U, V = np.meshgrid(np.linspace(u0, u1, n), np.linspace(v0, v1, n), indexing="ij")
+    P = s.evaluate(U.ravel(), V.ravel())
+    rel = P - tip
+    z = rel @ axis
+    rho = np.linalg.norm(rel - z[:, None] * axis, axis=1)
+    R, r = cutter.D / 2, cutter.r
+    Rt = R - r
+    tube = np.hypot(rho - Rt, z - r)
+    # inside the body, and the depth to its nearest boundary (bottom disc, torus corner, side), shallow points
+    flat = (rho <= Rt) & (z >= 0) & (z < r)
+    corner = (rho > Rt) & (z < r) & (tube < r)
+    side = (z >= r) & (z <= cutter.length) & (rho < R)
+    depth = np.zeros(rho.shape)
+    depth[flat] = np.minimum(z[flat], r - np.hypot(np.maximum(rho[flat] - Rt, 0), z[flat] - r))
+    depth[corner] = r - tube[corner]
+    depth[side] = np.minimum(R - rho[side], cutter.length - z[side])
+    return float(depth.max())
+
+
+def test_rear_gouge_agrees_with_an_independent_brute_force():
+    face = ms.Face(ms.example("bezier5"), name="bezier5")
+    res = ms.machining_surface(face, "bull:D=28,r=4", axes=5, lead=20, tolerance=1e-3)
+    tp = ms.tool_paths(res, stepover=5.0)
+    v = ms.verify(face, tp, tolerance=0.01, step_mm=0.25)
+    w = v.worst(1)[0]
+    i = w["index"]
+    assert w["status"] == "gouge" and w["depth_mm"] > 0.02  # the heel of a 33 mm feed-section radius
+    # the deepest placement of the motion ending at i, brute-forced on a dense parameter grid
+    a, b = tp.tip[i - 1], tp.tip[i]
+    aa, ab = tp.axis[i - 1], tp.axis[i]
+    best = 0.0
+    for s in np.linspace(0, 1, 41)[1:]:
+        ax = (1 - s) * aa + s * ab
+        best = max(best, _brute_depth(face, tp.cutter, (1 - s) * a + s * b, ax / np.linalg.norm(ax)))
+    assert abs(best - w["depth_mm"]) <= 1e-3, (best, w["depth_mm"])
+
+
+@needs_kernel
+def test_demo_path_is_clean_on_the_whole_block_and_a_shifted_one_reads_its_shift():
+    from machsurf_cad.occ import read_step_faces
+
+    faces = read_step_faces(ROOT / "example_parts" / "freeform_block.step")
+    top = faces[0]
+    res = ms.machining_surface(top, "bull:D=16,r=3", axes=5, lead=10, tolerance=1e-3)
+    tp = ms.tool_paths(res, stepover=4.0, chordal_tolerance=0.005)
+    v = ms.verify(faces, tp, tolerance=0.01)
+    assert v.clean and v.report()["n_faces"] == 8
+    assert v.max_gouge <= 0.005 + 0.002  # chords and fits, within their stated tolerances
+    # the cutting positions moved 0.05 mm into the part along the nominal's outward normal at the contact
+    uv = tp.extras["uv"]
+    cut = ~np.isnan(uv[:, 0])
+    n = np.zeros_like(tp.tip)
+    n[cut] = top.surface.normals(uv[cut, 0], uv[cut, 1]) * (-1.0 if top.reversed else 1.0)
+    moved = ms.ToolPath(tp.tip - 0.05 * n, tp.axis, tp.move, tp.pass_index, cutter=tp.cutter)
+    at_positions = ms.verify(faces, moved, tolerance=0.01, step_mm=1e9, step_deg=180)  # the GOTOs themselves
+    assert_close(at_positions.max_gouge, 0.050, 1e-3, "gouge of a path moved 0.05 mm into the part")
+    assert at_positions.report()["n_gouging_positions"] >= 0.9 * int(cut.sum())
+    along = ms.verify(faces, moved, tolerance=0.01)  # and as the CNC moves between them: chords add their sag
+    assert 0.050 - 1e-3 <= along.max_gouge <= 0.050 + 0.005 + 2e-3
+
+
+def test_shank_and_holder_collisions_and_rapids():
+    from machsurf_cad.geometry import builders
+
+    wall = builders.plane_patch(origin=(0, 0, 0), du=(100, 0, 0), dv=(0, 0, 100))  # x-z plane, normal -y
+    face = ms.Face(wall, reversed=True)  # material on y < 0... outward normal +y
+    body = ms.BullNoseEndMill(10, 2, 20, shank=ms.Shank(16, 30), holder=ms.Shank(40, 40))
+    # tool axis along +y, tip 1 mm off the wall: the cutting part is clear, nothing else near
+    tp = ms.ToolPath.from_passes(
+        [np.array([[50.0, 1.0, 50.0], [60.0, 1.0, 50.0]])], [np.array([[0, 1.0, 0]] * 2)], cutter=body
+    )
+    assert ms.verify(face, tp, tolerance=0.01).clean
+    # axis parallel to the wall, 6 mm off: the cutting part (R 5) is clear but the shank (R 8) cuts 2 mm in
+    tp2 = ms.ToolPath.from_passes(
+        [np.array([[50.0, 6.0, 10.0], [60.0, 6.0, 10.0]])], [np.array([[0, 0, 1.0]] * 2)], cutter=body
+    )
+    v2 = ms.verify(face, tp2, tolerance=0.01)
+    assert v2.report()["n_collisions"] > 0 and v2.report()["n_gouging_positions"] == 0
+    assert_close(v2.report()["min_clearance_mm"], -14.0, 1e-6, "holder depth (R 20, z 60..100 on a 100 mm wall)")
+    no_holder = ms.BullNoseEndMill(10, 2, 20, shank=ms.Shank(16, 30))
+    v3 = ms.verify(face, tp2, no_holder, tolerance=0.01)
+    assert_close(v3.report()["min_clearance_mm"], -2.0, 1e-6, "shank depth (R 8 at 6 mm from the wall)")
+
+
+def test_bad_input():
+    face = ms.Face(ms.example("bezier5"))
+    tp = ms.ToolPath.from_passes([np.array([[0.0, 0, 500], [10, 0, 500]])], [np.array([[0, 0, 1.0]] * 2)])
+    with pytest.raises(ms.InputError, match="needs the tool"):
+        ms.verify(face, tp)
+    with pytest.warns(UserWarning, match="never comes within"):
+        v = ms.verify(face, tp, ms.BallEndMill(10))
+    assert v.clean and v.report()["warnings"]
+    with pytest.raises(ms.InputError, match="tolerance must be > 0"):
+        ms.verify(face, tp, ms.BallEndMill(10), tolerance=0)
+
+
+@needs_kernel
+def test_verify_command_reads_apt_and_csv_and_exits_by_the_result(tmp_path):
+    import json
+
+    from helpers import run
+
+    from machsurf_cad.occ import read_step_faces
+
+    block = ROOT / "example_parts" / "freeform_block.step"
+    top = read_step_faces(block, [0])[0]
+    res = ms.machining_surface(top, "bull:D=16,r=3", axes=5, lead=10, tolerance=1e-3)
+    tp = ms.tool_paths(res, stepover=8.0)
+    apt = ms.write_apt(tmp_path / "p.apt", tp)
+    out = tmp_path / "v"
+    r = run("verify", block, "--toolpath", apt, "-o", out)  # the tool from the APT's CUTTER
+    assert r.returncode == 0, r.stdout + r.stderr
+    rep = json.loads((out / "report.json").read_text())["verify"]
+    assert rep["clean"] and rep["n_faces"] == 8 and rep["n_positions"] == tp.n_positions
+    assert (out / "verify_part.png").is_file() and (out / "verify_path.png").is_file()
+    uv = tp.extras["uv"]
+    cut = ~np.isnan(uv[:, 0])
+    n = np.zeros_like(tp.tip)
+    n[cut] = top.surface.normals(uv[cut, 0], uv[cut, 1]) * (-1.0 if top.reversed else 1.0)
+    bad = ms.write_csv(
+        tmp_path / "bad.csv", ms.ToolPath(tp.tip - 0.2 * n, tp.axis, tp.move, tp.pass_index, cutter=tp.cutter)
+    )
+    r = run(
+        "verify", block, "--toolpath", bad, "--tool", "bull:D=16,r=3", "--shank", "D=16,L=40", "-o", tmp_path / "v2"
+    )
+    assert r.returncode == 2 and "NOT clean" in r.stdout
+    rep = json.loads((tmp_path / "v2" / "report.json").read_text())["verify"]
+    assert rep["max_gouge_mm"] > 0.19 and rep["worst"][0]["face"] == "freeform_top"
+    r = run("verify", block, "--toolpath", bad, "-o", tmp_path / "v3")  # CSV carries no cutter
+    assert r.returncode == 1 and "give --tool" in r.stderr
+    r = run("verify", block, "--toolpath", bad, "--tool", "ball:D=10", "--shank", "D=10", "-o", tmp_path / "v4")
+    assert r.returncode == 1 and "needs D and L" in r.stderr
