@@ -76,23 +76,39 @@ class Face:
         if not self.loops:
             u0, u1, v0, v1 = self.uv_bounds
             return (u >= u0) & (u <= u1) & (v >= v0) & (v <= v1)
-        inside = np.zeros(u.shape, dtype=bool)
-        for loop in self.loops:
-            poly = np.concatenate([c.evaluate(np.linspace(*c.bounds, n_per_curve))[:-1] for c in loop])
-            inside ^= _points_in_polygon(u, v, poly)
-        return inside
+        polys = self._polygons(n_per_curve)
+        return _points_in_polygons(u, v, polys)
+
+    def _polygons(self, n_per_curve: int = 64) -> list:
+        """The trimming loops as closed (u, v) polygons, computed once per face."""
+        key = ("_polys", n_per_curve)
+        cache = self.__dict__.setdefault("_cache", {})
+        if key not in cache:
+            cache[key] = [
+                np.concatenate([c.evaluate(np.linspace(*c.bounds, n_per_curve))[:-1] for c in loop])
+                for loop in self.loops
+            ]
+        return cache[key]
 
 
 def _points_in_polygon(u, v, poly) -> np.ndarray:
-    """Even-odd rule by a sweep over v: the points sorted by v once, each polygon edge flips only the
-    points in its v range (O(E log N + crossings) time, O(N) memory; no points x edges array)."""
+    """Even-odd rule for one closed polygon (see :func:`_points_in_polygons`)."""
+    return _points_in_polygons(u, v, [poly])
+
+
+def _points_in_polygons(u, v, polys) -> np.ndarray:
+    """Even-odd rule over several closed polygons at once (a face's outer loop and holes), by a sweep
+    over v: the points sorted by v once, each polygon edge flips only the points in its v range
+    (O(E log N + crossings) time, O(N) memory; no points x edges array)."""
     uf = np.asarray(u, float).ravel()
     vf = np.asarray(v, float).ravel()
     order = np.argsort(vf, kind="stable")
     vs, us = vf[order], uf[order]
     flips = np.zeros(uf.size, bool)
-    x0, y0 = poly[:, 0], poly[:, 1]
-    x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
+    x0 = np.concatenate([p[:, 0] for p in polys])
+    y0 = np.concatenate([p[:, 1] for p in polys])
+    x1 = np.concatenate([np.roll(p[:, 0], -1) for p in polys])
+    y1 = np.concatenate([np.roll(p[:, 1], -1) for p in polys])
     lo, hi = np.minimum(y0, y1), np.maximum(y0, y1)
     start = np.searchsorted(vs, lo, side="right")  # points with v > lo ...
     end = np.searchsorted(vs, hi, side="right")  # ... and v <= hi: (y0 > v) != (y1 > v)
