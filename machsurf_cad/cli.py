@@ -241,7 +241,10 @@ def main(argv=None) -> int:
 
     from .progress import Bar
 
-    previous = signal.signal(signal.SIGTERM, _on_sigterm) if _main_thread() else None
+    previous = previous_int = None
+    if _main_thread():
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+        previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)  # even when started ignored
     try:
         spec = _spec(args)
         with Bar(_BAR_TITLES.get(args.command, args.command)) as bar:
@@ -258,6 +261,8 @@ def main(argv=None) -> int:
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
+        if previous_int is not None:
+            signal.signal(signal.SIGINT, previous_int)
 
 
 def _main_thread() -> bool:

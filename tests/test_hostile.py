@@ -257,6 +257,13 @@ def test_broken_pipe_and_sigterm(tmp_path):
     assert rc == 143 and b"terminated" in p2.stderr.read()
     assert not (tmp_path / "big").exists()
     _no_partial(tmp_path / "big")
+    p3 = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=ROOT)
+    time.sleep(3.0)
+    t = time.perf_counter()
+    p3.send_signal(signal.SIGINT)  # Ctrl-C: acts within a second, exit 130, nothing written
+    assert p3.wait(60) == 130 and time.perf_counter() - t < 2.0
+    assert b"interrupted" in p3.stderr.read() and not (tmp_path / "big").exists()
+    _no_partial(tmp_path / "big")
 
 
 def test_api_refusals():
