@@ -45,6 +45,16 @@ def _axis(text: str | None):
     return v
 
 
+def _lead(text: str):
+    """``--lead``: degrees or ``auto``."""
+    if text.strip().lower() == "auto":
+        return "auto"
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"lead must be degrees or auto, got {text!r}") from None
+
+
 def _spec(args):
     """The job spec of the parsed arguments (options and spec fields share their names)."""
     cls = SPECS[args.command]
@@ -109,7 +119,10 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--tool", required=True, help="ball:D=..|flat:D=..|bull:D=..,r=.. (mm)")
     m.add_argument("--axes", type=int, default=5, help="3 or 5 (default 5)")
     m.add_argument("--strategy", default="planes:x", help="planes:x|y|z|a,b,c or iso:u|v (default planes:x)")
-    m.add_argument("--lead", type=float, default=0.0, help="lead angle Omega_t, degrees (5 axes)")
+    m.add_argument("--lead", type=_lead, default=0.0, help="lead angle Omega_t, degrees, or auto (5 axes)")
+    m.add_argument("--lead-margin", type=float, default=1.0, help="--lead auto: degrees above the local need")
+    m.add_argument("--lead-min", type=float, default=0.0, help="--lead auto: smallest lead, degrees")
+    m.add_argument("--lead-rate", type=float, default=2.0, help="--lead auto: largest lead change, deg per mm")
     m.add_argument("--tilt", type=float, default=0.0, help="tilt angle Omega_n, degrees (5 axes)")
     m.add_argument("--axis", default=None, help="fixed axis x,y,z for 3 axes / 3+2 (default 0,0,1)")
     m.add_argument("--tip", action="store_true", help="3 axes: S1 at the tool tip instead of the torus plane")

@@ -368,3 +368,30 @@ def test_envelope_command_bad_input(tmp_path):
     r = run("envelope", "--tool", "cone:D=10,angle=10", "--theta", "120", "--passes", "2", "-o", tmp_path / "d")
     assert r.returncode == 1 and ("folds back" in r.stderr or "no real envelope" in r.stderr)
     assert not any((tmp_path / x).exists() for x in "abcd")
+
+
+def test_lead_auto_reports_its_range_and_the_global_check_still_decides(tmp_path):
+    out = tmp_path / "auto"
+    r = run(
+        "machining-surface",
+        "--example",
+        "bezier5",
+        "--tool",
+        "bull:D=28,r=4",
+        "--lead",
+        "auto",
+        "--tol",
+        "0.001",
+        "-o",
+        out,
+    )
+    assert r.returncode == 0, r.stderr
+    al = json.loads((out / "report.json").read_text())["auto_lead"]
+    assert 0 < al["lead_min_deg"] <= al["local_need_max_deg"] <= al["lead_max_deg"] < 89
+    assert f"automatic lead: {al['lead_min_deg']:.3f}" in r.stdout
+    r = run("machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--lead", "auto", "-o", tmp_path / "b")
+    assert r.returncode == 1 and "a ball end mill needs no lead" in r.stderr
+    r = run(
+        "machining-surface", "--example", "bezier5", "--tool", "bull:D=28,r=4", "--lead", "soon", "-o", tmp_path / "c"
+    )
+    assert r.returncode == 1 and "lead must be degrees or auto" in r.stderr

@@ -182,3 +182,39 @@ def test_verify_command_reads_apt_and_csv_and_exits_by_the_result(tmp_path):
     assert r.returncode == 1 and "give --tool" in r.stderr
     r = run("verify", block, "--toolpath", bad, "--tool", "ball:D=10", "--shank", "D=10", "-o", tmp_path / "v4")
     assert r.returncode == 1 and "needs D and L" in r.stderr
+
+
+def test_auto_lead_matches_the_rear_gouge_threshold_of_a_concave_cylinder():
+    """A bull D28 r4 feeding along a concave cylinder of radius 60: local gouge iff R_t / sin(lead) + r > rho.
+    lead="auto" (no margin) finds asin(10 / 56) = 10.29 deg; a brute force (dense trough samples, the
+    bull-nose body in closed form) bisected on the lead agrees within 0.1 deg; lead 5 gouges 1.8 mm."""
+    face = _trough(60.0, 45.0, 100.0)
+    cut = ms.BullNoseEndMill(28, 4)
+    res = ms.machining_surface(face, cut, axes=5, lead="auto", lead_margin_deg=0.0, tolerance=1e-3)
+    auto = res.report()["auto_lead"]["lead_min_deg"]
+    assert_close(auto, math.degrees(math.asin(10 / 56)), 1e-9, "closed-form threshold")
+
+    def depth(lead_deg):  # tool at the bottom line, axis leaned by the lead towards the feed (+y here)
+        lam = math.radians(lead_deg)
+        axis = np.array([0.0, math.sin(lam), math.cos(lam)])
+        # the tip placed so that the body's lowest point (the contact, normal +z) is at the bottom (0, 0, 0)
+        return _brute_depth(face, cut, -_lowest_point(cut, axis), axis, n=900)
+
+    lo, hi = 5.0, 20.0
+    assert depth(lo) > 1.0 and depth(hi) < 1e-4
+    for _ in range(18):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if depth(mid) > 1e-4 else (lo, mid)
+    assert abs(hi - auto) < 0.1, (hi, auto)
+    tp = ms.tool_paths(ms.machining_surface(face, cut, axes=5, lead=5, tolerance=1e-3), stepover=10)
+    assert ms.verify(face, tp, tolerance=0.01).max_gouge > 1.7  # the issue's 1.80 mm behind the contact
+
+
+def _lowest_point(cutter, axis):
+    """The point of the tool body lowest along -z when the tip is at the origin (the contact with a
+    horizontal bottom line), from the profile: the corner torus point whose normal is -z."""
+    ez = np.array([0.0, 0.0, 1.0])
+    w = ez - (ez @ axis) * axis  # the radial direction towards which the torus's lowest point lies is -w
+    w = w / np.linalg.norm(w) if np.linalg.norm(w) > 1e-12 else np.array([1.0, 0.0, 0.0])
+    centre = -cutter.R_t * w + cutter.r * axis  # corner circle centre in that direction
+    return centre - cutter.r * ez

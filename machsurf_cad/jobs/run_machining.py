@@ -28,6 +28,9 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
         loops=spec.loops,
         max_poles=spec.max_poles,
         tip=spec.tip,
+        lead_margin_deg=spec.lead_margin,
+        lead_min_deg=spec.lead_min,
+        lead_rate_deg_per_mm=spec.lead_rate,
         degree=(spec.degree, spec.degree),
         progress=progress,
     )
@@ -52,6 +55,13 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
             f"{rep['axis_error_deg_measured']:.4g} deg"
         )
     say("loops: " + ("none" if not ms.loops.found else "; ".join(r.describe() for r in ms.loops.regions)))
+    if rep.get("auto_lead"):
+        al = rep["auto_lead"]
+        say(
+            f"automatic lead: {al['lead_min_deg']:.3f}..{al['lead_max_deg']:.3f} deg (local need up to "
+            f"{al['local_need_max_deg']:.3f} deg incl. margin {al['margin_deg']:g}, change at most "
+            f"{al['rate_bound_deg_per_mm']:g} deg/mm)"
+        )
     tp = None
     code = EXIT_OK
     with Staging(out) as st:

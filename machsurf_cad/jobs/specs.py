@@ -113,9 +113,12 @@ class MachiningSurfaceJob(_Post, JobSpec):
     tool: str = "ball:D=10"
     axes: int = 5
     strategy: str = "planes:x"
-    lead: float = 0.0
+    lead: float | str = 0.0
     tilt: float = 0.0
     axis: tuple | None = None
+    lead_margin: float = 1.0
+    lead_min: float = 0.0
+    lead_rate: float = 2.0
     tip: bool = False
     tol: float = 1e-3
     degree: int = 3

@@ -245,6 +245,7 @@ class MachiningSurface(Result):
             "R_t_mm": Rt,
             "axes": self.axes,
             "strategy": self.strategy.describe(),
+            "auto_lead": getattr(self.strategy, "info", None),
             "tolerance_mm": self.tolerance,
             "tip_location": self.tip,
             "axis_length_mm": self.axis_length if em.is_ball else None,
@@ -282,11 +283,14 @@ def machining_surface(
     *,
     axes: int = 5,
     strategy="planes:x",
-    lead: float = 0.0,
+    lead: float | Literal["auto"] = 0.0,
     tilt: float = 0.0,
     axis=None,
     axis_field=None,
     tolerance: float = 1e-3,
+    lead_margin_deg: float = 1.0,
+    lead_min_deg: float = 0.0,
+    lead_rate_deg_per_mm: float = 2.0,
     degree=(3, 3),
     max_poles: int = 40000,
     loops: Literal["error", "flag", "trim"] = "error",
@@ -310,7 +314,10 @@ def machining_surface(
         Feed direction: ``"planes:x"`` (planes parallel to yOz), ``"planes:a,b,c"``, ``"iso:u"``.
     lead, tilt : float
         Lead ``Omega_t`` and tilt ``Omega_n`` in degrees (5 axes); conventions in
-        :mod:`machsurf_cad.machining.strategies`.
+        :mod:`machsurf_cad.machining.strategies`. ``lead="auto"``: per point the smallest lead free
+        of local gouging plus ``lead_margin_deg``, at least ``lead_min_deg``, changing by at most
+        ``lead_rate_deg_per_mm`` per mm (:mod:`machsurf_cad.machining.autolead`; reported as
+        ``auto_lead``); a fixed lead is checked by the tool-body check, never changed.
     axis_field : callable or AxisField, optional
         Tool axis ``func(u, v) -> (..., 3)`` given by the caller (5 axes).
     tolerance : float
@@ -361,7 +368,19 @@ def machining_surface(
     em = cutter.end_mill_radii(_PURPOSE)
     Rt = em.R_t
     face = _as_face(face)
-    strat = _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field)
+    if isinstance(lead, str):
+        if lead != "auto":
+            raise InputError(f"lead must be degrees or 'auto', got {lead!r}")
+        if axes != 5 or axis is not None or axis_field is not None or tilt:
+            raise InputError("lead='auto' is a 5-axis lead field without tilt, fixed axis or axis field")
+        from .autolead import auto_lead
+
+        feed = parse_strategy(strategy) if isinstance(strategy, str) else strategy
+        strat, _ = auto_lead(
+            face, cutter, feed, margin_deg=lead_margin_deg, min_deg=lead_min_deg, rate_deg_per_mm=lead_rate_deg_per_mm
+        )
+    else:
+        strat = _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field)
     L = float(axis_length) if axis_length is not None else cutter.D
     if not L > 0:
         raise InputError("axis length must be > 0 mm")
