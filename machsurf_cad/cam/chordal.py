@@ -1,5 +1,6 @@
-"""Chordal sampling of dense tool-tip polylines (mm): keep the fewest positions whose chords stay
-within a tolerance of every dense point, and measure the error reached."""
+"""Chordal sampling of dense polylines (mm): keep the fewest positions whose chords stay within a
+tolerance of every dense point, and measure the error reached. Tool paths pass 6-D points (the tip
+and a point one tool diameter up the axis) so that the chords hold for the whole tool in 5 axes."""
 
 from __future__ import annotations
 

@@ -8,6 +8,13 @@ from .base import EXIT_OK, JobOutcome, Say, Staging, face_input, finish
 from .specs import MachiningSurfaceJob
 
 
+def _all_faces(spec, face):
+    """Every face of the part the face was read from (an example is its own part)."""
+    from .run_verify import part_faces
+
+    return part_faces(spec.part) if spec.part else [face]
+
+
 def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> JobOutcome:
     from ..cutters import parse_cutter
     from ..machining import machining_surface
@@ -31,6 +38,7 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
         lead_margin_deg=spec.lead_margin,
         lead_min_deg=spec.lead_min,
         lead_rate_deg_per_mm=spec.lead_rate,
+        lead_check_faces=_all_faces(spec, face) if spec.lead == "auto" else None,
         degree=(spec.degree, spec.degree),
         progress=progress,
     )

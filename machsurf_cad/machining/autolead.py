@@ -16,8 +16,10 @@ raised to the smallest field that changes by at most ``rate_deg_per_mm`` per mm 
 Lipschitz upper envelope: the axis never turns faster than that, and never below the local need),
 blurred (Gaussian, 2 grid cells) and lifted by the most the blur removed anywhere, so that the
 field is smooth (S2 follows the axis and must be fitted) and still above the need everywhere.
-This is the local check; the global tool-body check (:func:`machsurf_cad.verify`) runs on the
-written path as for every other path.
+With ``check_faces`` the tool body is then checked (:func:`machsurf_cad.verify`) at a 61 x 61 grid of
+placements against those faces; where it still gouges (its heel reaches farther than second order
+sees), the need there and around is raised by ``bump_deg`` and the field rebuilt, up to
+``max_rounds`` times. The written path is checked again as every path is.
 """
 
 from __future__ import annotations
@@ -108,8 +110,50 @@ class LeadField:
         )
 
 
+def _smooth_field(need, du_mm, dv_mm, rate):
+    """Rate-bounded envelope of the need, blurred and lifted back above it (see the module docstring)."""
+    from scipy.ndimage import gaussian_filter
+
+    env = lipschitz_envelope(need, du_mm, dv_mm, rate)
+    blur = gaussian_filter(env, sigma=2.0, mode="nearest")
+    return blur + max(0.0, float((env - blur).max()))
+
+
+def _gouging_placements(face, cutter, field, faces, *, tolerance: float, n: int = 61):
+    """(u, v) of the tool placements on an ``n x n`` grid of the face whose body gouges ``faces``."""
+    from ..cam.toolpath import Move, ToolPath
+    from ..gougecheck import GOUGE, verify
+    from .surfaces import MachiningMaps
+
+    maps = MachiningMaps(face, cutter, 5, field, cutter.D, False)
+    u0, u1, v0, v1 = face.uv_bounds
+    us, vs = np.linspace(u0, u1, n), np.linspace(v0, v1, n)
+    U, V = np.meshgrid(us, vs, indexing="ij")
+    inside = face.contains_uv(U, V) if face.is_trimmed else np.ones(U.shape, bool)
+    axis = maps.tool_axis(us, vs)
+    tips = maps.s2(us, vs) - cutter.end_mill_radii("automatic lead").r * axis
+    sel = inside.ravel()
+    m = int(sel.sum())
+    tp = ToolPath(tips.reshape(-1, 3)[sel], axis.reshape(-1, 3)[sel], np.full(m, Move.CUT), np.arange(m), cutter=cutter)
+    res = verify(faces, tp, tolerance=tolerance, step_mm=1e9, step_deg=180.0)  # each placement on its own
+    bad = res.status == GOUGE
+    uv = np.stack([U.ravel()[sel], V.ravel()[sel]], 1)
+    return uv[bad], float(res.gouge_depth.max()) if m else 0.0
+
+
 def auto_lead(
-    face, cutter, feed, *, margin_deg: float = 1.0, min_deg: float = 0.0, rate_deg_per_mm: float = 2.0, grid: int = 61
+    face,
+    cutter,
+    feed,
+    *,
+    margin_deg: float = 1.0,
+    min_deg: float = 0.0,
+    rate_deg_per_mm: float = 2.0,
+    grid: int = 61,
+    check_faces=None,
+    check_tolerance: float = 0.01,
+    bump_deg: float = 1.0,
+    max_rounds: int = 6,
 ) -> tuple[LeadField, dict]:
     """The gouge-free lead field of a bull-nose (or flat) end mill on ``face`` for ``feed`` (see module doc).
 
@@ -145,13 +189,23 @@ def auto_lead(
         )
     du_mm = np.linalg.norm(np.diff(p.point, axis=0), axis=-1)
     dv_mm = np.linalg.norm(np.diff(p.point, axis=1), axis=-1)
-    env = lipschitz_envelope(need, du_mm, dv_mm, rate_deg_per_mm)
-    # a smooth field (the axis, hence S2, must be smooth to be fitted): the envelope blurred, then
-    # lifted by the largest amount the blur took off anywhere, so it stays above the need everywhere
-    from scipy.ndimage import gaussian_filter
-
-    blur = gaussian_filter(env, sigma=2.0, mode="nearest")
-    lead = blur + max(0.0, float((env - blur).max()))
+    lead = _smooth_field(need, du_mm, dv_mm, rate_deg_per_mm)
+    rounds = []
+    if check_faces is not None:
+        # the global body check on a grid of tool placements: where the tool still gouges (its rear
+        # reaching farther than second order sees), raise the need and rebuild the field
+        for _ in range(max_rounds):
+            field = LeadField(us, vs, lead, feed)
+            bad_uv, depth = _gouging_placements(face, cutter, field, check_faces, tolerance=check_tolerance)
+            rounds.append({"gouging_placements": int(len(bad_uv)), "max_gouge_mm": depth})
+            if len(bad_uv) == 0:
+                break
+            iu = np.clip(np.searchsorted(us, bad_uv[:, 0]), 0, grid - 1)
+            iv = np.clip(np.searchsorted(vs, bad_uv[:, 1]), 0, grid - 1)
+            for i, j in zip(iu, iv):
+                sl = (slice(max(0, i - 3), i + 4), slice(max(0, j - 3), j + 4))
+                need[sl] = np.maximum(need[sl], lead[sl] + bump_deg)
+            lead = _smooth_field(need, du_mm, dv_mm, rate_deg_per_mm)
     if np.max(lead) > 89.0:
         raise DegenerateGeometryError("the automatic lead would exceed 89 deg: the tool cannot follow this face")
     rep = {
@@ -163,6 +217,8 @@ def auto_lead(
         "rate_bound_deg_per_mm": rate_deg_per_mm,
         "grid": [grid, grid],
         "criterion": "R_t / sin(lead) + r <= 1 / k_max (largest concave curvature), r <= 1 / k_max",
+        "body_check_rounds": rounds,
+        "body_check_tolerance_mm": check_tolerance if check_faces is not None else None,
     }
     return LeadField(us, vs, lead, feed, info=rep), rep
 

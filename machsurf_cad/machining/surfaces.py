@@ -291,6 +291,7 @@ def machining_surface(
     lead_margin_deg: float = 1.0,
     lead_min_deg: float = 0.0,
     lead_rate_deg_per_mm: float = 2.0,
+    lead_check_faces=None,
     degree=(3, 3),
     max_poles: int = 40000,
     loops: Literal["error", "flag", "trim"] = "error",
@@ -316,8 +317,9 @@ def machining_surface(
         Lead ``Omega_t`` and tilt ``Omega_n`` in degrees (5 axes); conventions in
         :mod:`machsurf_cad.machining.strategies`. ``lead="auto"``: per point the smallest lead free
         of local gouging plus ``lead_margin_deg``, at least ``lead_min_deg``, changing by at most
-        ``lead_rate_deg_per_mm`` per mm (:mod:`machsurf_cad.machining.autolead`; reported as
-        ``auto_lead``); a fixed lead is checked by the tool-body check, never changed.
+        ``lead_rate_deg_per_mm`` per mm, raised where the tool body still gouges ``lead_check_faces``
+        (default: the face itself) at a grid of placements (:mod:`machsurf_cad.machining.autolead`;
+        reported as ``auto_lead``); a fixed lead is checked by the tool-body check, never changed.
     axis_field : callable or AxisField, optional
         Tool axis ``func(u, v) -> (..., 3)`` given by the caller (5 axes).
     tolerance : float
@@ -377,7 +379,13 @@ def machining_surface(
 
         feed = parse_strategy(strategy) if isinstance(strategy, str) else strategy
         strat, _ = auto_lead(
-            face, cutter, feed, margin_deg=lead_margin_deg, min_deg=lead_min_deg, rate_deg_per_mm=lead_rate_deg_per_mm
+            face,
+            cutter,
+            feed,
+            margin_deg=lead_margin_deg,
+            min_deg=lead_min_deg,
+            rate_deg_per_mm=lead_rate_deg_per_mm,
+            check_faces=[face] if lead_check_faces is None else lead_check_faces,
         )
     else:
         strat = _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field)

@@ -135,8 +135,11 @@ def tool_paths(
             if uv.shape[0] < 2:
                 continue
             p = _positions(ms, uv)
-            idx = douglas_peucker(p["tip"], chordal_tolerance)
-            chord_err = max(chord_err, chord_error(p["tip"], idx))
+            # the chords must hold for the whole tool, not only its tip: a point one diameter up the axis
+            # is sampled with the tip (a 5-axis lead that turns between positions moves the body)
+            six = np.concatenate([p["tip"], p["tip"] + ms.cutter.D * p["axis"]], axis=1)
+            idx = douglas_peucker(six, chordal_tolerance)
+            chord_err = max(chord_err, chord_error(six, idx))
             axis_err = max(axis_err, p["axis_err"])
             if zigzag and len(tips) % 2 == 1:
                 idx = idx[::-1]

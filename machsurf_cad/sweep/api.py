@@ -85,8 +85,9 @@ def chain_toolpath(
     for e in chain.passes:
         t = np.linspace(*e.motion.t_range, n_dense)
         T, A = e.motion.T(t), e.motion.A(t)
-        idx = douglas_peucker(T, chordal_tolerance)
-        err = max(err, chord_error(T, idx))
+        six = np.concatenate([T, T + e.cutter.D * A], axis=1)  # the tip and a point one diameter up the axis
+        idx = douglas_peucker(six, chordal_tolerance)
+        err = max(err, chord_error(six, idx))
         if len(tips) % 2 == 1:
             idx = idx[::-1]
         tips.append(T[idx])
