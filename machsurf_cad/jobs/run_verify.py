@@ -167,7 +167,16 @@ def run_verify(spec: VerifyJob, out, say: Say, progress=None) -> JobOutcome:
         )
         code = EXIT_OK if res.clean else EXIT_TOLERANCE
         say("clean" if res.clean else "NOT clean: gouges or collisions beyond the tolerance")
-        report = {"part": str(spec.part), "toolpath": str(path), "tool": cutter.to_dict(), "verify": rep}
+        skipped = tp.info.get("skipped_statements") or {}
+        if skipped:
+            say("warning: APT statements skipped: " + ", ".join(f"{k} x{n}" for k, n in sorted(skipped.items())))
+        report = {
+            "part": str(spec.part),
+            "toolpath": str(path),
+            "tool": cutter.to_dict(),
+            "verify": rep,
+            "apt_statements_skipped": skipped,
+        }
         outcome = finish(st, "verify", report, code, res)
     say(f"outputs in {out}/: {', '.join(outcome.files)}")
     return outcome
