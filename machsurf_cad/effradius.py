@@ -41,8 +41,9 @@ from scipy.special import cosdg, sindg
 
 from .cutters import Cutter, parse_cutter
 from .errors import DegenerateGeometryError, InputError
-from .geometry.bspline import BSplineSurface, unit_normals
+from .geometry.bspline import BSplineSurface
 from .geometry.face import Face
+from .geometry.normals import unit_normals
 from .results import Result
 
 _S_FLAT_DEG = 1e-9  # slopes below this are a flat spot: R_eff is infinite

@@ -13,7 +13,7 @@ from machsurf_cad.geometry import (
     insert_knot_surface,
     local_properties,
 )
-from machsurf_cad.geometry.bspline import elevate_and_merge, refit_curve_in_space
+from machsurf_cad.geometry.knots import elevate_and_merge, refit_curve_in_space
 
 
 def test_sphere_points_normals_curvatures(rng):

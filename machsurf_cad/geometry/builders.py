@@ -15,7 +15,8 @@ import numpy as np
 from ..errors import InputError, ToleranceError
 from ..results import Result
 from .basis import collocation_matrix
-from .bspline import BSplineCurve, BSplineSurface, elevate_and_merge
+from .bspline import BSplineCurve, BSplineSurface
+from .knots import elevate_and_merge
 
 
 # ----------------------------------------------------------------------------- curves

@@ -18,7 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..results import Result
-from .bspline import BSplineSurface, _cross, unit_normals
+from .bspline import BSplineSurface
+from .normals import _cross, unit_normals
 
 
 @dataclass(frozen=True, eq=False)
@@ -118,7 +119,7 @@ def _with_limits(surface: BSplineSurface, p: LocalProperties, check: bool) -> Lo
     normal (:func:`~machsurf_cad.geometry.bspline.limit_normals`) and the curvatures of the nearest
     regular neighbour (1e-6 of the domain away); where the limit does not exist (a cone's tip) the
     normal stays undefined: :class:`DegenerateGeometryError` when ``check``, NaN otherwise."""
-    from .bspline import limit_normals
+    from .normals import limit_normals
 
     bad = ~np.all(np.isfinite(p.normal), axis=-1)
     if not np.any(bad):

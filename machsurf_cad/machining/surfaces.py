@@ -31,9 +31,10 @@ import numpy as np
 from ..approx import SurfaceFit, fit_surface
 from ..cutters import Cutter, parse_cutter
 from ..errors import DegenerateGeometryError, InputError
-from ..geometry.bspline import BSplineSurface, unit_normals
+from ..geometry.bspline import BSplineSurface
 from ..geometry.differential import local_properties_grid
 from ..geometry.face import Face
+from ..geometry.normals import unit_normals
 from ..results import Result
 from .loops import LoopError, LoopReport, fold_mask, region_from_mask
 from .strategies import AxisField, FixedAxis, IsoFeed, LeadTilt, LocalFrame, PlanesFeed, parse_strategy

@@ -20,7 +20,7 @@ import numpy as np
 from ..cam.chordal import chord_error, douglas_peucker
 from ..cam.toolpath import ToolPath
 from ..errors import InputError
-from ..geometry.bspline import unit_normals
+from ..geometry.normals import unit_normals
 from .strategies import IsoFeed, PlanesFeed
 from .surfaces import MachiningSurface, recover_axis
 
