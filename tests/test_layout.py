@@ -41,3 +41,14 @@ def test_no_order_for_degree_in_public_names():
     for path in PKG.rglob("*.py"):
         text = path.read_text()
         assert "spline order" not in text.lower() and "order_u" not in text
+
+
+def test_one_version():
+    """The version lives in machsurf_cad/_version.py; the FreeCAD add-on's package.xml says the same."""
+    import re
+
+    import machsurf_cad
+
+    xml = (ROOT / "workbench" / "package.xml").read_text()
+    assert re.search(r"<version>([^<]+)</version>", xml).group(1) == machsurf_cad.__version__
+    assert 'dynamic = ["version"]' in (ROOT / "pyproject.toml").read_text()
