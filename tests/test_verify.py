@@ -219,3 +219,31 @@ def _lowest_point(cutter, axis):
     w = w / np.linalg.norm(w) if np.linalg.norm(w) > 1e-12 else np.array([1.0, 0.0, 0.0])
     centre = -cutter.R_t * w + cutter.r * axis  # corner circle centre in that direction
     return centre - cutter.r * ez
+
+
+def _channel(radius: float = 8.0, length: float = 60.0):
+    """A concave channel: the lower half (+-80 deg) of a cylinder of ``radius`` along x, open upwards."""
+    from machsurf_cad.geometry import builders
+
+    arc = builders.circular_arc(radius, -170.0, -10.0, center=(0.0, radius))
+    pts = np.asarray(arc.poles)
+    c0 = ms.BSplineCurve(arc.degree, arc.knots, arc.mults, np.c_[np.zeros(len(pts)), pts], arc.weights)
+    c1 = ms.BSplineCurve(arc.degree, arc.knots, arc.mults, np.c_[np.full(len(pts), length), pts], arc.weights)
+    s = builders.ruled_surface(c0, c1)
+    up = ms.local_properties(s, 0.5, 0.5).normal[2] > 0
+    return ms.Face(s, name="channel", reversed=not up)
+
+
+@pytest.mark.parametrize("tool", ["bull:D=20,r=3", "flat:D=20"])
+def test_three_axis_bull_and_flat_in_a_narrow_channel_are_global_loops(tool):
+    """3 axes, fixed axis tilted 5 deg, a channel (radius 8) narrower than the tool (radius 10): the tool body
+    cuts the channel's walls at every placement; reported as a global loop (the ball D10 fits, no loop)."""
+    face = _channel()
+    ax = (math.sin(math.radians(5)), 0.0, math.cos(math.radians(5)))
+    with pytest.raises(ms.LoopError, match="global loop"):
+        ms.machining_surface(face, tool, axes=3, axis=ax, strategy="planes:y", tolerance=1e-3)
+    res = ms.machining_surface(face, tool, axes=3, axis=ax, strategy="planes:y", tolerance=1e-3, loops="flag")
+    glob = [r for r in res.loops.regions if r.kind == "global"]
+    assert glob and glob[0].n_samples > 1000
+    ok = ms.machining_surface(face, "ball:D=10", axes=3, axis=ax, strategy="planes:y", tolerance=1e-3)
+    assert not ok.loops.found

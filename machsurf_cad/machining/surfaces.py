@@ -605,12 +605,44 @@ def detect_loops(maps: MachiningMaps, n: int = 121) -> LoopReport:
         reg = region_from_mask("global", "S1", mask, U, V, offs, r - np.where(np.isfinite(dist), dist, r))
         if reg is not None:
             regions.append(reg)
+    # global, 3 axes with a flat or bull-nose end mill: the whole tool body at each placement against
+    # the face (the offset test above only sees the corner's centre; a tilted or wide bottom cuts
+    # elsewhere, e.g. in a channel narrower than the tool)
+    if maps.axes == 3 and not em.is_ball:
+        reg = _body_region(maps, us[::2], vs[::2], inside[::2, ::2])
+        if reg is not None:
+            regions.append(reg)
     mask = np.zeros((n, n), bool)
     for rg in regions:
         iu = np.clip(np.round((rg.uv[:, 0] - u0) / (u1 - u0) * (n - 1)).astype(int), 0, n - 1)
         iv = np.clip(np.round((rg.uv[:, 1] - v0) / (v1 - v0) * (n - 1)).astype(int), 0, n - 1)
         mask[iu, iv] = True
     return LoopReport(tuple(regions), (n, n), mask, us, vs)
+
+
+def _body_region(maps: MachiningMaps, us, vs, inside, tolerance: float = 1e-3):
+    """Placements of the 3-axis tool (from the exact S1) whose body cuts the face, as a loop region."""
+    from ..cam.toolpath import Move, ToolPath
+    from ..gougecheck import GOUGE, verify
+
+    U, V = np.meshgrid(us, vs, indexing="ij")
+    axis = np.asarray(maps.strategy.direction, float)
+    x = maps.s1(us, vs)
+    r = maps.cutter.end_mill_radii(_PURPOSE).r
+    tips = x if maps.tip else x - r * axis
+    sel = inside.ravel()
+    m = int(sel.sum())
+    if m == 0:
+        return None
+    tp = ToolPath(
+        tips.reshape(-1, 3)[sel], np.broadcast_to(axis, (m, 3)), np.full(m, Move.CUT), np.arange(m), cutter=maps.cutter
+    )
+    res = verify([maps.face], tp, tolerance=tolerance, step_mm=1e9, step_deg=180.0)  # each placement alone
+    bad = np.zeros(U.shape, bool)
+    depth = np.zeros(U.shape)
+    bad.ravel()[np.nonzero(sel)[0]] = res.status == GOUGE
+    depth.ravel()[np.nonzero(sel)[0]] = res.gouge_depth
+    return region_from_mask("global", "S1", bad, U, V, tips, depth)
 
 
 def _box_loop(bounds):
