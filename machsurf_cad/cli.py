@@ -206,6 +206,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     v.add_argument("--path", help="JSON path file: {points: [[x,y,z]...], axes: [[i,j,k]...]} (tip points, mm)")
     v.add_argument("--example", help="example motion instead of --path: sine (default), line, helix")
+    v.add_argument("--part", default=None, help="STEP part the passes are for: the tool path is checked against it")
     v.add_argument("--passes", type=int, default=2, help="number of passes (default 2)")
     v.add_argument("--continuity", choices=["g0", "g1"], default="g1", help="between passes (default g1)")
     v.add_argument("--theta", default="0", help="rotation of each next axis about n1, degrees (one, or one per seam)")
@@ -222,6 +223,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--no-theta-scan", dest="theta_scan", action="store_false", help="skip the scan of the admissible theta range"
     )
     v.add_argument("--no-render", dest="render", action="store_false", help="skip the zebra picture")
+    _gouge(v, "0.01")
     _post(v)
     v.add_argument("-o", "--out", default="out/envelope", help="output folder")
     return p

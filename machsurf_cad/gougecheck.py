@@ -17,7 +17,10 @@ is computed on the exact surfaces:
 
 Negative distances are depths inside the tool: a point of the part inside the cutting part is a
 **gouge** (the tool removes material beyond the surface by about that depth), inside the shank or
-holder a **collision**; a rapid move whose cutting part touches the part is a collision too.
+holder a **collision**; a rapid move whose cutting part touches the part is a collision too. A tool
+buried in the material touches no face: when the middle of its cutting part lies behind the nearest
+face (by its outward normal) by more than the tool radius plus the sampling, it is a gouge of at
+least that depth.
 """
 
 from __future__ import annotations
@@ -313,6 +316,22 @@ def verify(
             better = d_new < cut_d[sel]
             cut_d[sel[better]] = d_new[better]
             best_xyz[sel[better]] = xyz[better]
+    # a tool buried in the material touches no face: behind the nearest face (its outward normal) by
+    # more than the sampling can explain, with no face point inside the cutting part, is a gouge too
+    nd, ni = tree.query(T + A * min(L_cut, c.D) / 2, workers=-1)
+    nrm = np.empty((ni.size, 3))
+    for fi in np.unique(F[ni]):
+        k = np.nonzero(F[ni] == fi)[0]
+        fc = faces[fi]
+        n_f = fc.surface.normals(SU[ni[k]], SV[ni[k]], check=False) * (-1.0 if fc.reversed else 1.0)
+        nrm[k] = n_f
+    behind = -np.einsum("ij,ij->i", T + A * min(L_cut, c.D) / 2 - P[ni], nrm)
+    buried = np.isfinite(behind) & (behind > h + tolerance + r_cut) & (cut_d > -tolerance)
+    if np.any(buried):
+        cut_d[buried] = -behind[buried]
+        best_face[buried] = F[ni[buried]]
+        best_xyz[buried] = P[ni[buried]]
+        seed[buried] = ni[buried]
     far = seed < 0
     best_face[far] = -1
     # per position: the worst placement of the motion ending there

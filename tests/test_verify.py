@@ -247,3 +247,37 @@ def test_three_axis_bull_and_flat_in_a_narrow_channel_are_global_loops(tool):
     assert glob and glob[0].n_samples > 1000
     ok = ms.machining_surface(face, "ball:D=10", axes=3, axis=ax, strategy="planes:y", tolerance=1e-3)
     assert not ok.loops.found
+
+
+@needs_kernel
+def test_envelope_tool_path_is_checked_against_a_given_part(tmp_path):
+    import json
+
+    from helpers import run
+
+    block = ROOT / "example_parts" / "freeform_block.step"  # x 5..125, y 5..95, z -40..51
+    out = tmp_path / "env"
+    path = tmp_path / "path.json"  # a D10 cylinder, axis z, 8 mm from the y = 5 wall: 2 mm into it
+    path.write_text(json.dumps({"points": [[x, 8.0, 0.0] for x in (20.0, 40.0, 60.0, 80.0, 100.0)]}))
+    r = run(
+        "envelope", "--tool", "cyl:D=10", "--path", path, "--passes", "1", "--part", block, "--no-render", "-o", out
+    )
+    assert r.returncode == 2 and "tool path NOT written" in r.stdout
+    v = json.loads((out / "report.json").read_text())["verify"]
+    assert v["n_gouging_positions"] > 0 and abs(v["max_gouge_mm"] - 2.0) < 1e-3  # R 5, 3 mm from the axis
+    r = run("envelope", "--tool", "cyl:D=10", "--path", path, "--passes", "1", "--no-render", "-o", out)
+    assert r.returncode == 0 and "written unchecked" in r.stdout
+
+
+@needs_kernel
+def test_a_tool_buried_in_the_material_is_a_gouge():
+    from machsurf_cad.occ import read_step_faces
+
+    faces = read_step_faces(ROOT / "example_parts" / "freeform_block.step")  # x 5..125, y 5..95, z -40..51
+    tp = ms.ToolPath.from_passes(
+        [np.array([[60.0, 50, 0], [70, 50, 0]])], [np.array([[0, 0, 1.0]] * 2)], cutter=ms.FlatEndMill(10)
+    )  # touches no face: entirely inside the block
+    v = ms.verify(faces, tp)
+    rep = v.report()
+    assert rep["n_gouging_positions"] == 2 and rep["n_collisions"] == 1  # approach and cut; the rapid too
+    assert v.max_gouge > 5.0 - 1.0  # at least its depth behind the nearest face, less the radius

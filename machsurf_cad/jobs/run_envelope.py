@@ -73,7 +73,17 @@ def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
         faces = [Face(f.surface, name=e.name) for e, f in zip(chain.passes, chain.fits)]
         write_step(st.path("envelopes.step"), faces)
         write_stl(st.path("envelopes.stl"), faces, linear_deflection=spec.tol * 10)
-        write_toolpath(st, tp, spec)
+        if spec.part:  # the passes' tool path against every face of the part they are for
+            from .run_verify import part_faces, write_checked_toolpath
+
+            rep["verify"], vcode = write_checked_toolpath(
+                st, say, tp, part_faces(spec.part), spec, tolerance=spec.gouge_tol, render=spec.render
+            )
+            code = max(code, vcode)
+        else:
+            write_toolpath(st, tp, spec)
+            rep["verify"] = {"checked": False, "reason": "no --part: nothing to check the tool path against"}
+            say("tool path written unchecked: give --part PART.step to check the tool body against the part")
         if spec.render and res.other is not None:
             from ..viz import render_zebra
 

@@ -210,6 +210,9 @@ class EnvelopeJob(_Post, JobSpec):
     tool: str = "cyl:D=10"
     path: str | None = None
     example: str | None = None
+    part: str | None = None
+    gouge_tol: float = 0.01
+    allow_gouge: bool = False
     passes: int = 2
     continuity: Continuity = "g1"
     theta: str = "0"
