@@ -184,6 +184,7 @@ def verify(
     step_deg: float = 1.0,
     spacing_mm: float | None = None,
     progress: Progress | None = None,
+    max_samples: int = 20_000_000,
 ) -> VerifyResult:
     """Gouges and collisions of a tool path's tool body against every face of a part.
 
@@ -206,6 +207,8 @@ def verify(
         surface to 1/18 of it.
     progress : Progress, optional
         ``progress(done, total, message)`` over the placements.
+    max_samples : int
+        Work-size bound on the part's samples (about 100 bytes each with the k-d tree).
 
     Returns
     -------
@@ -242,8 +245,15 @@ def verify(
     faces = _faces(part)
     h = positive("spacing_mm", spacing_mm) if spacing_mm is not None else min(1.0, c.D / 8.0)
     pts, fid, us, vs, dus, dvs = [], [], [], [], [], []
+    total = 0
     for i, f in enumerate(faces):
         P, U, V, du, dv = _sample_face(f, h)
+        total += P.shape[0]
+        if total > max_samples:
+            raise InputError(
+                f"sampling the part every {h:g} mm needs more than {max_samples} points (face {i} of {len(faces)}): "
+                "give a larger spacing_mm (--spacing) or fewer faces (--faces)"
+            )
         pts.append(P)
         fid.append(np.full(P.shape[0], i))
         us.append(U)
