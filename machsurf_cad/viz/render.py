@@ -19,6 +19,21 @@ except Exception:  # pragma: no cover - older VTK
 pv.OFF_SCREEN = True
 
 
+def _bar_args(title: str, color: str = "black", n_labels: int = 5) -> dict:
+    """The one legend layout of every map: vertical on the right, 3 significant digits."""
+    return dict(
+        title=title,
+        color=color,
+        fmt="%.3g",
+        n_labels=n_labels,
+        vertical=True,
+        position_x=0.86,
+        position_y=0.15,
+        height=0.7,
+        width=0.06,
+    )
+
+
 def _save(plotter, png_path, mesh=None, vtp_path=None) -> Path:
     """Screenshot to ``png_path`` (folders made), close the plotter, and save ``mesh`` as .vtp if asked."""
     png_path = Path(png_path)
@@ -92,17 +107,7 @@ def render_deviation(
     vmax = max(result.max_abs, tol or 0.0, 1e-12)
     p = pv.Plotter(off_screen=True, window_size=list(window_size))
     p.set_background("white")
-    sargs = dict(
-        title="deviation [mm]",
-        color="black",
-        fmt="%.3g",
-        n_labels=5,
-        vertical=True,
-        position_x=0.86,
-        position_y=0.15,
-        height=0.7,
-        width=0.06,
-    )
+    sargs = _bar_args("deviation [mm]", "black", 5)
     annotations = {}
     if tol:
         annotations = {tol: f"+tol {tol:g}", -tol: f"-tol {tol:g}"}
@@ -194,17 +199,7 @@ def render_scalar_map(
         mesh = mesh.extract_cells(np.nonzero(m[faces].all(axis=1))[0]).extract_surface(algorithm=None)
     p = pv.Plotter(off_screen=True, window_size=list(window_size))
     p.set_background(background)
-    sargs = dict(
-        title=label,
-        color="white",
-        fmt="%.3g",
-        n_labels=6,
-        vertical=True,
-        position_x=0.86,
-        position_y=0.15,
-        height=0.7,
-        width=0.06,
-    )
+    sargs = _bar_args(label, "white", 6)
     p.add_mesh(
         mesh, scalars=colour, cmap=cmap, clim=clim, scalar_bar_args=sargs, annotations=annotations or {}, lighting=False
     )  # a map: colours must read true against the legend
@@ -273,17 +268,7 @@ def render_gouge_map(
     vmax = max(float(d.max()), 2 * tolerance, 1e-9)
     p = pv.Plotter(off_screen=True, window_size=list(window_size))
     p.set_background("white")
-    sargs = dict(
-        title="tool depth into the part [mm]",
-        color="black",
-        fmt="%.3g",
-        n_labels=5,
-        vertical=True,
-        position_x=0.86,
-        position_y=0.15,
-        height=0.7,
-        width=0.06,
-    )
+    sargs = _bar_args("tool depth into the part [mm]", "black", 5)
     p.add_mesh(
         cloud,
         scalars="gouge_depth_mm",
