@@ -34,41 +34,25 @@ from .specs import (
     VerifyJob,
 )
 
+_RUNNERS = {  # command -> (module, function); imported on first use (the kernel and pyvista stay lazy)
+    "info": ("run_inspect", "run_info"),
+    "inspect": ("run_inspect", "run_inspect"),
+    "machining-surface": ("run_machining", "run_machining_surface"),
+    "reff": ("run_reff", "run_reff"),
+    "flank": ("run_flank", "run_flank"),
+    "envelope": ("run_envelope", "run_envelope"),
+    "verify": ("run_verify", "run_verify"),
+    "demo": ("run_demo", "run_demo"),
+}
+
 
 def _runner(spec: JobSpec) -> Callable:
-    if isinstance(spec, InfoJob):
-        from .run_inspect import run_info
+    import importlib
 
-        return run_info
-    if isinstance(spec, InspectJob):
-        from .run_inspect import run_inspect
-
-        return run_inspect
-    if isinstance(spec, MachiningSurfaceJob):
-        from .run_machining import run_machining_surface
-
-        return run_machining_surface
-    if isinstance(spec, ReffJob):
-        from .run_reff import run_reff
-
-        return run_reff
-    if isinstance(spec, FlankJob):
-        from .run_flank import run_flank
-
-        return run_flank
-    if isinstance(spec, EnvelopeJob):
-        from .run_envelope import run_envelope
-
-        return run_envelope
-    if isinstance(spec, VerifyJob):
-        from .run_verify import run_verify
-
-        return run_verify
-    if isinstance(spec, DemoJob):
-        from .run_demo import run_demo
-
-        return run_demo
-    raise TypeError(f"not a job spec: {spec!r}")
+    if not isinstance(spec, JobSpec) or spec.command not in _RUNNERS:
+        raise TypeError(f"not a job spec: {spec!r}")
+    module, name = _RUNNERS[spec.command]
+    return getattr(importlib.import_module(f"{__name__}.{module}"), name)
 
 
 def run_job(spec: JobSpec, out, *, say: Say = quiet, progress: Progress | None = None) -> JobOutcome:
