@@ -167,3 +167,14 @@ def test_bad_inputs():
     assert exact.source_deviation < 1e-9
     with pytest.raises(InputError, match="tool radius"):
         optimum_setting(s, 0.5, -1.0)
+
+
+def test_optimum_returns_the_best_of_every_solution_found():
+    """Liu's surface, R = 10, u = 1, side -1: two three-tangency settings exist; the first one found used to
+    be kept (0.0033 mm, a contact beyond the surface); the best (both contacts on it) is 0.0004 mm."""
+    s = examples.liu_ruled()
+    st = optimum_setting(s, 1.0, 10.0, side=-1)
+    e = interference(s, st).max_abs
+    others = st.contacts["other_solutions"]
+    assert e < 0.0005 and not st.contacts["contact_outside_surface"]
+    assert others and min(o["max_abs_mm"] for o in others) > 5 * e

@@ -285,11 +285,13 @@ def whole_surface_error(surface: RuledSurface, R: float, kind: str, side: int, n
     lo, hi = surface.u_range
     eps = 1e-6 * (hi - lo)
     worst = 0.0
+    prev = None
     for u in np.linspace(lo + eps, hi - eps, n_rules):
         try:
-            s = tool_setting(surface, float(u), R, kind, side=side)
+            s = tool_setting(surface, float(u), R, kind, side=side, start=prev)  # continuation along u
         except NoAdmissibleSetting:
             return math.inf
+        prev = s
         worst = max(worst, interference(surface, s, n_v=81).max_abs)
     return worst
 

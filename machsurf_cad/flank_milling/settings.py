@@ -201,10 +201,12 @@ def optimum_setting(
 ) -> Setting:
     """The paper's optimum: tangent to the rule at M2 and to C0 at M0 and C1 at M1.
 
-    Solved for ``h0`` and ``gamma`` with the tangency points found by Newton from the rule;
-    starts from the standard setting, then from a spread of fallbacks. Raises
-    :class:`NoAdmissibleSetting` when no solution has M2 on the rule, |gamma| < 80 deg and
-    true tangencies (minima of the distance) on this side.
+    Solved for ``h0`` and ``gamma`` with the tangency points found by Newton from the rule. With
+    ``start`` (a neighbouring rule's setting) its branch is continued when it holds; otherwise
+    Newton runs from starts over the admissible (h0, gamma) range, every admissible solution is
+    kept, and the one with the smallest interference along the rule is returned, the others in
+    ``contacts["other_solutions"]``. Raises :class:`NoAdmissibleSetting` when no solution has M2
+    on the rule, |gamma| < 80 deg and true tangencies (minima of the distance) on this side.
     """
     from scipy.optimize import root
 
@@ -283,11 +285,10 @@ def optimum_setting(
         for x0 in starts:  # ... then the robust (slower) hybrid solver
             yield root(residual, np.array(x0), method="hybr", options={"xtol": 1e-14}).x
 
-    best = None
-    for xs in candidates():
+    def admissible(xs):
         h0, gamma = xs[0] * fr.h_p, xs[1]
         if not np.all(np.abs(residual(xs)) < 1e-11):
-            continue
+            return None
         q, a, r0, r1 = contacts(h0, gamma)
         # a true tangency: the distance is stationary there (not a minimum clipped at the domain's edge)
         tangent = all(
@@ -303,36 +304,70 @@ def optimum_setting(
             and np.all(np.isfinite(r0[2]))
             and np.all(np.isfinite(r1[2]))
         )
-        if ok:
-            best = (h0, gamma, q, a, r0, r1)
-            break
-    if best is None:
+        return (h0, gamma, q, a, r0, r1) if ok else None
+
+    def make(sol, others=()):
+        h0, gamma, q, a, r0, r1 = sol
+        return Setting(
+            "optimum",
+            fr,
+            float(R),
+            q,
+            a,
+            float(h0),
+            math.degrees(gamma),
+            0.0,
+            {
+                "u0": r0[0],
+                "u1": r1[0],
+                "M0": r0[2],
+                "M1": r1[2],
+                "M2": fr.p0 + h0 * fr.z1,
+                "tangency_residual_mm": max(abs(r0[1] - R), abs(r1[1] - R)),
+                "contact_outside_surface": bool(not (lo0 <= r0[0] <= hi0 and lo0 <= r1[0] <= hi0)),
+                "tangency_slope_residual": max(abs(r0[3]), abs(r1[3])),
+                "other_solutions": list(others),
+            },
+        )
+
+    if start is not None:  # continuation along a path: the branch of the neighbouring rule, when it holds
+        xs = newton(np.array(starts[0]))
+        sol = admissible(xs) if xs is not None else None
+        if sol is not None:
+            return make(sol)
+    # every three-tangency solution from starts over the admissible (h0, gamma) range, then the best by
+    # the interference along the rule (the first found is not always the best: Liu's surface, side -1)
+    wide = [(h, g) for h in (0.25, 0.6) for g in np.radians([-45, -25, -12, 12, 25, 45])]
+    found: list[tuple] = []
+    for x0 in starts + wide:
+        xs = newton(np.array(x0))
+        if xs is None:
+            continue
+        sol = admissible(xs)
+        if sol is not None and all(abs(sol[0] - f[0]) > 1e-6 * fr.h_p or abs(sol[1] - f[1]) > 1e-9 for f in found):
+            found.append(sol)
+    if not found:
+        for x0 in starts + wide:  # the robust (slower) hybrid solver
+            sol = admissible(root(residual, np.array(x0), method="hybr", options={"xtol": 1e-14}).x)
+            if sol is not None:
+                found.append(sol)
+                break
+    if not found:
         raise NoAdmissibleSetting(
             f"no admissible optimum setting for R = {R:g} mm on side {side:+d} at u = {u_p:g}: the three-tangency "
             f"system has no solution with M2 on the rule and true tangencies with both directrices (alpha0 = "
             f"{fr.alpha0_deg:.3g} deg, h_p = {fr.h_p:.4g} mm)"
         )
-    h0, gamma, q, a, r0, r1 = best
-    return Setting(
-        "optimum",
-        fr,
-        float(R),
-        q,
-        a,
-        float(h0),
-        math.degrees(gamma),
-        0.0,
-        {
-            "u0": r0[0],
-            "u1": r1[0],
-            "M0": r0[2],
-            "M1": r1[2],
-            "M2": fr.p0 + h0 * fr.z1,
-            "tangency_residual_mm": max(abs(r0[1] - R), abs(r1[1] - R)),
-            "contact_outside_surface": bool(not (lo0 <= r0[0] <= hi0 and lo0 <= r1[0] <= hi0)),
-            "tangency_slope_residual": max(abs(r0[3]), abs(r1[3])),
-        },
-    )
+    if len(found) == 1:
+        return make(found[0])
+    settings = [make(f) for f in found]
+    errors = [interference(surface, st, n_v=101).max_abs for st in settings]
+    order = np.argsort(errors)
+    others = [
+        {"h0_mm": float(found[i][0]), "gamma_deg": math.degrees(found[i][1]), "max_abs_mm": float(errors[i])}
+        for i in order[1:]
+    ]
+    return make(found[order[0]], others)
 
 
 @dataclass(frozen=True, eq=False)
