@@ -178,3 +178,13 @@ def test_optimum_returns_the_best_of_every_solution_found():
     others = st.contacts["other_solutions"]
     assert e < 0.0005 and not st.contacts["contact_outside_surface"]
     assert others and min(o["max_abs_mm"] for o in others) > 5 * e
+
+
+def test_eq18_side_minus_one_optimum_exists_far_from_the_standard_setting():
+    """Eq. (18), u = 0.4, R = 40, side -1: the solver used to report "no admissible optimum"; a setting with
+    both tangencies exists at gamma = -26.6 deg, h0 = 69.6 mm, error 17.12 mm (an independent solve)."""
+    s = examples.eq18_ruled()
+    st = optimum_setting(s, 0.4, 40.0, side=-1)
+    assert abs(st.gamma_deg + 26.6) < 0.05 and abs(st.h0 - 69.6) < 0.05
+    assert abs(interference(s, st).max_abs - 17.12) < 0.01
+    assert st.contacts["tangency_residual_mm"] < 1e-9

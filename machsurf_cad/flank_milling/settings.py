@@ -142,9 +142,26 @@ def _dist_axis(p, q, a):
 
 
 def _curve_min(directrix, q, a, u_start, u_range, iters=40):
-    """Local minimum over u of the distance from a directrix to the axis (Newton, from u_start)."""
+    """Local minimum over u of the distance from a directrix to the axis (Newton, from u_start).
+
+    Where Newton from ``u_start`` fails (a concave stretch of the distance, or outside a directrix's
+    domain), it starts again from the smallest of 129 samples over the range.
+    """
     lo, hi = u_range
-    u = float(u_start)
+    out = _newton_min(directrix, q, a, float(u_start), lo, hi, iters)
+    if out is not None:
+        return out
+    us = np.linspace(lo, hi, 129)
+    c = directrix(us, 0)[:, 0]
+    w = c - q
+    w = w - (w @ a)[:, None] * a
+    d = np.linalg.norm(w, axis=1)
+    if not np.any(np.isfinite(d)):
+        return None
+    return _newton_min(directrix, q, a, float(us[int(np.nanargmin(d))]), lo, hi, iters)
+
+
+def _newton_min(directrix, q, a, u, lo, hi, iters):
     scale = max(1.0, abs(hi - lo))
     for _ in range(iters):
         c = directrix(np.array([u]), 2)[0]
@@ -164,6 +181,8 @@ def _curve_min(directrix, q, a, u_start, u_range, iters=40):
     c = directrix(np.array([u]), 2)[0]
     w = c[0] - q
     w = w - (w @ a) * a
+    if not np.all(np.isfinite(w)):
+        return None
     return u, float(np.linalg.norm(w)), c[0], float(2 * (w @ c[1]))
 
 
