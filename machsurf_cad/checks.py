@@ -27,7 +27,7 @@ def positive(name: str, value, unit: str = "mm") -> float:
     """``value`` as a finite float > 0."""
     x = finite(name, value)
     if not x > 0:
-        raise InputError(f"{name} must be > 0 {unit}, got {value!r}".rstrip())
+        raise InputError(f"{name} must be > 0{' ' + unit if unit else ''}, got {value!r}")
     return x
 
 

@@ -328,7 +328,7 @@ def verify(
             best_xyz[sel[better]] = xyz[better]
     # a tool buried in the material touches no face: behind the nearest face (its outward normal) by
     # more than the sampling can explain, with no face point inside the cutting part, is a gouge too
-    nd, ni = tree.query(T + A * min(L_cut, c.D) / 2, workers=-1)
+    _, ni = tree.query(T + A * min(L_cut, c.D) / 2, workers=-1)
     nrm = np.empty((ni.size, 3))
     for fi in np.unique(F[ni]):
         k = np.nonzero(F[ni] == fi)[0]

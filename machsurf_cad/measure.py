@@ -374,7 +374,8 @@ def _to_boundary(face: Face, pts: np.ndarray, proj: Projection, outside: np.ndar
         p = q[sel]
 
         def f(tt, c=c, p=p):
-            return np.einsum("ij,ij->i", s.evaluate(*c.evaluate(tt).T) - p, s.evaluate(*c.evaluate(tt).T) - p)
+            w = s.evaluate(*c.evaluate(tt).T) - p
+            return np.einsum("ij,ij->i", w, w)
 
         g = (np.sqrt(5.0) - 1) / 2
         x1, x2 = b - g * (b - a), a + g * (b - a)

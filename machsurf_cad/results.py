@@ -4,7 +4,7 @@ Every result type of machsurf_cad is a frozen dataclass with ``eq=False`` (resul
 arrays: identity is the only honest equality, and they are not hashable by value), whose
 numpy arrays are read-only views, and whose ``report()`` returns a JSON-ready dict with
 unit-suffixed keys: ``_mm`` lengths, ``_deg`` angles, ``_s`` seconds, ``_mm2`` areas,
-``_mm_min`` feeds. Timings are one dict ``time_s`` of named stages in seconds.
+``_mm_min`` feeds. Timings are one dict ``time_s`` of named stages ``<stage>_s`` in seconds.
 
 Long operations take one progress callback, :data:`Progress`:
 ``progress(done, total, message)`` with ``total`` ``None`` when it is not known.
@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -23,10 +22,6 @@ import numpy as np
 
 Progress = Callable[[int, int | None, str], None]
 """``progress(done, total, message)``: ``done`` work units of ``total`` (``None`` if unknown)."""
-
-
-def no_progress(done: int, total: int | None = None, message: str = "") -> None:
-    """The default :data:`Progress`: does nothing."""
 
 
 def readonly(a) -> np.ndarray:
@@ -53,40 +48,6 @@ class Result:
         raise NotImplementedError
 
 
-class Stopwatch:
-    """Named stage timings in seconds, reported as ``{"<stage>_s": ...}``.
-
-    >>> sw = Stopwatch()
-    >>> with sw("fit"):
-    ...     pass
-    >>> sorted(sw.report())
-    ['fit_s', 'total_s']
-    """
-
-    def __init__(self) -> None:
-        self._t0 = time.perf_counter()
-        self.stages: dict[str, float] = {}
-
-    def __call__(self, stage: str) -> _Stage:
-        return _Stage(self, stage)
-
-    def report(self) -> dict:
-        out = {f"{k}_s": v for k, v in self.stages.items()}
-        out["total_s"] = time.perf_counter() - self._t0
-        return out
-
-
-class _Stage:
-    def __init__(self, sw: Stopwatch, name: str):
-        self.sw, self.name = sw, name
-
-    def __enter__(self) -> None:
-        self.t = time.perf_counter()
-
-    def __exit__(self, *exc) -> None:
-        self.sw.stages[self.name] = self.sw.stages.get(self.name, 0.0) + time.perf_counter() - self.t
-
-
 def json_default(o: Any) -> Any:
     """``json.dumps`` hook for numpy values and paths."""
     if isinstance(o, np.ndarray):
@@ -105,4 +66,4 @@ def write_json(path, data: dict) -> Path:
     return path
 
 
-__all__ = ["Progress", "no_progress", "readonly", "Result", "Stopwatch", "json_default", "write_json"]
+__all__ = ["Progress", "readonly", "Result", "json_default", "write_json"]

@@ -108,7 +108,6 @@ def test_conflicting_and_malformed_arguments(tmp_path):
 
 def test_work_size_is_bounded_before_the_work(tmp_path):
     o = tmp_path / "o"
-    t = time.perf_counter()
     _refused(
         run(
             "machining-surface",
@@ -133,7 +132,6 @@ def test_work_size_is_bounded_before_the_work(tmp_path):
         run("reff", "--example", "blade", "--tool", "bull:D=10,r=2", "--grid", "4096", "--direction", "all", "-o", o),
         "GiB, over the",
     )
-    assert time.perf_counter() - t < 60
     assert not o.exists()
 
 

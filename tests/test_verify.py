@@ -15,7 +15,6 @@ def _trough(rho: float, half_angle_deg: float = 60.0, length: float = 60.0):
     z = 0; the outward normal (into the tool, out of the material) points to the axis."""
     from machsurf_cad.geometry import builders
 
-    a = math.radians(half_angle_deg)
     arc = builders.circular_arc(rho, -90.0 - half_angle_deg, -90.0 + half_angle_deg, center=(0.0, rho))
     # sweep the (y, z) arc along x: a ruled surface between the arc at x = 0 and at x = length
     c0 = ms.BSplineCurve(arc.degree, arc.knots, arc.mults, np.c_[np.zeros(len(arc.poles)), arc.poles], arc.weights)
@@ -25,7 +24,6 @@ def _trough(rho: float, half_angle_deg: float = 60.0, length: float = 60.0):
     s = builders.ruled_surface(c0, c1)
     p = ms.local_properties(s, 0.5, 0.5)
     up = float(p.normal[2]) > 0  # the material is below the trough's surface: outward normal points up
-    assert abs(math.sin(a)) > 0
     return ms.Face(s, name="trough", reversed=not up)
 
 

@@ -91,11 +91,6 @@ class Face:
         return cache[key]
 
 
-def _points_in_polygon(u, v, poly) -> np.ndarray:
-    """Even-odd rule for one closed polygon (see :func:`_points_in_polygons`)."""
-    return _points_in_polygons(u, v, [poly])
-
-
 def _points_in_polygons(u, v, polys) -> np.ndarray:
     """Even-odd rule over several closed polygons at once (a face's outer loop and holes), by a sweep
     over v: the points sorted by v once, each polygon edge flips only the points in its v range

@@ -102,9 +102,6 @@ class JobOutcome:
     out_dir: Path | None = None
     result: object = field(default=None, repr=False)
 
-    def report_dict(self) -> dict:
-        return self.report
-
 
 def finish(st: Staging, command: str, report: dict, exit_code: int = EXIT_OK, result=None) -> JobOutcome:
     """Write ``report.json`` (with the file list) into the staging folder and build the outcome."""

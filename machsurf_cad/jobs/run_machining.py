@@ -8,13 +8,6 @@ from .base import EXIT_OK, JobOutcome, Say, Staging, face_input, finish
 from .specs import MachiningSurfaceJob
 
 
-def _all_faces(spec, face):
-    """Every face of the part the face was read from (an example is its own part)."""
-    from .run_verify import part_faces
-
-    return part_faces(spec.part) if spec.part else [face]
-
-
 def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> JobOutcome:
     from ..cutters import parse_cutter
     from ..machining import machining_surface
@@ -23,6 +16,16 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
     t0 = time.perf_counter()
     cutter = parse_cutter(spec.tool)
     face, desc = face_input(spec.part, spec.example, spec.face)
+    faces_of_part: list = []
+
+    def part():
+        """Every face of the part the face came from (an example is its own part), read once."""
+        if not faces_of_part:
+            from .run_verify import part_faces
+
+            faces_of_part.extend(part_faces(spec.part) if spec.part else [face])
+        return faces_of_part
+
     ms = machining_surface(
         face,
         cutter,
@@ -38,7 +41,7 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
         lead_margin_deg=spec.lead_margin,
         lead_min_deg=spec.lead_min,
         lead_rate_deg_per_mm=spec.lead_rate,
-        lead_check_faces=_all_faces(spec, face) if spec.lead == "auto" else None,
+        lead_check_faces=part() if spec.lead == "auto" else None,
         degree=(spec.degree, spec.degree),
         progress=progress,
     )
@@ -92,7 +95,7 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
         rep["S1_deviation_map"] = dev.report()
         if spec.toolpath:
             from ..machining.toolpath import tool_paths
-            from .run_verify import part_faces, write_checked_toolpath
+            from .run_verify import write_checked_toolpath
 
             tp = tool_paths(ms, stepover=spec.stepover, chordal_tolerance=spec.chordal, clearance=spec.clearance)
             rep["toolpath"] = tp.report()
@@ -106,10 +109,8 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
                     f"warning: chordal {spec.chordal:g} + fit tolerance {spec.tol:g} mm reach the gouge tolerance "
                     f"{spec.gouge_tol:g} mm: chords on convex regions may be refused as gouges"
                 )
-            # every face of the part the face came from (an example is its own part)
-            faces = part_faces(spec.part) if spec.part else [face]
             rep["verify"], code = write_checked_toolpath(
-                st, say, tp, faces, spec, tolerance=spec.gouge_tol, render=True
+                st, say, tp, part(), spec, tolerance=spec.gouge_tol, render=True
             )
         rep["nominal"] = desc
         rep["time_s"] = {"fit_s": t_fit, "total_s": time.perf_counter() - t0}

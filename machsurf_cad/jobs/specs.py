@@ -7,10 +7,10 @@ numbers), so it can be written to JSON, sent to another process and run there by
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass, fields
 from typing import Literal
 
+from ..checks import positive
 from ..errors import InputError
 
 LoopPolicy = Literal["error", "flag", "trim"]
@@ -21,8 +21,7 @@ Setting = Literal["standard-tangent", "standard-distributed", "optimum", "minima
 def _positive(name: str, v, allow_none: bool = False) -> None:
     if v is None and allow_none:
         return
-    if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-        raise InputError(f"{name} must be > 0, got {v!r}")
+    positive(name, v, "")
 
 
 def _one_input(part, example, other: str = "a STEP file") -> None:

@@ -33,23 +33,14 @@ from ..errors import DegenerateGeometryError, InputError
 from .strategies import LocalFrame
 
 
-def feed_curvatures(face, feed, us, vs):
-    """Normal curvatures (1/mm, positive where the surface bends towards its outward normal: concave
-    for the tool) along the feed, across it, and the largest of all directions, on the grid ``us x vs``."""
+def concave_curvature(face, us, vs):
+    """The largest normal curvature (1/mm) towards the face's outward normal (concave for the tool; OCCT's
+    principal curvatures are signed towards su x sv) on the grid ``us x vs``, and the local properties."""
     from ..geometry.differential import local_properties_grid
 
     p = local_properties_grid(face.surface, us, vs)
     flip = -1.0 if face.reversed else 1.0
-    n = p.normal * flip
-    frame = LocalFrame(p.point, p.su, p.sv, n, p.u, p.v)
-    f = feed.feed(frame)
-    c = np.cross(n, f)
-    # curvature of the normal sections (OCCT's sign: positive bending towards su x sv), made positive
-    # where the surface bends towards its outward normal (concave for the tool)
-    k_f = flip * p.normal_curvature(f)
-    k_c = flip * p.normal_curvature(c)
-    k_max = np.maximum(flip * p.k1, flip * p.k2)
-    return k_f, k_c, k_max, p
+    return np.maximum(flip * p.k1, flip * p.k2), p
 
 
 def minimum_lead(R_t: float, r: float, k_f, *, margin_deg: float = 0.0, min_deg: float = 0.0):
@@ -90,13 +81,17 @@ class LeadField:
     label: str = "automatic lead"
     info: dict | None = None
 
-    def lead_at(self, u, v) -> np.ndarray:
+    def __post_init__(self) -> None:
         from scipy.interpolate import RegularGridInterpolator
 
-        f = RegularGridInterpolator(
+        # built once: the fits evaluate the axis on every refinement grid
+        interp = RegularGridInterpolator(
             (self.us, self.vs), self.lead_deg, method="cubic", bounds_error=False, fill_value=None
         )
-        return f(np.stack([np.ravel(u), np.ravel(v)], -1)).reshape(np.shape(u))
+        object.__setattr__(self, "_interp", interp)
+
+    def lead_at(self, u, v) -> np.ndarray:
+        return self._interp(np.stack([np.ravel(u), np.ravel(v)], -1)).reshape(np.shape(u))  # type: ignore[attr-defined]
 
     def axis(self, frame: LocalFrame) -> np.ndarray:
         f = self.feed.feed(frame)
@@ -117,28 +112,6 @@ def _smooth_field(need, du_mm, dv_mm, rate):
     env = lipschitz_envelope(need, du_mm, dv_mm, rate)
     blur = gaussian_filter(env, sigma=2.0, mode="nearest")
     return blur + max(0.0, float((env - blur).max()))
-
-
-def _gouging_placements(face, cutter, field, faces, *, tolerance: float, n: int = 61):
-    """(u, v) of the tool placements on an ``n x n`` grid of the face whose body gouges ``faces``."""
-    from ..cam.toolpath import Move, ToolPath
-    from ..gougecheck import GOUGE, verify
-    from .surfaces import MachiningMaps
-
-    maps = MachiningMaps(face, cutter, 5, field, cutter.D, False)
-    u0, u1, v0, v1 = face.uv_bounds
-    us, vs = np.linspace(u0, u1, n), np.linspace(v0, v1, n)
-    U, V = np.meshgrid(us, vs, indexing="ij")
-    inside = face.contains_uv(U, V) if face.is_trimmed else np.ones(U.shape, bool)
-    axis = maps.tool_axis(us, vs)
-    tips = maps.s2(us, vs) - cutter.end_mill_radii("automatic lead").r * axis
-    sel = inside.ravel()
-    m = int(sel.sum())
-    tp = ToolPath(tips.reshape(-1, 3)[sel], axis.reshape(-1, 3)[sel], np.full(m, Move.CUT), np.arange(m), cutter=cutter)
-    res = verify(faces, tp, tolerance=tolerance, step_mm=1e9, step_deg=180.0)  # each placement on its own
-    bad = res.status == GOUGE
-    uv = np.stack([U.ravel()[sel], V.ravel()[sel]], 1)
-    return uv[bad], float(res.gouge_depth.max()) if m else 0.0
 
 
 def auto_lead(
@@ -169,9 +142,10 @@ def auto_lead(
             raise InputError(f"{name} must be >= 0")
     u0, u1, v0, v1 = face.uv_bounds
     us, vs = np.linspace(u0, u1, grid), np.linspace(v0, v1, grid)
-    k_f, k_c, k_max, p = feed_curvatures(face, feed, us, vs)
+    U, V = np.meshgrid(us, vs, indexing="ij")
+    k_max, p = concave_curvature(face, us, vs)
     need = minimum_lead(em.R_t, em.r, k_max, margin_deg=margin_deg, min_deg=min_deg)
-    inside = face.contains_uv(*np.meshgrid(us, vs, indexing="ij")) if face.is_trimmed else np.ones(need.shape, bool)
+    inside = face.contains_uv(U, V) if face.is_trimmed else np.ones(need.shape, bool)
     across = (em.r > 0) & (k_max * em.r > 1.0)
     bad = inside & (np.isnan(need) | across)
     need = np.where(np.isnan(need), 89.0, need)
@@ -181,11 +155,7 @@ def auto_lead(
             f"no lead avoids a local gouge at {int(bad.sum())} of {int(inside.sum())} grid point(s), e.g. (u, v) = "
             f"({us[i[0]]:.4g}, {vs[i[1]]:.4g}): the surface is concave tighter than the tool can follow "
             f"(R_t + r = {em.R_t + em.r:g} mm along the feed, r = {em.r:g} mm across)",
-            {
-                "uv": np.stack(
-                    [np.meshgrid(us, vs, indexing="ij")[0][bad], np.meshgrid(us, vs, indexing="ij")[1][bad]], -1
-                )[:20].tolist()
-            },
+            {"uv": np.stack([U[bad], V[bad]], -1)[:20].tolist()},
         )
     du_mm = np.linalg.norm(np.diff(p.point, axis=0), axis=-1)
     dv_mm = np.linalg.norm(np.diff(p.point, axis=1), axis=-1)
@@ -194,15 +164,15 @@ def auto_lead(
     if check_faces is not None:
         # the global body check on a grid of tool placements: where the tool still gouges (its rear
         # reaching farther than second order sees), raise the need and rebuild the field
-        for _ in range(max_rounds):
-            field = LeadField(us, vs, lead, feed)
-            bad_uv, depth = _gouging_placements(face, cutter, field, check_faces, tolerance=check_tolerance)
-            rounds.append({"gouging_placements": int(len(bad_uv)), "max_gouge_mm": depth})
-            if len(bad_uv) == 0:
+        from .surfaces import MachiningMaps, gouging_placements
+
+        for _ in range(max_rounds):  # the placements on the lead grid itself: a gouge marks its own cell
+            maps = MachiningMaps(face, cutter, 5, LeadField(us, vs, lead, feed), cutter.D, False)
+            gouging, depth, _ = gouging_placements(maps, us, vs, inside, check_faces, tolerance=check_tolerance)
+            rounds.append({"gouging_placements": int(gouging.sum()), "max_gouge_mm": float(depth.max())})
+            if not gouging.any():
                 break
-            iu = np.clip(np.searchsorted(us, bad_uv[:, 0]), 0, grid - 1)
-            iv = np.clip(np.searchsorted(vs, bad_uv[:, 1]), 0, grid - 1)
-            for i, j in zip(iu, iv):
+            for i, j in np.argwhere(gouging):
                 sl = (slice(max(0, i - 3), i + 4), slice(max(0, j - 3), j + 4))
                 need[sl] = np.maximum(need[sl], lead[sl] + bump_deg)
             lead = _smooth_field(need, du_mm, dv_mm, rate_deg_per_mm)
@@ -223,4 +193,4 @@ def auto_lead(
     return LeadField(us, vs, lead, feed, info=rep), rep
 
 
-__all__ = ["auto_lead", "minimum_lead", "feed_curvatures", "lipschitz_envelope", "LeadField"]
+__all__ = ["auto_lead", "minimum_lead", "concave_curvature", "lipschitz_envelope", "LeadField"]

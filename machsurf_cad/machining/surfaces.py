@@ -179,6 +179,19 @@ class MachiningMaps:
         """Exact unit tool axis on the grid."""
         return self.axis(self.frame(us, vs))
 
+    def tool_placements(self, us, vs) -> tuple[np.ndarray, np.ndarray]:
+        """Exact tool tips (mm) and unit axes on the grid: the tip is ``r`` below the torus plane's axis
+        point (5 axes: S2; 3 axes: S1 unless it is already at the tip) or the ball's centre."""
+        em = self.cutter.end_mill_radii(_PURPOSE)
+        axis = self.tool_axis(us, vs)
+        if self.axes == 5:
+            cl = self.s1(us, vs) if em.is_ball else self.s2(us, vs)
+        else:
+            cl = self.s1(us, vs)
+            if self.tip:
+                return cl, axis
+        return cl - em.r * axis, axis
+
 
 def recover_axis(k: np.ndarray, cl: np.ndarray, n: np.ndarray, *, ball_length: float | None = None) -> np.ndarray:
     """Tool axis from K (on S1), C_L (on S2) and the face normal: ``u = w x ((n x w)/|n x w|)``, ``w = C_L - K``.
@@ -609,7 +622,9 @@ def detect_loops(maps: MachiningMaps, n: int = 121) -> LoopReport:
     # the face (the offset test above only sees the corner's centre; a tilted or wide bottom cuts
     # elsewhere, e.g. in a channel narrower than the tool)
     if maps.axes == 3 and not em.is_ball:
-        reg = _body_region(maps, us[::2], vs[::2], inside[::2, ::2])
+        us2, vs2 = us[::2], vs[::2]
+        bad, depth, tips = gouging_placements(maps, us2, vs2, inside[::2, ::2], [face], tolerance=1e-3)
+        reg = region_from_mask("global", "S1", bad, *np.meshgrid(us2, vs2, indexing="ij"), tips, depth)
         if reg is not None:
             regions.append(reg)
     mask = np.zeros((n, n), bool)
@@ -620,29 +635,29 @@ def detect_loops(maps: MachiningMaps, n: int = 121) -> LoopReport:
     return LoopReport(tuple(regions), (n, n), mask, us, vs)
 
 
-def _body_region(maps: MachiningMaps, us, vs, inside, tolerance: float = 1e-3):
-    """Placements of the 3-axis tool (from the exact S1) whose body cuts the face, as a loop region."""
+def gouging_placements(maps: MachiningMaps, us, vs, inside, faces, *, tolerance: float):
+    """The tool placed by the exact maps at every grid point inside the face, each checked alone against
+    ``faces`` (:func:`machsurf_cad.verify`): grid masks of the gouging placements and their depths (mm),
+    and the tips (mm)."""
     from ..cam.toolpath import Move, ToolPath
     from ..gougecheck import GOUGE, verify
 
-    U, V = np.meshgrid(us, vs, indexing="ij")
-    axis = np.asarray(maps.strategy.direction, float)
-    x = maps.s1(us, vs)
-    r = maps.cutter.end_mill_radii(_PURPOSE).r
-    tips = x if maps.tip else x - r * axis
-    sel = inside.ravel()
-    m = int(sel.sum())
-    if m == 0:
-        return None
-    tp = ToolPath(
-        tips.reshape(-1, 3)[sel], np.broadcast_to(axis, (m, 3)), np.full(m, Move.CUT), np.arange(m), cutter=maps.cutter
-    )
-    res = verify([maps.face], tp, tolerance=tolerance, step_mm=1e9, step_deg=180.0)  # each placement alone
-    bad = np.zeros(U.shape, bool)
-    depth = np.zeros(U.shape)
-    bad.ravel()[np.nonzero(sel)[0]] = res.status == GOUGE
-    depth.ravel()[np.nonzero(sel)[0]] = res.gouge_depth
-    return region_from_mask("global", "S1", bad, U, V, tips, depth)
+    tips, axes = maps.tool_placements(us, vs)
+    bad = np.zeros(inside.shape, bool)
+    depth = np.zeros(inside.shape)
+    sel = np.nonzero(inside.ravel())[0]
+    if sel.size:
+        tp = ToolPath(
+            tips.reshape(-1, 3)[sel],
+            axes.reshape(-1, 3)[sel],
+            np.full(sel.size, Move.CUT),
+            np.arange(sel.size),
+            cutter=maps.cutter,
+        )
+        res = verify(faces, tp, tolerance=tolerance, step_mm=1e9, step_deg=180.0)  # each placement alone
+        bad.ravel()[sel] = res.status == GOUGE
+        depth.ravel()[sel] = res.gouge_depth
+    return bad, depth, tips
 
 
 def _box_loop(bounds):
