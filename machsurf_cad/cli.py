@@ -80,6 +80,11 @@ def _gouge(p, default: str) -> None:
         help=f"deepest the tool may go into the part, mm (default {default}); deeper: the path is not written, exit 2",
     )
     g.add_argument("--allow-gouge", action="store_true", help="write a gouging path anyway, gouges listed in report")
+    g.add_argument(
+        "--trim-gouges",
+        action="store_true",
+        help="keep only the clear stretches of a gouging path, relinked, rechecked",
+    )
 
 
 def _post(p) -> None:

@@ -279,3 +279,45 @@ def test_a_tool_buried_in_the_material_is_a_gouge():
     rep = v.report()
     assert rep["n_gouging_positions"] == 2 and rep["n_collisions"] == 1  # approach and cut; the rapid too
     assert v.max_gouge > 5.0 - 1.0  # at least its depth behind the nearest face, less the radius
+
+
+def test_trim_gouges_keeps_the_clear_stretches_and_rechecks_them(tmp_path):
+    import json
+
+    from helpers import run
+
+    from machsurf_cad.gougecheck import clear_runs
+
+    face = ms.Face(ms.example("bezier5"), name="bezier5")
+    res = ms.machining_surface(face, "bull:D=28,r=4", axes=5, lead=5, tolerance=1e-3)
+    tp = ms.tool_paths(res, stepover=5.0)
+    v = ms.verify(face, tp)
+    kept = clear_runs(tp, v)
+    assert kept is not None and 0 < kept.n_cut < tp.n_cut
+    # every kept cutting position was a clear one of the original path, in the same order within its run
+    orig = {tuple(np.round(p, 9)) for p, s, m in zip(tp.tip, v.status, tp.move) if s == 0 and m in (1, 2)}
+    cutting = (kept.move == ms.Move.CUT) | (kept.move == ms.Move.APPROACH)
+    assert all(tuple(np.round(p, 9)) in orig for p in kept.tip[cutting])
+    out = tmp_path / "t"
+    r = run(
+        "machining-surface",
+        "--example",
+        "bezier5",
+        "--tool",
+        "bull:D=28,r=4",
+        "--lead",
+        "5",
+        "--tol",
+        "0.001",
+        "--toolpath",
+        "--stepover",
+        "5",
+        "--trim-gouges",
+        "-o",
+        out,
+    )
+    assert r.returncode == 0 and "cut down to its clear stretches" in r.stdout, r.stdout
+    t = json.loads((out / "report.json").read_text())["verify"]["trimmed"]
+    assert t["recheck"]["clean"] and t["n_cut_kept"] < t["n_cut_before"]
+    back = ms.read_apt(out / "toolpath.apt")
+    assert ms.verify(face, back, tp.cutter).clean  # what was written is clean, read back from the file

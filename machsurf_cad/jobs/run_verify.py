@@ -114,15 +114,46 @@ def check_path(
 def write_checked_toolpath(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool):
     """Check ``tp`` against the part, then write it unless it gouges (``spec.allow_gouge`` writes it
     anyway, listed in the report). Returns ``(verify report, exit code)``."""
-    _, rep = check_path(st, say, tp, faces, tolerance=tolerance, render=render)
+    res, rep = check_path(st, say, tp, faces, tolerance=tolerance, render=render)
     if rep["clean"]:
         write_toolpath(st, tp, spec)
         return rep, EXIT_OK
+    if spec.trim_gouges:  # keep the clear stretches, relinked; rapids that still collide go up step by step
+        from ..gougecheck import clear_runs, verify
+
+        clearance = spec.clearance
+        for _ in range(4):
+            cut = clear_runs(tp, res, clearance=clearance)
+            if cut is None:
+                break
+            again = verify(faces, cut, tolerance=tolerance)
+            if again.clean:
+                n0, n1 = tp.n_cut, cut.n_cut
+                say(
+                    f"tool path cut down to its clear stretches (--trim-gouges): {n1} of {n0} cutting positions in "
+                    f"{cut.n_passes} pass(es), linking {clearance:g} mm along the axis; checked again: clean, max "
+                    f"gouge {again.max_gouge:.3g} mm"
+                )
+                write_toolpath(st, cut, spec)
+                rep["trimmed"] = {
+                    "n_cut_kept": n1,
+                    "n_cut_before": n0,
+                    "n_passes": cut.n_passes,
+                    "clearance_mm": clearance,
+                    "recheck": again.report(),
+                }
+                return rep, EXIT_OK
+            clearance *= 2.0
+        say("tool path NOT written: no clear stretch is left, or its linking moves collide (--trim-gouges)")
+        return rep, EXIT_TOLERANCE
     if spec.allow_gouge:
         write_toolpath(st, tp, spec)
         say("tool path written with its gouges and collisions (--allow-gouge): see verify.worst in the report")
         return rep, EXIT_OK
-    say("tool path NOT written: it gouges or collides beyond the tolerance (--allow-gouge writes it anyway)")
+    say(
+        "tool path NOT written: it gouges or collides beyond the tolerance (--trim-gouges keeps the clear "
+        "stretches, --allow-gouge writes it anyway)"
+    )
     return rep, EXIT_TOLERANCE
 
 

@@ -129,6 +129,7 @@ class MachiningSurfaceJob(_Post, JobSpec):
     chordal: float = 0.005
     gouge_tol: float = 0.01
     allow_gouge: bool = False
+    trim_gouges: bool = False
     command = "machining-surface"
 
     def __post_init__(self) -> None:
@@ -187,6 +188,7 @@ class FlankJob(_Post, JobSpec):
     render: bool = True
     gouge_tol: float | None = None
     allow_gouge: bool = False
+    trim_gouges: bool = False
     command = "flank"
 
     def __post_init__(self) -> None:
@@ -212,6 +214,7 @@ class EnvelopeJob(_Post, JobSpec):
     part: str | None = None
     gouge_tol: float = 0.01
     allow_gouge: bool = False
+    trim_gouges: bool = False
     passes: int = 2
     continuity: Continuity = "g1"
     theta: str = "0"
