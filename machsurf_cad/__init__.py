@@ -61,6 +61,7 @@ from .jobs import (
     JobSpec,
     MachiningSurfaceJob,
     ReffJob,
+    SimulateJob,
     VerifyJob,
     run_job,
 )
@@ -77,6 +78,7 @@ from .machining import (
 from .machining.toolpath import tool_paths
 from .measure import DeviationResult, deviation, project_points
 from .results import Progress
+from .simulation import SimulationResult, simulate
 from .sweep import Envelope, EnvelopeResult, Motion, PassChain, envelope
 
 reff = reff_maps
@@ -94,6 +96,7 @@ __all__ = [
     "flank_path",
     "envelope",
     "verify",
+    "simulate",
     "deviation",
     "project_points",
     "fit_surface",
@@ -121,6 +124,7 @@ __all__ = [
     "FlankJob",
     "EnvelopeJob",
     "VerifyJob",
+    "SimulateJob",
     "DemoJob",
     "JobOutcome",
     # results
@@ -132,6 +136,7 @@ __all__ = [
     "Setting",
     "Interference",
     "VerifyResult",
+    "SimulationResult",
     "EnvelopeResult",
     "PassChain",
     "Envelope",

@@ -203,6 +203,23 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--no-render", dest="render", action="store_false", help="numbers only")
     w.add_argument("-o", "--out", default="out/verify", help="output folder")
 
+    s = sub.add_parser("simulate", help="what a tool path leaves on the part: scallops and gouges (N-buffer)")
+    s.add_argument("part", help="STEP file of the part")
+    s.add_argument("--toolpath", required=True, help="tool path: our CSV, or APT CLDATA (.apt, .cls)")
+    s.add_argument("--tool", default=None, help="cutter, e.g. ball:D=10 (default: the APT file's CUTTER)")
+    s.add_argument("--faces", default="all", help="faces to simulate: all (default) or indices 0,3,5")
+    s.add_argument("--resolution", type=float, default=None, help="nominal sample spacing, mm (default ~200k samples)")
+    s.add_argument(
+        "--tol", type=float, default=0.01, help="a cut deeper than this is a gouge, mm (default 0.01); exit 2"
+    )
+    s.add_argument("--depth", type=float, default=1.0, help="deepest gouge measured, mm (default 1)")
+    s.add_argument("--stock", type=float, default=1.0, help="thickest material measured, mm (default 1)")
+    s.add_argument("--motion-step", type=float, default=None, help="placement spacing on the motion, mm (default R/10)")
+    s.add_argument("--heights", default="0.001,0.002,0.005,0.01,0.02,0.05,0.1", help="area fractions above these, mm")
+    s.add_argument("--max-samples", type=int, default=10_000_000, help="memory budget in samples (~400 B each)")
+    s.add_argument("--no-render", dest="render", action="store_false", help="numbers and VTP-free report only")
+    s.add_argument("-o", "--out", default="out/simulate", help="output folder")
+
     v = sub.add_parser("envelope", help="swept envelopes of a rotational tool and G1/G0 adjacent passes")
     v.add_argument(
         "--tool",
@@ -240,6 +257,7 @@ _BAR_TITLES = {
     "flank": "settings along the surface",
     "demo": "measuring the STL",
     "verify": "checking the tool body",
+    "simulate": "simulating the cut",
 }
 
 

@@ -31,6 +31,7 @@ from .specs import (
     JobSpec,
     MachiningSurfaceJob,
     ReffJob,
+    SimulateJob,
     VerifyJob,
 )
 
@@ -42,6 +43,7 @@ _RUNNERS = {  # command -> (module, function); imported on first use (the kernel
     "flank": ("run_flank", "run_flank"),
     "envelope": ("run_envelope", "run_envelope"),
     "verify": ("run_verify", "run_verify"),
+    "simulate": ("run_simulate", "run_simulate"),
     "demo": ("run_demo", "run_demo"),
 }
 
@@ -95,6 +97,7 @@ def run_job(spec: JobSpec, out, *, say: Say = quiet, progress: Progress | None =
 
 __all__ = [
     "VerifyJob",
+    "SimulateJob",
     "run_job",
     "JobOutcome",
     "JobSpec",

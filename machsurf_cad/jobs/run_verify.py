@@ -157,18 +157,25 @@ def write_checked_toolpath(st: Staging, say: Say, tp, faces, spec, *, tolerance:
     return rep, EXIT_TOLERANCE
 
 
-def run_verify(spec: VerifyJob, out, say: Say, progress=None) -> JobOutcome:
+def read_toolpath_file(path: Path):
+    """A tool path from our CSV or an APT CLDATA file, by its suffix."""
     from ..cam import read_apt, read_csv
+
+    suffix = path.suffix.lower()
+    if not path.is_file():
+        raise InputError(f"tool path file not found: {path}")
+    if suffix == ".csv":
+        return read_csv(path)
+    if suffix in (".apt", ".cls", ".cl", ".aptsource", ".txt"):
+        return read_apt(path)
+    raise InputError(f"tool path must be .csv (ours) or APT CLDATA (.apt, .cls, .cl), got {path.name}")
+
+
+def run_verify(spec: VerifyJob, out, say: Say, progress=None) -> JobOutcome:
     from ..cutters import parse_cutter
 
     path = Path(spec.toolpath)
-    suffix = path.suffix.lower()
-    if suffix == ".csv":
-        tp = read_csv(path)
-    elif suffix in (".apt", ".cls", ".cl", ".aptsource", ".txt"):
-        tp = read_apt(path)
-    else:
-        raise InputError(f"tool path must be .csv (ours) or APT CLDATA (.apt, .cls, .cl), got {path.name}")
+    tp = read_toolpath_file(path)
     cutter: Any = parse_cutter(spec.tool) if spec.tool else tp.cutter
     if cutter is None:
         raise InputError(f"{path.name} names no usable CUTTER: give --tool")

@@ -280,6 +280,46 @@ class VerifyJob(JobSpec):
 
 
 @dataclass(frozen=True)
+class SimulateJob(JobSpec):
+    """What a tool path leaves on the part: the N-buffer cut simulation (scallops and gouges)."""
+
+    part: str = ""
+    toolpath: str = ""
+    tool: str | None = None
+    faces: str = "all"
+    resolution: float | None = None
+    tol: float = 0.01
+    depth: float = 1.0
+    stock: float = 1.0
+    motion_step: float | None = None
+    heights: str = "0.001,0.002,0.005,0.01,0.02,0.05,0.1"
+    max_samples: int = 10_000_000
+    render: bool = True
+    command = "simulate"
+
+    def __post_init__(self) -> None:
+        if not self.part or not self.toolpath:
+            raise InputError("simulate needs a STEP part and --toolpath")
+        _positive("resolution (mm)", self.resolution, allow_none=True)
+        _positive("tol (mm)", self.tol)
+        _positive("depth (mm)", self.depth)
+        _positive("stock (mm)", self.stock)
+        _positive("motion_step (mm)", self.motion_step, allow_none=True)
+        if int(self.max_samples) < 1:
+            raise InputError("max_samples must be >= 1")
+        self.height_values()
+
+    def height_values(self) -> tuple:
+        try:
+            hs = tuple(float(x) for x in str(self.heights).split(",") if x.strip())
+        except ValueError:
+            raise InputError(f"--heights must be numbers in mm like 0.005,0.01; got {self.heights!r}") from None
+        for h in hs:
+            _positive("each height (mm)", h)
+        return hs
+
+
+@dataclass(frozen=True)
 class DemoJob(JobSpec):
     """The main job on the embedded example part (``make demo``)."""
 
@@ -287,7 +327,8 @@ class DemoJob(JobSpec):
 
 
 SPECS: dict[str, type[JobSpec]] = {
-    c.command: c for c in (InfoJob, InspectJob, MachiningSurfaceJob, ReffJob, FlankJob, EnvelopeJob, VerifyJob, DemoJob)
+    c.command: c
+    for c in (InfoJob, InspectJob, MachiningSurfaceJob, ReffJob, FlankJob, EnvelopeJob, VerifyJob, SimulateJob, DemoJob)
 }
 """Spec type by command name."""
 
@@ -300,6 +341,7 @@ __all__ = [
     "FlankJob",
     "EnvelopeJob",
     "VerifyJob",
+    "SimulateJob",
     "DemoJob",
     "SPECS",
     "LoopPolicy",

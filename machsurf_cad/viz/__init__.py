@@ -5,5 +5,14 @@ is drawn from a result object whose figures are already in the JSON report.
 """
 
 from .render import deviation_polydata, render_deviation, render_gouge_map, render_scalar_map, render_zebra
+from .simmap import render_simulation_map, simulation_polydata
 
-__all__ = ["deviation_polydata", "render_deviation", "render_gouge_map", "render_scalar_map", "render_zebra"]
+__all__ = [
+    "deviation_polydata",
+    "render_deviation",
+    "render_gouge_map",
+    "render_scalar_map",
+    "render_zebra",
+    "render_simulation_map",
+    "simulation_polydata",
+]

@@ -55,3 +55,28 @@ def plot_path_distance(distance, status, png_path, *, tolerance: float, title: s
     fig.savefig(png_path)
     plt.close(fig)
     return png_path
+
+
+def plot_simulation_histogram(value, reached, png_path, *, tolerance: float, heights=(), title: str = "") -> Path:
+    """Histogram of the material left per nominal sample (mm; negative: gouge), the gouge tolerance and the
+    report's heights marked."""
+    import numpy as np
+
+    v = np.asarray(value, float)[np.asarray(reached, bool)]
+    fig, ax = plt.subplots(figsize=(9, 4.5), dpi=120)
+    if v.size:
+        ax.hist(v, bins=120, color="tab:blue", alpha=0.85)
+    ax.axvline(-tolerance, color="tab:red", ls="--", lw=1, label=f"-tolerance ({tolerance:g} mm)")
+    for h in heights:
+        ax.axvline(h, color="grey", ls=":", lw=0.8)
+    ax.set_yscale("log")
+    ax.set_xlabel("material left along the normal [mm] (negative: gouge)")
+    ax.set_ylabel("samples")
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper right")
+    png_path = Path(png_path)
+    fig.tight_layout()
+    fig.savefig(png_path)
+    plt.close(fig)
+    return png_path
