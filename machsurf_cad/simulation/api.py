@@ -270,6 +270,7 @@ def simulate(
     t1 = time.perf_counter()
     T, A, _ = motion_poses(toolpath.tip, toolpath.axis, step, float(c.length))
     out = nbuffer(c, P, N, T, A, depth=depth, stock=stock, progress=progress)
+    value, clamped = out["t"], out["clamped"]
     t2 = time.perf_counter()
     if not out["reached"].any():
         raise InputError(
@@ -285,9 +286,9 @@ def simulate(
         P,
         N,
         F,
-        out["t"],
+        value,
         out["reached"],
-        out["clamped"],
+        clamped,
         Q,
         tuple(f.name or f"face_{i}" for i, f in enumerate(faces)),
         float(resolution),

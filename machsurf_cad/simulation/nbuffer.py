@@ -17,10 +17,14 @@ Exactness:
   its lower bound (a deeper cut, on the safe side for gouges) and is counted.
 * **The motion between placements** is sampled ``motion_step`` mm apart (tip and every point of the
   cutting part, axis interpolated linearly and normalised, as :func:`~machsurf_cad.gougecheck.verify`
-  does). For each sample the best placement and its two neighbours are then refined by two rounds of
+  does). For each sample the best placement and its two neighbours are then refined by four rounds of
   parabolic interpolation over the continuous motion; the change made by the last round is reported
   (``motion_residual_mm``). For a profile without sharp corners the sampled result alone is within
   ``motion_step^2 / (8 rho_min)`` of the swept one (``rho_min`` the smallest profile radius).
+
+A placement that meets a blade only below the nominal, without holding the nominal point itself,
+entered the material through another face (a blade running under the top face near a convex edge,
+say): it does not cut this blade; the samples of that other face see it.
 
 Candidate pairs (sample, placement) come from a k-d tree over the samples queried with spheres that
 cover the cutting part (one per slab of the profile, radius measured on the profile); a pair is
@@ -37,6 +41,8 @@ from scipy.spatial import cKDTree
 from ..errors import InputError
 
 _CONVERGED_MM = 1e-7
+REFINE_ROUNDS = 4
+"""Rounds of parabolic interpolation over the motion (the change made by the last one is reported)."""
 NEAR_REACH_MM = 0.1
 """Reach of the first sweep of candidate pairs (mm)."""
 
@@ -251,6 +257,7 @@ def _settle(cutter, P, N, T, A, si, pi, best, best_pose, clamped, depth, stock, 
         n_marched += a_s.size
         t, st = march(cutter, P[a_s], N[a_s], T[a_p], A[a_p], -depth, stock, max_steps)
         unconv += int((st == 3).sum())
+        t = np.where((t < 0) & (g0[sel][ok] > 0), np.inf, t)  # cuts below the nominal only: see the docstring
         # several pairs of one sample: keep the lowest entry
         o = np.lexsort((t, a_s))
         a_s, a_p, t, st = a_s[o], a_p[o], t[o], st[o]
@@ -281,11 +288,15 @@ def _entry_at(cutter, P, N, T, A, x, t_hint, depth, stock):
     if redo.any():
         t2, _ = march(cutter, P[redo], N[redo], tip[redo], a[redo], -depth, stock)
         t[redo] = t2
+    below = t < 0
+    if below.any():  # a cut below the nominal counts only when the tool holds the nominal point itself
+        g0 = _distance(cutter, P[below], N[below], np.zeros(int(below.sum())), tip[below], a[below])
+        t[np.flatnonzero(below)[g0 > 0]] = np.inf
     return np.where(np.isfinite(t), t, np.inf)
 
 
 def _refine_motion(cutter, P, N, T, A, k, t_k, depth, stock):
-    """Two rounds of safeguarded parabolic interpolation of the entry over the placement index."""
+    """Rounds of safeguarded parabolic interpolation of the entry over the placement index."""
     n = T.shape[0]
     x0 = k.astype(float)
     xl, xr = np.maximum(x0 - 1, 0.0), np.minimum(x0 + 1, n - 1.0)
@@ -293,7 +304,7 @@ def _refine_motion(cutter, P, N, T, A, k, t_k, depth, stock):
     fr = _entry_at(cutter, P, N, T, A, xr, t_k, depth, stock)
     xb, fb = x0.copy(), t_k.copy()
     residual = 0.0
-    for _ in range(2):
+    for _ in range(REFINE_ROUNDS):
         xv = _parabola_vertex(xl, fl, xb, fb, xr, fr)
         fv = _entry_at(cutter, P, N, T, A, xv, fb, depth, stock)
         gain = np.where(np.isfinite(fv), np.maximum(fb - fv, 0.0), 0.0)
