@@ -94,6 +94,10 @@ def _post(p) -> None:
     g.add_argument("--plunge-feed", type=float, default=300.0, help="approach/retract feed, mm/min (default 300)")
     g.add_argument("--spindle", type=float, default=10000.0, help="spindle speed, rpm (default 10000)")
     g.add_argument("--tool-number", type=int, default=1, help="LOADTL tool number (default 1)")
+    g.add_argument(
+        "--simulate", action="store_true", help="simulate the written path on the part: scallops, gouges (exit 2)"
+    )
+    g.add_argument("--simulate-resolution", type=float, default=None, help="sample spacing of --simulate, mm")
 
 
 def build_parser() -> argparse.ArgumentParser:

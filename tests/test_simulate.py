@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import ROOT, needs_kernel
 from helpers import assert_close
 from scipy.spatial import cKDTree
 
@@ -226,3 +227,94 @@ def test_bad_input_is_refused_with_one_line():
     bare = ms.ToolPath(tp.tip, tp.axis, tp.move, tp.pass_index, None, None, None, "bare", {}, {})
     with pytest.raises(ms.InputError, match="tool"):
         ms.simulate(_plane(), bare)
+
+
+@needs_kernel
+def test_simulate_command_on_the_example_block(tmp_path):
+    """A 3-axis ball path on the block's top face, simulated on all 8 faces by the command; then the same path
+    moved 0.05 mm into the part along the normal: max gouge 0.050 +- 0.001 mm and exit 2."""
+    import json
+
+    from helpers import run
+
+    from machsurf_cad.occ import read_step_faces
+
+    block = ROOT / "example_parts" / "freeform_block.step"
+    top = read_step_faces(block, [0])[0]
+    res = ms.machining_surface(top, "ball:D=10", axes=3, tolerance=1e-3)
+    tp = ms.tool_paths(res, stepover=2.0, chordal_tolerance=2e-4)  # chords that sag 0.2 um at most
+    apt = ms.write_apt(tmp_path / "p.apt", tp)
+    out = tmp_path / "s"
+    r = run("simulate", block, "--toolpath", apt, "--resolution", "0.5", "-o", out)
+    assert r.returncode == 0, r.stdout + r.stderr
+    rep = json.loads((out / "report.json").read_text())["simulate"]
+    assert rep["n_faces"] == 8 and rep["n_positions"] == tp.n_positions
+    # passes 2 mm apart on a gently curved face leave about the plane's R - sqrt(R^2 - 1) = 0.101 mm between
+    # them (the closed forms are tested above); the strip between the face's edge and the first pass (up to
+    # 2 mm wide) more; no gouge beyond the chords' sag
+    top_rep = rep["faces"][0]
+    assert top_rep["reached_fraction"] > 0.99 and 0.01 < top_rep["mean_scallop_mm"] < 0.05
+    assert 0.09 < top_rep["max_scallop_mm"] < 0.6 and rep["max_gouge_mm"] < 5e-4 and not rep["gouged"]
+    assert set(rep["fraction_above_mm"]) >= {"0.01", "0.05"} and rep["resolution_mm"] == 0.5
+    assert rep["samples_x_positions_per_s"] > 0 and rep["time_s"]["total_s"] > 0
+    for f in ("simulate_map.png", "simulate_map.vtp", "simulate_histogram.png"):
+        assert (out / f).stat().st_size > 1000
+    # into the part by 0.05 mm along the nominal's normal at each contact
+    uv = tp.extras["uv"]
+    cut = tp.move == ms.Move.CUT
+    d = top.surface.derivatives(uv[cut, 0], uv[cut, 1], 1)
+    n = np.cross(d.su, d.sv)
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    n *= -1 if top.reversed else 1
+    tips = tp.tip.copy()
+    tips[cut] -= 0.05 * n
+    moved = ms.ToolPath(tips, tp.axis, tp.move, tp.pass_index, tp.cc, tp.feed, tp.cutter, "moved", {}, {})
+    bad = ms.write_csv(tmp_path / "moved.csv", moved)
+    r = run(
+        "simulate", block, "--toolpath", bad, "--tool", "ball:D=10", "--faces", "0", "--no-render", "-o", tmp_path / "m"
+    )
+    assert r.returncode == 2, r.stdout + r.stderr
+    rep = json.loads((tmp_path / "m" / "report.json").read_text())["simulate"]
+    assert_close(rep["max_gouge_mm"], 0.05, 1e-3, "max gouge") and rep["gouged"]
+    # bad input: one line, exit 1
+    r = run("simulate", block, "--toolpath", apt, "--resolution", "0", "-o", tmp_path / "b1")
+    assert r.returncode == 1 and "resolution" in r.stderr and "Traceback" not in r.stderr
+    r = run("simulate", block, "--toolpath", apt, "--resolution", "0.001", "-o", tmp_path / "b2")
+    assert r.returncode == 1 and "budget" in r.stderr
+    r = run(
+        "simulate",
+        block,
+        "--toolpath",
+        apt,
+        "--tool",
+        "ball:D=12",
+        "--faces",
+        "3",
+        "--no-render",
+        "-o",
+        tmp_path / "b3",
+    )
+    assert "warning" in r.stdout and "using --tool" in r.stdout
+    far = ms.ToolPath(tp.tip + [0, 0, 200.0], tp.axis, tp.move, tp.pass_index, None, None, tp.cutter, "far", {}, {})
+    r = run("simulate", block, "--toolpath", ms.write_apt(tmp_path / "far.apt", far), "-o", tmp_path / "b4")
+    assert r.returncode == 1 and "no contact" in r.stderr
+
+
+@needs_kernel
+def test_path_writing_commands_simulate_what_they_write(tmp_path):
+    import json
+
+    from helpers import run
+
+    out = tmp_path / "ms"
+    r = run(
+        "machining-surface", "--example", "bezier5", "--tool", "ball:D=20", "--axes", "3", "--toolpath",
+        "--stepover", "6", "--simulate", "--simulate-resolution", "1", "--clearance", "60", "-o", out,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stdout + r.stderr
+    rep = json.loads((out / "report.json").read_text())
+    sim = rep["verify"]["simulate"]
+    # on a plane, 6 mm passes of a ball R 10 leave 0.455 mm at most and 0.15 mm on average (d^2 / 2R over
+    # d in [0, 3]); the curved face about that, more in the strips along its edges
+    assert 0.08 < sim["mean_scallop_mm"] < 0.3 and sim["max_scallop_mm"] > 0.3 and not sim["gouged"], sim
+    assert (out / "simulate_map.png").is_file()

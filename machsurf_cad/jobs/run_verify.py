@@ -111,13 +111,13 @@ def check_path(
     return res, rep
 
 
-def write_checked_toolpath(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool):
+def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool):
     """Check ``tp`` against the part, then write it unless it gouges (``spec.allow_gouge`` writes it
-    anyway, listed in the report). Returns ``(verify report, exit code)``."""
+    anyway, listed in the report). Returns ``(verify report, exit code, the path written or None)``."""
     res, rep = check_path(st, say, tp, faces, tolerance=tolerance, render=render)
     if rep["clean"]:
         write_toolpath(st, tp, spec)
-        return rep, EXIT_OK
+        return rep, EXIT_OK, tp
     if spec.trim_gouges:  # keep the clear stretches, relinked; rapids that still collide go up step by step
         from ..gougecheck import clear_runs, verify
 
@@ -142,19 +142,40 @@ def write_checked_toolpath(st: Staging, say: Say, tp, faces, spec, *, tolerance:
                     "clearance_mm": clearance,
                     "recheck": again.report(),
                 }
-                return rep, EXIT_OK
+                return rep, EXIT_OK, cut
             clearance *= 2.0
         say("tool path NOT written: no clear stretch is left, or its linking moves collide (--trim-gouges)")
-        return rep, EXIT_TOLERANCE
+        return rep, EXIT_TOLERANCE, None
     if spec.allow_gouge:
         write_toolpath(st, tp, spec)
         say("tool path written with its gouges and collisions (--allow-gouge): see verify.worst in the report")
-        return rep, EXIT_OK
+        return rep, EXIT_OK, tp
     say(
         "tool path NOT written: it gouges or collides beyond the tolerance (--trim-gouges keeps the clear "
         "stretches, --allow-gouge writes it anyway)"
     )
-    return rep, EXIT_TOLERANCE
+    return rep, EXIT_TOLERANCE, None
+
+
+def write_checked_toolpath(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool):
+    """Check ``tp`` against the part and write it unless it gouges (:func:`_write_checked`); with
+    ``spec.simulate`` the written path's cut is simulated on the part too (report ``simulate``; a simulated
+    gouge beyond ``tolerance`` exits 2). Returns ``(verify report, exit code)``."""
+    rep, code, written = _write_checked(st, say, tp, faces, spec, tolerance=tolerance, render=render)
+    if getattr(spec, "simulate", False):
+        if written is None:
+            say("--simulate: nothing written, nothing simulated")
+        else:
+            from .run_simulate import simulate_path
+
+            sim, srep = simulate_path(
+                st, say, written, faces, tolerance=tolerance, render=render, resolution=spec.simulate_resolution
+            )
+            rep["simulate"] = srep
+            if sim.gouged and not spec.allow_gouge:
+                say(f"the simulated cut gouges {sim.max_gouge:.4g} mm (tol {tolerance:g}): exit 2")
+                code = EXIT_TOLERANCE
+    return rep, code
 
 
 def read_toolpath_file(path: Path):

@@ -43,10 +43,13 @@ class _Post:
     plunge_feed: float = 300.0
     spindle: float = 10000.0
     tool_number: int = 1
+    simulate: bool = False
+    simulate_resolution: float | None = None
 
     def _check_post(self) -> None:
         for n in ("clearance", "feed", "plunge_feed", "spindle"):
             _positive(n, getattr(self, n))
+        _positive("simulate_resolution (mm)", self.simulate_resolution, allow_none=True)
         if int(self.tool_number) < 1:
             raise InputError("tool_number must be >= 1")
 

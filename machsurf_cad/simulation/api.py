@@ -117,8 +117,29 @@ class SimulationResult(Result):
             "n_unconverged": self.n_unconverged,
             "samples_x_positions_per_s": n * self.n_placements / t if t > 0 else None,
             "tool": self.cutter.spec(),
+            "faces": self.per_face(),
             "time_s": dict(self.time_s),
         }
+
+    def per_face(self) -> list[dict]:
+        """Per face: samples, reached fraction, max and mean material left, max gouge (mm)."""
+        out = []
+        for i, name in enumerate(self.face_names):
+            sel = self.face == i
+            r = sel & self.reached
+            v = self.value[r]
+            out.append(
+                {
+                    "face": i,
+                    "name": name,
+                    "n_samples": int(sel.sum()),
+                    "reached_fraction": float(r.sum() / max(1, sel.sum())),
+                    "max_scallop_mm": float(max(v.max(), 0.0)) if v.size else None,
+                    "mean_scallop_mm": float(np.maximum(v, 0.0).mean()) if v.size else None,
+                    "max_gouge_mm": float(max(-v.min(), 0.0)) if v.size else 0.0,
+                }
+            )
+        return out
 
 
 def _faces(part) -> list[Face]:
