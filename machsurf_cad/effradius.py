@@ -179,12 +179,37 @@ class DirectionMap(Result):
     stepover: np.ndarray | None
     stepover_ball: np.ndarray | None
     reachable: np.ndarray | None
+    unreachable: np.ndarray | None = None
+    stepover_surface: np.ndarray | None = None
+    stepover_surface_ball: np.ndarray | None = None
 
     def figures(self, inside: np.ndarray, weights: np.ndarray, R_ball: float) -> dict:
+        unreach = self.unreachable if self.unreachable is not None else np.zeros(inside.shape, bool)
+        w_all = weights * inside
+        total = float(w_all.sum())
+        n_in = int(inside.sum())
+        facing = self.slope_deg >= 90.0 - 1e-9
+        head = {
+            "theta_deg": self.theta_deg,
+            "unreachable_fraction": float(w_all[unreach].sum() / total) if total > 0 else 0.0,
+            "n_unreachable_samples": int(np.count_nonzero(unreach & inside)),
+            "n_facing_away_samples": int(np.count_nonzero(facing & inside)),
+            "n_samples": n_in,
+        }
+        inside = inside & ~unreach  # the scores below are over the samples the tool can reach
         w = weights * inside
+        if not inside.any():
+            return {
+                **head,
+                "r_eff_min_mm": None,
+                "r_eff_max_mm": None,
+                "r_eff_mean_mm": None,
+                "n_infinite_r_eff": 0,
+                "area_fraction_torus_beats_ball": None,
+            }
         fin = np.isfinite(self.r_eff) & inside
         out = {
-            "theta_deg": self.theta_deg,
+            **head,
             "r_eff_min_mm": float(self.r_eff[fin].min()) if fin.any() else None,
             "r_eff_max_mm": float(self.r_eff[fin].max()) if fin.any() else None,
             "r_eff_mean_mm": float(np.average(self.r_eff[fin], weights=w[fin])) if fin.any() else None,
@@ -194,10 +219,15 @@ class DirectionMap(Result):
         if self.stepover is not None:
             ok = np.isfinite(self.stepover) & np.isfinite(self.stepover_ball) & inside
             so, sb = self.stepover[ok], self.stepover_ball[ok]
+            ss = self.stepover_surface[ok] if self.stepover_surface is not None else so
+            ssb = self.stepover_surface_ball[ok] if self.stepover_surface_ball is not None else sb
             out.update(
                 {
                     "stepover_mean_mm": float(np.average(so, weights=w[ok])) if ok.any() else None,
                     "stepover_ball_mean_mm": float(np.average(sb, weights=w[ok])) if ok.any() else None,
+                    "stepover_surface_mean_mm": float(np.average(ss, weights=w[ok])) if ok.any() else None,
+                    "stepover_surface_ball_mean_mm": float(np.average(ssb, weights=w[ok])) if ok.any() else None,
+                    "stepover_surface_min_mm": float(ss.min()) if ok.any() else None,
                     "n_unreachable": int(np.count_nonzero(~self.reachable & inside)),
                     "n_infinite_stepover": int(np.count_nonzero(np.isinf(self.stepover) & inside)),
                 }
@@ -389,7 +419,7 @@ def reff_maps(
     U, V = np.meshgrid(us, vs, indexing="ij")
     inside = face.contains_uv(U, V) if face.is_trimmed else np.ones(U.shape, bool)
     t = time.perf_counter()
-    d = face.surface.derivatives_grid(us, vs, 2 if scallop is not None else 1)
+    d = face.surface.derivatives_grid(us, vs, 2)  # the curvature across the feed decides reachability
     timings["evaluate_s"] = time.perf_counter() - t
     n = unit_normals(d.su, d.sv, face.surface.scale, U, V, check=False)
     bad = ~np.isfinite(n).all(axis=-1) & inside
@@ -404,7 +434,7 @@ def reff_maps(
     if face.reversed:
         n = -n
     area = np.linalg.norm(np.cross(d.su, d.sv), axis=-1)
-    forms = _Forms(d, n, scallop is not None)
+    forms = _Forms(d, n, True)
     maps = []
     t = time.perf_counter()
     for theta in dirs:
@@ -413,7 +443,7 @@ def reff_maps(
     best_t = best_v = None
     if len(maps) > 1:
         crit = np.stack([m.stepover if scallop is not None else m.r_eff for m in maps])
-        crit = np.where(np.isnan(crit), -np.inf, crit)
+        crit = np.where(np.isnan(crit) | np.stack([m.unreachable for m in maps]), -np.inf, crit)
         idx = np.argmax(crit, axis=0)
         best_t = np.asarray(dirs)[idx]
         best_v = np.take_along_axis(crit, idx[None], 0)[0]
@@ -498,15 +528,16 @@ def _direction_map(theta, fm: _Forms, cutter, comp, scallop, axes, lead, tilt, i
     n = fm.n
     nz = n[..., 2]
     vertical = ~(np.abs(nz) > 1e-12)
-    if np.any(vertical & inside):
+    if axes == 5 and np.any(vertical & inside):
         raise DegenerateGeometryError(
             f"the face has vertical spots (normal horizontal) at {int((vertical & inside).sum())} "
             "sample(s): a feed direction by its XY projection is undefined there"
         )
+    # 3 axes: a spot whose normal is horizontal or faces away from +Z cannot be reached (counted below)
     # feed: the tangent direction whose projection on XY is along theta
     ct, st = math.cos(th), math.sin(th)
     with np.errstate(divide="ignore", invalid="ignore"):
-        fz = -(n[..., 0] * ct + n[..., 1] * st) / nz
+        fz = -(n[..., 0] * ct + n[..., 1] * st) / np.where(vertical, 1.0, nz)
     fnorm = np.sqrt(1.0 + fz * fz)
     f = np.empty(n.shape)
     f[..., 0] = ct / fnorm
@@ -531,23 +562,37 @@ def _direction_map(theta, fm: _Forms, cutter, comp, scallop, axes, lead, tilt, i
     S = np.degrees(np.arctan2(sinS, cosS))
     alpha = np.degrees(np.arccos(cos_a))
     r_eff = effective_radius(cutter, S, alpha)
-    rho = np.full(S.shape, np.inf)
-    so = sob = reach = None
-    if scallop is not None:
-        # normal section across the feed: direction t = f x n; rho signed positive where convex
-        t_dir = np.cross(f, n)
-        a, b = _dot(t_dir, fm.d.su), _dot(t_dir, fm.d.sv)
+    # normal section across the feed: direction t = f x n; rho signed positive where convex
+    t_dir = np.cross(f, n)
+    a, b = _dot(t_dir, fm.d.su), _dot(t_dir, fm.d.sv)
+    with np.errstate(divide="ignore", invalid="ignore"):
         du = (fm.G * a - fm.F * b) / fm.det
         dv = (fm.E * b - fm.F * a) / fm.det
         II = fm.L * du * du + 2 * fm.M * du * dv + fm.N * dv * dv
         I_ = fm.E * du * du + 2 * fm.F * du * dv + fm.G * dv * dv
         kn = II / I_  # positive: bends towards the tool (concave)
-        with np.errstate(divide="ignore"):
-            rho = np.where(np.abs(kn) > 1e-14, -1.0 / kn, np.inf)
-        so, reach = stepover(scallop, r_eff, rho)
-        rb = (comp or cutter).D / 2
-        sob, _ = stepover(scallop, np.full(S.shape, rb), rho)
-    return DirectionMap(float(theta), S, alpha, r_eff, rho, so, sob, reach)
+        rho = np.where(np.abs(kn) > 1e-14, -1.0 / kn, np.inf)
+    # unreachable: facing away from the axis (3 axes), or a concave section tighter than the tool across it
+    unreach = (rho < 0) & (-rho <= np.where(np.isfinite(r_eff), r_eff, np.inf))
+    if axes == 3:
+        unreach |= vertical | (nz < 0)
+    unreach &= inside
+    so = sob = reach = ss = ssb = None
+    if scallop is not None:
+        from .simulation.scallop import spacing_for_scallop
+
+        with np.errstate(invalid="ignore"):
+            so, reach = stepover(scallop, np.where(unreach, np.nan, r_eff), rho)
+            rb = (comp or cutter).D / 2
+            sob, _ = stepover(scallop, np.full(S.shape, rb), rho)
+            kappa = np.where(np.isfinite(rho), 1.0 / np.where(np.isfinite(rho), rho, 1.0), 0.0)
+            ss = np.where(np.isinf(r_eff), np.inf, spacing_for_scallop(scallop, r_eff, kappa))
+            ssb = spacing_for_scallop(scallop, rb, kappa)
+        unreach |= ~reach & inside
+        for arr in (so, ss):
+            arr[unreach] = np.nan
+    r_eff = np.where(unreach, np.nan, r_eff)
+    return DirectionMap(float(theta), S, alpha, r_eff, rho, so, sob, reach, unreach, ss, ssb)
 
 
 reff = reff_maps

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+import machsurf_cad as ms
 from machsurf_cad.effradius import effective_radius, parse_directions, reff_maps, stepover
 from machsurf_cad.errors import DegenerateGeometryError, InputError
 from machsurf_cad.geometry import builders
@@ -209,3 +210,48 @@ def test_bad_inputs():
         reff_maps(plane, "bull:D=10,r=2", axes=5, tilt=1e6)
     with pytest.raises(InputError, match="GiB, over the"):
         reff_maps(plane, "bull:D=10,r=2", grid=4096, directions="all")
+
+
+def test_unreachable_samples_are_counted_and_left_out_of_the_scores():
+    """3 axes on a sphere band from latitude -30 to 60 deg (outward normal away from the centre): the lower
+    third faces away from +Z; its area fraction is exact (sin 0 - sin -30) / (sin 60 - sin -30)."""
+    from machsurf_cad.geometry import builders
+
+    s = builders.sphere_patch(50.0, (-30.0, 60.0), 90.0)  # su x sv points to the centre
+    face = ms.Face(s, name="band", reversed=True)
+    m = ms.reff_maps(face, "bull:D=10,r=2", directions=[0.0, 90.0], grid=256)
+    exact = (0.0 - math.sin(math.radians(-30))) / (math.sin(math.radians(60)) - math.sin(math.radians(-30)))
+    for d in m.report()["directions"]:
+        assert abs(d["unreachable_fraction"] - exact) < 0.01, d
+        assert d["n_facing_away_samples"] == d["n_unreachable_samples"] > 0
+    # the scores are those of the reachable part alone: the same as on the band from 0 to 60 deg
+    upper = ms.reff_maps(ms.Face(builders.sphere_patch(50.0, (0.5, 60.0), 90.0), reversed=True), "bull:D=10,r=2",
+                         directions=[0.0], grid=256)  # fmt: skip
+    a, b = m.report()["directions"][0], upper.report()["directions"][0]
+    assert abs(a["r_eff_mean_mm"] - b["r_eff_mean_mm"]) < 0.02 * b["r_eff_mean_mm"]
+    assert a["r_eff_max_mm"] < 1e3  # no radius from the far side
+
+
+def test_a_concave_section_tighter_than_the_tool_is_unreachable():
+    """A ball R 8 in a trough of radius 6 (feed along the trough): cannot reach; R 5: can, and the step-over
+    on the surface is the circle-circle spacing (arc length), the chord between centres relation (31)."""
+    from machsurf_cad.geometry import builders
+    from machsurf_cad.simulation.scallop import spacing_for_scallop
+
+    arc = builders.circular_arc(6.0, -150.0, -30.0, center=(0.0, 6.0))
+    c0 = ms.BSplineCurve(arc.degree, arc.knots, arc.mults, np.c_[np.zeros(len(arc.poles)), arc.poles], arc.weights)
+    c1 = ms.BSplineCurve(arc.degree, arc.knots, arc.mults, np.c_[np.full(len(arc.poles), 40.0), arc.poles],
+                         arc.weights)  # fmt: skip
+    s = builders.ruled_surface(c0, c1)
+    up = float(ms.local_properties(s, 0.5, 0.5).normal[2]) > 0
+    face = ms.Face(s, name="trough", reversed=not up)
+    m = ms.reff_maps(face, "ball:D=16", directions=[0.0], grid=64, scallop=0.01)
+    d = m.report()["directions"][0]
+    assert d["unreachable_fraction"] == 1.0 and d["r_eff_mean_mm"] is None
+    m = ms.reff_maps(face, "ball:D=10", directions=[0.0], grid=64, scallop=0.01)
+    d = m.report()["directions"][0]
+    assert d["unreachable_fraction"] == 0.0
+    w = float(spacing_for_scallop(0.01, 5.0, -1 / 6.0))
+    # chord between the centres, 1 mm from the trough's axis: 2 (6 - 5) sin(w / (2 * 6))
+    assert abs(d["stepover_surface_mean_mm"] - w) < 1e-9
+    assert abs(d["stepover_mean_mm"] - 2 * 1.0 * math.sin(w / 12.0)) < 1e-9

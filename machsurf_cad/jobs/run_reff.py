@@ -52,12 +52,18 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
         )
         if d.get("n_infinite_r_eff"):
             line += f"; {d['n_infinite_r_eff']} flat-spot sample(s) with infinite R_eff"
+        line += (
+            f"; unreachable {d['unreachable_fraction']:.1%} of the area ({d['n_facing_away_samples']} sample(s) facing "
+            "away from the axis, the rest concave tighter than the tool), left out of these figures"
+        )
         say(line)
         if spec.scallop:
             say(
-                f"    step-over for scallop {spec.scallop:g} mm: torus {_f(d.get('stepover_mean_mm'))} mm, ball "
-                f"{_f(d.get('stepover_ball_mean_mm'))} mm (ratio {_f(d.get('stepover_ratio_mean'), '.3f')}); "
-                f"unreachable {d.get('n_unreachable', 0)} sample(s)"
+                f"    step-over for scallop {spec.scallop:g} mm, between tool centres: torus "
+                f"{_f(d.get('stepover_mean_mm'))} mm, ball {_f(d.get('stepover_ball_mean_mm'))} mm (ratio "
+                f"{_f(d.get('stepover_ratio_mean'), '.3f')}); on the surface between adjacent contacts: torus "
+                f"{_f(d.get('stepover_surface_mean_mm'))} mm (min {_f(d.get('stepover_surface_min_mm'))}), ball "
+                f"{_f(d.get('stepover_surface_ball_mean_mm'))} mm"
             )
     with Staging(out) as st:
         if spec.render:
@@ -71,11 +77,13 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
                     "alpha_deg": d.alpha_deg,
                     "ratio_to_ball": np.nan_to_num(d.r_eff / maps.R_ball, posinf=1e300),
                 }
+                extra["unreachable"] = d.unreachable.astype(np.uint8)
                 if d.stepover is not None:
                     extra.update(
                         {
                             "stepover_mm": np.nan_to_num(d.stepover, nan=-1, posinf=1e300),
                             "stepover_ball_mm": np.nan_to_num(d.stepover_ball, nan=-1, posinf=1e300),
+                            "stepover_surface_mm": np.nan_to_num(d.stepover_surface, nan=-1, posinf=1e300),
                         }
                     )
                 render_scalar_map(
