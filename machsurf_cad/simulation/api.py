@@ -290,7 +290,12 @@ def simulate(
     P, N, F, Q = sample_faces(faces, resolution, max_samples=max_samples)
     t1 = time.perf_counter()
     T, A, _ = motion_poses(toolpath.tip, toolpath.axis, step, float(c.length))
-    out = nbuffer(c, P, N, T, A, depth=depth, stock=stock, progress=progress)
+    rho = smallest_profile_radius(c)
+    smooth = not _has_sharp_corner(c)
+    # how much lower the swept motion can cut than its sampled placements: the sagitta of the smallest
+    # profile radius over a step (no sharp corner), else half a step (a corner sweeping across)
+    margin = step * step / (8 * rho) if smooth else 0.5 * step
+    out = nbuffer(c, P, N, T, A, depth=depth, stock=stock, margin=margin, progress=progress)
     value, clamped = out["t"], out["clamped"]
     t2 = time.perf_counter()
     if not out["reached"].any():
@@ -298,8 +303,6 @@ def simulate(
             f"no contact: no tool placement comes within {stock:g} mm of the {len(faces)} face(s) "
             "(wrong part, faces or tool path?)"
         )
-    rho = smallest_profile_radius(c)
-    smooth = not _has_sharp_corner(c)
     times = {"sampling_s": t1 - t0, "simulation_s": t2 - t1, "total_s": time.perf_counter() - t0}
     return SimulationResult(
         toolpath,

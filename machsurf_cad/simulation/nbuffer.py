@@ -176,30 +176,35 @@ def nbuffer(
     *,
     depth: float,
     stock: float,
+    margin: float,
     progress=None,
     max_steps: int = 60,
 ) -> dict:
     """Entry of every blade into the discrete placements ``(T, A)``, then refined over the motion.
 
+    ``margin`` (mm) bounds how much lower the swept motion can cut than its sampled placements: every
+    placement within it of a sample's best is kept and refined over the motion around it (one per
+    local minimum along the path: the neighbouring passes each get theirs).
+
     Returns a dict of arrays per sample: ``t`` (mm, ``+stock`` where nothing reached), ``reached``,
     ``clamped`` (cut below ``-depth``), ``pose`` (best placement, fractional), and figures
-    ``n_pairs``, ``n_marched``, ``n_unconverged``, ``motion_residual_mm``.
+    ``n_pairs``, ``n_marched``, ``n_refined``, ``n_unconverged``, ``motion_residual_mm``.
     """
     m = P.shape[0]
     best = np.full(m, np.inf)
-    best_pose = np.full(m, -1, int)
     clamped = np.zeros(m, bool)
-    unconv = 0
-    n_pairs = n_marched = 0
+    stats = {"unconv": 0, "marched": 0}
+    records: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    n_pairs = 0
     heights, radii = cover_spheres(cutter)
     n_poses = T.shape[0]
-    # two sweeps: a short reach settles the samples cut close to the nominal (a pose farther than the
+    # two sweeps: a short reach settles the samples cut close to the nominal (a placement farther than the
     # reach cannot beat them), the full reach only the others
     near = min(stock, NEAR_REACH_MM)
     todo = np.arange(m)
     for sweep, reach in enumerate((near, max(depth, stock)) if stock > near else (max(depth, stock),)):
         if sweep:
-            todo = np.flatnonzero(~(best <= near))
+            todo = np.flatnonzero(~(best + margin <= near))
             if todo.size == 0:
                 break
         tree = cKDTree(P[todo])
@@ -210,17 +215,37 @@ def nbuffer(
                 continue
             si = todo[si]
             n_pairs += si.size
-            n_marched, unconv = _settle(
-                cutter, P, N, T, A, si, pi, best, best_pose, clamped, depth, stock, max_steps, n_marched, unconv
-            )
+            _settle(cutter, P, N, T, A, si, pi, best, clamped, depth, stock, margin, max_steps, stats, records)
     reached = np.isfinite(best)
-    pose = best_pose.astype(float)
+    pose = np.full(m, np.nan)
     residual = 0.0
-    # refinement over the continuous motion (not for blades cut below -depth: the value is a bound)
-    idx = np.flatnonzero(reached & ~clamped)
-    if idx.size and n_poses > 1:
-        t_ref, x_ref, residual = _refine_motion(cutter, P[idx], N[idx], T, A, best_pose[idx], best[idx], depth, stock)
-        best[idx], pose[idx] = t_ref, x_ref
+    n_refined = 0
+    if records and n_poses > 1:
+        rs = np.concatenate([r[0] for r in records])
+        rp = np.concatenate([r[1] for r in records])
+        rt = np.concatenate([r[2] for r in records])
+        keep = (rt <= best[rs] + margin) & ~clamped[rs]
+        rs, rp, rt = rs[keep], rp[keep], rt[keep]
+        # one per local minimum along the path: drop a placement whose neighbour on the path cuts deeper
+        o = np.lexsort((rp, rs))
+        rs, rp, rt = rs[o], rp[o], rt[o]
+        same_next = np.zeros(rs.size, bool)
+        same_next[:-1] = (rs[1:] == rs[:-1]) & (rp[1:] == rp[:-1] + 1)
+        lower_next = np.zeros(rs.size, bool)
+        lower_next[:-1] = same_next[:-1] & (rt[1:] < rt[:-1])
+        lower_prev = np.zeros(rs.size, bool)
+        lower_prev[1:] = same_next[:-1] & (rt[:-1] < rt[1:])
+        loc = ~(lower_next | lower_prev)
+        rs, rp, rt = rs[loc], rp[loc], rt[loc]
+        n_refined = int(rs.size)
+        t_ref, x_ref, residual = _refine_motion(cutter, P[rs], N[rs], T, A, rp, rt, depth, stock)
+        o = np.lexsort((t_ref, rs))
+        rs, t_ref, x_ref = rs[o], t_ref[o], x_ref[o]
+        first = np.ones(rs.size, bool)
+        first[1:] = rs[1:] != rs[:-1]
+        better = t_ref[first] < best[rs[first]]
+        best[rs[first][better]] = t_ref[first][better]
+        pose[rs[first]] = x_ref[first]
     if progress is not None:
         progress(1, 1, "simulating the cut")
     t_out = np.where(reached, best, stock)
@@ -230,18 +255,20 @@ def nbuffer(
         "clamped": clamped,
         "pose": pose,
         "n_pairs": int(n_pairs),
-        "n_marched": int(n_marched),
-        "n_unconverged": int(unconv),
+        "n_marched": int(stats["marched"]),
+        "n_refined": n_refined,
+        "n_unconverged": int(stats["unconv"]),
         "motion_residual_mm": float(residual),
     }
 
 
-def _settle(cutter, P, N, T, A, si, pi, best, best_pose, clamped, depth, stock, max_steps, n_marched, unconv):
-    """March the pairs that can still lower their sample's best entry; update it in place."""
+def _settle(cutter, P, N, T, A, si, pi, best, clamped, depth, stock, margin, max_steps, stats, records):
+    """March the pairs that can still come within ``margin`` of their sample's best entry; update the
+    best in place and record every entry that does."""
     g0 = _distance(cutter, P[si], N[si], np.zeros(si.size), T[pi], A[pi])
-    keep = g0 < np.minimum(best[si], stock)
+    keep = g0 < np.minimum(best[si] + margin, stock)
     si, pi, g0 = si[keep], pi[keep], g0[keep]
-    # the most promising pair per sample first, then the others that can still beat it
+    # the most promising pair per sample first, then the others that can still come near it
     order = np.lexsort((g0, si))
     si, pi, g0 = si[order], pi[order], g0[order]
     first = np.ones(si.size, bool)
@@ -249,26 +276,20 @@ def _settle(cutter, P, N, T, A, si, pi, best, best_pose, clamped, depth, stock, 
     for sel in (first, ~first):
         if not sel.any():
             continue
-        a_s, a_p = si[sel], pi[sel]
-        ok = g0[sel] < best[a_s]
-        a_s, a_p = a_s[ok], a_p[ok]
+        a_s, a_p, a_g = si[sel], pi[sel], g0[sel]
+        ok = a_g < best[a_s] + margin
+        a_s, a_p, a_g = a_s[ok], a_p[ok], a_g[ok]
         if a_s.size == 0:
             continue
-        n_marched += a_s.size
+        stats["marched"] += a_s.size
         t, st = march(cutter, P[a_s], N[a_s], T[a_p], A[a_p], -depth, stock, max_steps)
-        unconv += int((st == 3).sum())
-        t = np.where((t < 0) & (g0[sel][ok] > 0), np.inf, t)  # cuts below the nominal only: see the docstring
-        # several pairs of one sample: keep the lowest entry
-        o = np.lexsort((t, a_s))
-        a_s, a_p, t, st = a_s[o], a_p[o], t[o], st[o]
-        u = np.ones(a_s.size, bool)
-        u[1:] = a_s[1:] != a_s[:-1]
-        a_s, a_p, t, st = a_s[u], a_p[u], t[u], st[u]
-        better = t < best[a_s]
-        best[a_s[better]] = t[better]
-        best_pose[a_s[better]] = a_p[better]
-        clamped[a_s[better]] = st[better] == 1
-    return n_marched, unconv
+        stats["unconv"] += int((st == 3).sum())
+        t = np.where((t < 0) & (a_g > 0), np.inf, t)  # cuts below the nominal only: see the docstring
+        fin = np.isfinite(t)
+        records.append((a_s[fin], a_p[fin], t[fin]))
+        np.minimum.at(best, a_s[fin], t[fin])
+        cl = fin & (st == 1)
+        clamped[a_s[cl]] = True
 
 
 def _pose_at(T, A, x):
