@@ -148,6 +148,19 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--toolpath", action="store_true", help="also write the tool path (CSV, APT CLDATA, JSON)")
     m.add_argument("--stepover", type=float, default=2.0, help="distance between passes, mm (default 2)")
     m.add_argument(
+        "--scallop",
+        type=float,
+        default=None,
+        metavar="H",
+        help="instead of --stepover: iso-scallop passes leaving H mm between neighbours (spacing on the surface)",
+    )
+    m.add_argument(
+        "--overrun",
+        type=float,
+        default=None,
+        help="with --scallop: passes run on past the face's edges, mm (default R)",
+    )
+    m.add_argument(
         "--chordal", type=float, default=0.005, help="chordal tolerance of the positions, mm (default 0.005)"
     )
     _gouge(m, "0.01")

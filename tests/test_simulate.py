@@ -318,3 +318,21 @@ def test_path_writing_commands_simulate_what_they_write(tmp_path):
     # d in [0, 3]); the curved face about that, more in the strips along its edges
     assert 0.08 < sim["mean_scallop_mm"] < 0.3 and sim["max_scallop_mm"] > 0.3 and not sim["gouged"], sim
     assert (out / "simulate_map.png").is_file()
+
+
+def test_flat_end_mill_with_lead_on_a_plane_leaves_the_rim_ellipse():
+    """A flat end mill R 5 leaning 5 deg towards the feed: translating along x its rim's shadow across the feed
+    is the half-ellipse z = R sin(lead) (1 - sqrt(1 - y^2 / R^2)); two passes 1.8 mm apart. The entry jumps where
+    the rim passes a sample: the motion is refined by golden-section search."""
+    R, lam, s = 5.0, math.radians(5.0), 1.8
+    a = np.array([math.sin(lam), 0.0, math.cos(lam)])
+    x = np.linspace(-12, 12, 25)
+    tips = [np.stack([x, np.full_like(x, y), np.full_like(x, R * math.sin(lam))], 1) for y in (-s / 2, s / 2)]
+    res = ms.simulate(
+        _plane(1.0, 0.5), _passes(tips, [np.tile(a, (x.size, 1))] * 2, ms.FlatEndMill(10)), resolution=0.02
+    )
+    b = R * math.sin(lam)
+    y = res.points[:, 1]
+    exact = np.minimum(b * (1 - np.sqrt(1 - ((y + s / 2) / R) ** 2)), b * (1 - np.sqrt(1 - ((y - s / 2) / R) ** 2)))
+    assert_close(res.value, exact, 5e-5, "flat end mill's rim ellipse")
+    assert res.motion_bound_smooth_mm is None  # a sharp corner: no smooth bound is claimed

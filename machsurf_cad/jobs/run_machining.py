@@ -97,7 +97,22 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
             from ..machining.toolpath import tool_paths
             from .run_verify import write_checked_toolpath
 
-            tp = tool_paths(ms, stepover=spec.stepover, chordal_tolerance=spec.chordal, clearance=spec.clearance)
+            if spec.scallop is not None:
+                from ..machining.isoscallop import iso_scallop_paths
+
+                tp = iso_scallop_paths(
+                    ms, scallop=spec.scallop, chordal_tolerance=spec.chordal, clearance=spec.clearance,
+                    overrun=spec.overrun,
+                )  # fmt: skip
+                i = tp.info
+                say(
+                    f"iso-scallop passes for {spec.scallop:g} mm: spacing on the surface {i['spacing_min_mm']:.4g}.."
+                    f"{i['spacing_max_mm']:.4g} mm (mean {i['spacing_mean_mm']:.4g}); {i['n_passes_planned']} passes "
+                    f"where a constant spacing keeping the same scallop needs {i['n_passes_constant_spacing']}; "
+                    f"overrun {i['overrun_mm']:g} mm ({i['n_overruns_lifted_or_dropped']} end(s) lifted off the face)"
+                )
+            else:
+                tp = tool_paths(ms, stepover=spec.stepover, chordal_tolerance=spec.chordal, clearance=spec.clearance)
             rep["toolpath"] = tp.report()
             say(
                 f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions ({tp.n_positions} with approach and "

@@ -130,6 +130,8 @@ class MachiningSurfaceJob(_Post, JobSpec):
     toolpath: bool = False
     stepover: float = 2.0
     chordal: float = 0.005
+    scallop: float | None = None
+    overrun: float | None = None
     gouge_tol: float = 0.01
     allow_gouge: bool = False
     trim_gouges: bool = False
@@ -139,6 +141,9 @@ class MachiningSurfaceJob(_Post, JobSpec):
         _one_input(self.part, self.example)
         _choice("axes", self.axes, (3, 5))
         _choice("loops", self.loops, ("error", "flag", "trim"))
+        _positive("scallop (mm)", self.scallop, allow_none=True)
+        if self.overrun is not None and not self.overrun >= 0:
+            raise InputError(f"overrun must be >= 0 mm, got {self.overrun!r}")
         for n in ("tol", "stl_deflection", "stepover", "chordal"):
             _positive(n + " (mm)", getattr(self, n))
         if self.axis is not None and len(self.axis) != 3:

@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from ..cam.chordal import chord_error, douglas_peucker
-from ..cam.toolpath import ToolPath
+from ..cam.toolpath import Move, ToolPath
 from ..effradius import effective_radius
 from ..errors import InputError
 from ..geometry.normals import unit_normals
@@ -30,6 +30,7 @@ from .surfaces import MachiningSurface
 
 _SUBSTEPS = 4
 _N_POINTS = 400
+_STENCIL = 6  # points each side for the pass direction (1.5 % of the pass)
 
 
 def _frame(F, reversed_: bool, uv):
@@ -38,8 +39,13 @@ def _frame(F, reversed_: bool, uv):
     return d, (-n if reversed_ else n)
 
 
-def _tangents(pts):
-    t = np.gradient(pts, axis=0)
+def _tangents(pts, half: int = 1):
+    """Unit tangents of a polyline by central differences over ``half`` points each side (one-sided at the
+    ends): a wider stencil reads the pass's direction, not a kink of one step."""
+    n = pts.shape[0]
+    i = np.arange(n)
+    a, b = np.clip(i - half, 0, n - 1), np.clip(i + half, 0, n - 1)
+    t = pts[b] - pts[a]
     return t / np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
 
 
@@ -133,6 +139,69 @@ def _extend_to_box(uv, bounds):
     return np.concatenate(out)
 
 
+def _offset(ms, F, rev, cur, forward, scallop, bounds):
+    """The next pass from ``cur``: every point moved across the feed by the spacing that leaves ``scallop``
+    (the smaller of the spacings at the start and where it lands). Returns spacing and points."""
+    from ..simulation.scallop import spacing_for_scallop
+
+    u0, u1, v0, v1 = bounds
+    r_eff, kappa, c, _ = cross_feed(ms, cur, _tangents(F.evaluate(cur[:, 0], cur[:, 1]), _STENCIL))
+    c = np.where((_uv_step(F, cur, c) * forward(cur)).sum(axis=1)[:, None] < 0, -c, c)  # towards uncut
+    w = spacing_for_scallop(scallop, r_eff, kappa)
+    w = np.where(np.isinf(r_eff), np.nanmax(np.where(np.isfinite(w), w, np.nan), initial=0.0), w)
+    if np.all(~np.isfinite(w)):
+        raise InputError("no spacing leaves that scallop on this face (concave regions tighter than the tool)")
+    w = np.where(np.isfinite(w), w, np.nanmin(w))
+    nxt = _move_on_surface(F, rev, cur, c, w, bounds)
+
+    probe = np.clip(nxt, [u0, v0], [u1, v1])
+    r2, k2, _, _ = cross_feed(ms, probe, _tangents(F.evaluate(nxt[:, 0], nxt[:, 1]), _STENCIL))
+    w2 = spacing_for_scallop(scallop, r2, k2)
+    w2 = np.where(np.isfinite(w2), w2, w)
+    if np.any(w2 < w):
+        w = np.minimum(w, w2)
+        nxt = _move_on_surface(F, rev, cur, c, w, bounds)
+    return w, nxt
+
+
+def _front(t_pts, lvl_pts, grid, sign: float) -> np.ndarray:
+    """The next front on the pass grid: the landed polyline ``(t, level)`` read as ``level = f(t)``, taking
+    where it folds over itself the point that advanced least (so no spacing exceeds its own); ends held."""
+    out = np.full(grid.size, np.inf if sign > 0 else -np.inf)
+    a_t, b_t = t_pts[:-1], t_pts[1:]
+    a_l, b_l = lvl_pts[:-1], lvl_pts[1:]
+    lo, hi = np.minimum(a_t, b_t), np.maximum(a_t, b_t)
+    i0 = np.searchsorted(grid, lo, side="left")
+    i1 = np.searchsorted(grid, hi, side="right")
+    for s_ in np.flatnonzero(i1 > i0):
+        g = grid[i0[s_] : i1[s_]]
+        span = b_t[s_] - a_t[s_]
+        f = (g - a_t[s_]) / span if abs(span) > 0 else np.zeros_like(g)
+        val = a_l[s_] + f * (b_l[s_] - a_l[s_])
+        seg = out[i0[s_] : i1[s_]]
+        out[i0[s_] : i1[s_]] = np.minimum(seg, val) if sign > 0 else np.maximum(seg, val)
+    missing = ~np.isfinite(out)
+    if missing.all():
+        return np.interp(grid, np.sort(t_pts), lvl_pts[np.argsort(t_pts)])
+    if missing.any():  # beyond the landed points' range: the nearest value
+        ok = np.flatnonzero(~missing)
+        out[missing] = np.interp(grid[missing], grid[ok], out[ok])
+    return out
+
+
+def _plane_start(F, feed: PlanesFeed, bounds):
+    """For parallel planes: the passes step along the parameter across which the planes' level grows most
+    (on average), from the edge where it is lowest. Returns ``(k, sign)``: k = 0 steps in u, 1 in v."""
+    N = np.asarray(feed.plane_normal)
+    u0, u1, v0, v1 = bounds
+    d = F.derivatives_grid(np.linspace(u0, u1, 33), np.linspace(v0, v1, 33), 1)
+    gu = float(np.mean(d.su @ N)) * (u1 - u0)
+    gv = float(np.mean(d.sv @ N)) * (v1 - v0)
+    if abs(gu) < 1e-12 and abs(gv) < 1e-12:
+        raise InputError("the guiding planes are parallel to the face: choose another plane direction")
+    return (0, 1.0 if gu > 0 else -1.0) if abs(gu) >= abs(gv) else (1, 1.0 if gv > 0 else -1.0)
+
+
 def _to_box(pts, run, bounds):
     """The inside stretch ``pts[run]`` closed at the box: where the offset curve leaves the box, the crossing
     (interpolated between the last point in and the first out); where it stops short, extended along its end."""
@@ -219,7 +288,6 @@ def iso_scallop_paths(
         raise InputError(
             f"scallop height {scallop:g} mm is not smaller than the tool radius {em.R:g} mm: no spacing leaves it"
         )
-    from ..simulation.scallop import spacing_for_scallop
     from .toolpath import _positions
 
     feed = strategy if strategy is not None else getattr(ms.strategy, "feed", None)
@@ -229,92 +297,84 @@ def iso_scallop_paths(
     rev = ms.nominal.reversed
     bounds = ms.nominal.uv_bounds
     u0, u1, v0, v1 = bounds
-    s = np.linspace(0.0, 1.0, _N_POINTS)
-    if isinstance(feed, IsoFeed) and feed.direction == "u":
-        first, far = (
-            np.stack([u0 + s * (u1 - u0), np.full_like(s, v0)], 1),
-            np.stack([u0 + s * (u1 - u0), np.full_like(s, v1)], 1),
-        )
-        forward = lambda uv: np.tile([0.0, 1.0], (uv.shape[0], 1))  # noqa: E731
-    elif isinstance(feed, IsoFeed):
-        first, far = (
-            np.stack([np.full_like(s, u0), v0 + s * (v1 - v0)], 1),
-            np.stack([np.full_like(s, u1), v0 + s * (v1 - v0)], 1),
-        )
-        forward = lambda uv: np.tile([1.0, 0.0], (uv.shape[0], 1))  # noqa: E731
+    # the passes are fronts level = f(t): "level" the parameter the passes step along (index k), t the other
+    if isinstance(feed, IsoFeed):
+        k, sign = (1, 1.0) if feed.direction == "u" else (0, 1.0)
     elif isinstance(feed, PlanesFeed):
-        first, far, forward = _plane_ends(F, feed, bounds, ms.nominal)
+        k, sign = _plane_start(F, feed, bounds)
     else:
         raise InputError("iso-scallop paths start from a planes or iso-parametric strategy")
-    passes_uv = [first]
+    lo_k, hi_k = (bounds[2 * k], bounds[2 * k + 1])
+    t_lo, t_hi = (bounds[2 * (1 - k)], bounds[2 * (1 - k) + 1])
+    grid = np.linspace(t_lo, t_hi, _N_POINTS)
+    start, end = (lo_k, hi_k) if sign > 0 else (hi_k, lo_k)
+
+    def as_uv(level):
+        uv = np.empty((grid.size, 2))
+        uv[:, k], uv[:, 1 - k] = level, grid
+        return uv
+
+    fwd = np.zeros(2)
+    fwd[k] = sign
+    level = np.full(grid.size, start)
+    passes_uv = [as_uv(level)]
     spacings: list[np.ndarray] = []
-    cur = first
     while True:
         if len(passes_uv) > max_passes:
             raise InputError(f"scallop {scallop:g} mm needs more than {max_passes} passes on this face")
-        p3 = F.evaluate(cur[:, 0], cur[:, 1])
-        r_eff, kappa, c, _ = cross_feed(ms, cur, _tangents(p3))
-        # c towards the unmachined side
-        c = np.where((_uv_step(F, cur, c) * forward(cur)).sum(axis=1)[:, None] < 0, -c, c)
-        w = spacing_for_scallop(scallop, r_eff, kappa)
-        w = np.where(np.isinf(r_eff), np.nanmax(np.where(np.isfinite(w), w, np.nan), initial=0.0), w)
-        if np.all(~np.isfinite(w)):
-            raise InputError("no spacing leaves that scallop on this face (concave regions tighter than the tool)")
-        w = np.where(np.isfinite(w), w, np.nanmin(w))
-        nxt = _move_on_surface(F, rev, cur, c, w, bounds)
-        # the spacing where it lands; keep the smaller and move again from the same start
-        inside_box = (nxt[:, 0] >= u0) & (nxt[:, 0] <= u1) & (nxt[:, 1] >= v0) & (nxt[:, 1] <= v1)
-        if inside_box.any():
-            probe = np.clip(nxt, [u0, v0], [u1, v1])
-            r2, k2, _, _ = cross_feed(ms, probe, _tangents(F.evaluate(nxt[:, 0], nxt[:, 1])))
-            w2 = spacing_for_scallop(scallop, r2, k2)
-            w2 = np.where(np.isfinite(w2), w2, w)
-            if np.any(w2 < w):
-                w = np.minimum(w, w2)
-                nxt = _move_on_surface(F, rev, cur, c, w, bounds)
-                inside_box = (nxt[:, 0] >= u0) & (nxt[:, 0] <= u1) & (nxt[:, 1] >= v0) & (nxt[:, 1] <= v1)
-        spacings.append(w[inside_box] if inside_box.any() else w)
-        if not inside_box.any():
+        was_in = sign * (end - level) > 0
+        cur = as_uv(np.clip(level, min(lo_k, hi_k), max(lo_k, hi_k)))  # points past the far edge stay put
+        w, nxt = _offset(ms, F, rev, cur, lambda uv: np.tile(fwd, (uv.shape[0], 1)), scallop, bounds)
+        new = _front(nxt[:, 1 - k], nxt[:, k], grid, sign)
+        # every point advances (never back)
+        new = np.where(sign * (new - level) > 0, new, level + sign * 1e-9 * abs(hi_k - lo_k))
+        spacings.append(w[was_in])
+        level = np.where(was_in, new, level)
+        inside = sign * (end - level) > 0
+        if not inside.any():
             break
-        # extend the inside stretch to the box and resample
-        run = max(_runs(inside_box), key=len)
-        piece = _to_box(nxt, run, bounds) if run.size >= 2 else nxt[run]
-        piece = np.clip(piece, [u0, v0], [u1, v1])
-        if piece.shape[0] < 2:
-            break
-        cur = _resample(piece, F, _N_POINTS)
-        passes_uv.append(cur)
-    passes_uv.append(far)
+        # the stretch past the far edge runs along that edge (the last pass cuts there anyway): every pass
+        # ends on the parameter box, where it can run on past the face
+        passes_uv.append(as_uv(np.clip(level, min(lo_k, hi_k), max(lo_k, hi_k))))
+    last = as_uv(np.full(grid.size, end))
+    passes_uv.append(last)
     # positions along each pass, inside the trimmed face, sampled within the chordal tolerance
     over = em.R if overrun is None else float(overrun)
     if not (math.isfinite(over) and over >= 0):
         raise InputError(f"overrun must be >= 0 mm, got {overrun!r}")
-    tips, axes, ccs, extras = [], [], [], []
+    tips, axes, ccs, extras, runs_over = [], [], [], [], []
     chord_err = axis_err = 0.0
-    for k, uv in enumerate(passes_uv):
-        dense = _resample(uv, F, 4 * _N_POINTS)
-        keep = ms.s1.contains_uv(dense[:, 0], dense[:, 1]) if ms.s1.is_trimmed else np.ones(len(dense), bool)
-        for run in _runs(keep):
-            if run.size < 2:
+    for lvl, uv in enumerate(passes_uv):
+        for fin in _runs(np.isfinite(uv).all(axis=1)):
+            if fin.size < 2:
                 continue
-            seg = dense[run]
-            p = _positions(ms, seg)
-            six = np.concatenate([p["tip"], p["tip"] + ms.cutter.D * p["axis"]], axis=1)
-            idx = douglas_peucker(six, chordal_tolerance)
-            chord_err = max(chord_err, chord_error(six, idx))
-            axis_err = max(axis_err, p["axis_err"])
-            pos = {"tip": p["tip"][idx], "axis": p["axis"][idx], "cc": p["cc"][idx], "uv": seg[idx],
-                   "K": p["k"][idx], "CL": p["cl"][idx]}  # fmt: skip
-            if over > 0:
-                pos = _overrun(pos, over)
-            if zigzag and len(tips) % 2 == 1:
-                pos = {key: val[::-1] for key, val in pos.items()}
-            tips.append(pos["tip"])
-            axes.append(pos["axis"])
-            ccs.append(pos["cc"])
-            extras.append(
-                {"uv": pos["uv"], "K": pos["K"], "CL": pos["CL"], "level": np.full(pos["tip"].shape[0], float(k))}
-            )
+            dense = _resample(uv[fin], F, 4 * _N_POINTS)
+            keep = ms.s1.contains_uv(dense[:, 0], dense[:, 1]) if ms.s1.is_trimmed else np.ones(len(dense), bool)
+            for run in _runs(keep):
+                if run.size < 2:
+                    continue
+                seg, flag = _extend_past_edges(dense[run], F, bounds, over) if over > 0 else (dense[run], None)
+                p = _positions(ms, seg)
+                six = np.concatenate([p["tip"], p["tip"] + ms.cutter.D * p["axis"]], axis=1)
+                idx = douglas_peucker(six, chordal_tolerance)
+                if flag is not None:  # where the run leaves the face stays, so an overrun can be cut off there
+                    edge = np.flatnonzero(np.diff(flag.astype(int)) != 0)
+                    idx = np.unique(np.concatenate([idx, edge, edge + 1]))
+                chord_err = max(chord_err, chord_error(six, idx))
+                axis_err = max(axis_err, p["axis_err"])
+                off = flag[idx] if flag is not None else np.zeros(idx.size, bool)
+                cc = np.where(off[:, None], np.nan, p["cc"][idx])  # no contact with the face beyond its edge
+                pos = {"tip": p["tip"][idx], "axis": p["axis"][idx], "cc": cc, "uv": seg[idx], "K": p["k"][idx],
+                       "CL": p["cl"][idx], "overrun": off, "level": np.full(idx.size, float(lvl))}  # fmt: skip
+                if zigzag and len(runs_over) % 2 == 1:
+                    pos = {key: val[::-1] for key, val in pos.items()}
+                runs_over.append(pos)
+    dropped = _drop_gouging_overruns(ms, runs_over) if over > 0 else 0
+    for pos in runs_over:
+        tips.append(pos["tip"])
+        axes.append(pos["axis"])
+        ccs.append(pos["cc"])
+        extras.append({"uv": pos["uv"], "K": pos["K"], "CL": pos["CL"], "level": pos["level"]})
     if not tips:
         raise InputError("no iso-scallop pass crosses the face")
     w_all = np.concatenate(spacings)
@@ -333,54 +393,74 @@ def iso_scallop_paths(
         "chordal_error_measured_mm": chord_err,
         "axis_error_deg_measured": axis_err if ms.axes == 5 else None,
         "n_cut_positions": int(sum(t.shape[0] for t in tips)),
+        "overrun_mm": over,
+        "n_overruns_dropped_for_gouging": dropped,
     }
     return ToolPath.from_passes(
         tips, axes, cc=ccs, extras=extras, clearance=clearance, cutter=ms.cutter, name="iso_scallop", info=info
     )
 
 
-def _overrun(pos: dict, length: float) -> dict:
-    """One more position at each end, ``length`` mm on along the end chord (same axis; no contact point)."""
-    tip = pos["tip"]
-    if tip.shape[0] < 2:
-        return pos
-    out = {}
-    d0 = tip[0] - tip[1]
-    d1 = tip[-1] - tip[-2]
-    d0 = d0 / max(np.linalg.norm(d0), 1e-300)
-    d1 = d1 / max(np.linalg.norm(d1), 1e-300)
-    for key, val in pos.items():
-        if key == "tip":
-            first, last = tip[0] + length * d0, tip[-1] + length * d1
-        elif key == "axis":
-            first, last = val[0], val[-1]
-        else:
-            first, last = np.full(val.shape[1], np.nan), np.full(val.shape[1], np.nan)
-        out[key] = np.concatenate([first[None], val, last[None]])
-    return out
-
-
-def _plane_ends(F, feed: PlanesFeed, bounds, face):
-    """First and last plane sections (lowest and highest level on the face) and the forward direction."""
-    import contourpy
-
-    N = np.asarray(feed.plane_normal)
+def _extend_past_edges(seg, F, bounds, length: float):
+    """The run ``seg`` (uv) continued beyond the parameter box by ``length`` mm where it ends on the box's
+    edge, along its end direction in uv on the extrapolated surface (the tool stays on the face's smooth
+    continuation). Returns the points and a flag per point: beyond the edge."""
     u0, u1, v0, v1 = bounds
-    us, vs = np.linspace(u0, u1, 301), np.linspace(v0, v1, 301)
-    g = np.einsum("ijk,k->ij", F.evaluate_grid(us, vs), N)
-    lo, hi = float(g.min()), float(g.max())
-    eps = 1e-6 * max(1.0, hi - lo)
-    gen = contourpy.contour_generator(x=vs, y=us, z=g, line_type="Separate")
+    tol = 1e-9 * max(u1 - u0, v1 - v0)
 
-    def section(level):
-        lines = [ln for ln in gen.lines(level) if len(ln) >= 2]
-        if not lines:
-            raise InputError("the guiding planes do not cross the face")
-        ln = max(lines, key=len)
-        return _resample(np.stack([ln[:, 1], ln[:, 0]], 1), F, _N_POINTS)
+    def on_edge(q):
+        return min(abs(q[0] - u0), abs(q[0] - u1), abs(q[1] - v0), abs(q[1] - v1)) <= tol
 
-    def forward(uv):
-        d = F.derivatives(uv[:, 0], uv[:, 1], 1)
-        return np.stack([d.su @ N, d.sv @ N], 1)
+    parts, flags = [seg], [np.zeros(seg.shape[0], bool)]
+    for end, prev, where in ((seg[0], seg[1], 0), (seg[-1], seg[-2], 1)):
+        if not on_edge(end):
+            continue
+        dvec = end - prev
+        p0, p1 = F.evaluate(np.array([prev[0], end[0]]), np.array([prev[1], end[1]]))
+        speed = np.linalg.norm(p1 - p0) / max(np.hypot(*dvec), 1e-300)  # mm per unit of uv along the end
+        if not np.isfinite(speed) or speed <= 0:
+            continue
+        dvec = dvec / np.hypot(*dvec)
+        ext = end + np.outer(np.linspace(0.0, length / speed, 17)[1:], dvec)
+        if where == 0:
+            parts.insert(0, ext[::-1])
+            flags.insert(0, np.ones(ext.shape[0], bool))
+        else:
+            parts.append(ext)
+            flags.append(np.ones(ext.shape[0], bool))
+    return np.concatenate(parts), np.concatenate(flags)
 
-    return section(lo + eps), section(hi - eps), forward
+
+def _drop_gouging_overruns(ms: MachiningSurface, runs: list) -> int:
+    """Overruns follow the face's extrapolation; one that still cuts into the face (checked by the tool-body
+    check on the exact face, motion sampled every 0.25 mm) is cut off at the face's edge. Returns how many."""
+    from ..gougecheck import verify
+
+    stretches = []  # (run, slice of the overrun with the edge position)
+    for i, pos in enumerate(runs):
+        off = pos["overrun"]
+        for rr in _runs(off):
+            lo, hi = max(rr[0] - 1, 0), min(rr[-1] + 1, off.size - 1)
+            stretches.append((i, lo, hi, rr))
+    if not stretches:
+        return 0
+    chk = ToolPath.from_passes(
+        [runs[i]["tip"][lo : hi + 1] for i, lo, hi, _ in stretches],
+        [runs[i]["axis"][lo : hi + 1] for i, lo, hi, _ in stretches],
+        cutter=ms.cutter,
+        clearance=1.0,
+    )
+    res = verify(ms.nominal, chk, tolerance=1e-3, step_mm=0.25, step_deg=0.5, spacing_mm=0.5)
+    depth = np.maximum(0.0, -np.asarray(res.cut_distance))
+    bad: dict[int, list] = {}
+    n_bad = 0
+    for k, (i, _lo, _hi, rr) in enumerate(stretches):
+        sel = (chk.pass_index == k) & (chk.move == Move.CUT)
+        if sel.any() and depth[sel].max() > 1e-4:
+            bad.setdefault(i, []).extend(rr.tolist())
+            n_bad += 1
+    for i, idx in bad.items():
+        keep = np.ones(runs[i]["tip"].shape[0], bool)
+        keep[idx] = False
+        runs[i] = {key: val[keep] for key, val in runs[i].items()}
+    return n_bad

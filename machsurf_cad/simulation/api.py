@@ -295,7 +295,7 @@ def simulate(
     # how much lower the swept motion can cut than its sampled placements: the sagitta of the smallest
     # profile radius over a step (no sharp corner), else half a step (a corner sweeping across)
     margin = step * step / (8 * rho) if smooth else 0.5 * step
-    out = nbuffer(c, P, N, T, A, depth=depth, stock=stock, margin=margin, progress=progress)
+    out = nbuffer(c, P, N, T, A, depth=depth, stock=stock, margin=margin, sharp=not smooth, progress=progress)
     value, clamped = out["t"], out["clamped"]
     t2 = time.perf_counter()
     if not out["reached"].any():

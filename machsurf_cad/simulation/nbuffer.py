@@ -41,6 +41,8 @@ from scipy.spatial import cKDTree
 from ..errors import InputError
 
 _CONVERGED_MM = 1e-7
+GOLDEN_ITERATIONS = 16
+"""Golden-section steps over the motion for profiles with a sharp corner (bracket 2 placements x 0.618^16)."""
 REFINE_ROUNDS = 4
 """Rounds of parabolic interpolation over the motion (the change made by the last one is reported)."""
 NEAR_REACH_MM = 0.1
@@ -163,7 +165,10 @@ def candidate_pairs(tree: cKDTree, T, A, heights, radii, reach: float, chunk: in
             continue
         samp = np.concatenate([np.asarray(h, int) for h in hits if h])
         pose = np.repeat(np.arange(s, e).repeat(len(heights)), lens)
-        key = np.unique(samp.astype(np.int64) * n + pose)
+        key = samp.astype(np.int64) * n + pose
+        if len(heights) > 1:  # one placement's slabs may find a sample twice
+            key.sort()
+            key = key[np.r_[True, key[1:] != key[:-1]]]
         yield s, e, key // n, key % n
 
 
@@ -177,11 +182,13 @@ def nbuffer(
     depth: float,
     stock: float,
     margin: float,
+    sharp: bool = False,
     progress=None,
     max_steps: int = 60,
 ) -> dict:
     """Entry of every blade into the discrete placements ``(T, A)``, then refined over the motion.
 
+    ``sharp``: the profile has a sharp corner (golden-section refinement instead of parabolic).
     ``margin`` (mm) bounds how much lower the swept motion can cut than its sampled placements: every
     placement within it of a sample's best is kept and refined over the motion around it (one per
     local minimum along the path: the neighbouring passes each get theirs).
@@ -238,7 +245,8 @@ def nbuffer(
         loc = ~(lower_next | lower_prev)
         rs, rp, rt = rs[loc], rp[loc], rt[loc]
         n_refined = int(rs.size)
-        t_ref, x_ref, residual = _refine_motion(cutter, P[rs], N[rs], T, A, rp, rt, depth, stock)
+        refine = _refine_golden if sharp else _refine_motion
+        t_ref, x_ref, residual = refine(cutter, P[rs], N[rs], T, A, rp, rt, depth, stock)
         o = np.lexsort((t_ref, rs))
         rs, t_ref, x_ref = rs[o], t_ref[o], x_ref[o]
         first = np.ones(rs.size, bool)
@@ -265,8 +273,17 @@ def nbuffer(
 def _settle(cutter, P, N, T, A, si, pi, best, clamped, depth, stock, margin, max_steps, stats, records):
     """March the pairs that can still come within ``margin`` of their sample's best entry; update the
     best in place and record every entry that does."""
-    g0 = _distance(cutter, P[si], N[si], np.zeros(si.size), T[pi], A[pi])
-    keep = g0 < np.minimum(best[si] + margin, stock)
+    # a cheap lower bound of the distance first: below the tip plane, beside the widest radius, above the top
+    limit = np.minimum(best[si] + margin, stock)
+    rel = P[si] - T[pi]
+    z = np.einsum("ij,ij->i", rel, A[pi])
+    rho = np.sqrt(np.maximum(np.einsum("ij,ij->i", rel, rel) - z * z, 0.0))
+    r_max, top = _extent(cutter)
+    lower = np.maximum.reduce([-z, rho - r_max, z - top])
+    near = lower < limit
+    si, pi, limit = si[near], pi[near], limit[near]
+    g0 = cutter.cutting_distance_rz(rho[near], z[near])
+    keep = g0 < limit
     si, pi, g0 = si[keep], pi[keep], g0[keep]
     # the most promising pair per sample first, then the others that can still come near it
     order = np.lexsort((g0, si))
@@ -292,6 +309,12 @@ def _settle(cutter, P, N, T, A, si, pi, best, clamped, depth, stock, margin, max
         clamped[a_s[cl]] = True
 
 
+def _extent(cutter) -> tuple[float, float]:
+    """Widest radius and height of the cutting part (mm)."""
+    pts = np.concatenate([seg.points(64) for seg in cutter._outline()])
+    return float(pts[:, 0].max()) + 1e-9, float(pts[:, 1].max()) + 1e-9
+
+
 def _pose_at(T, A, x):
     j = np.clip(np.floor(x).astype(int), 0, T.shape[0] - 2)
     f = (x - j)[:, None]
@@ -314,6 +337,42 @@ def _entry_at(cutter, P, N, T, A, x, t_hint, depth, stock):
         g0 = _distance(cutter, P[below], N[below], np.zeros(int(below.sum())), tip[below], a[below])
         t[np.flatnonzero(below)[g0 > 0]] = np.inf
     return np.where(np.isfinite(t), t, np.inf)
+
+
+def _refine_golden(cutter, P, N, T, A, k, t_k, depth, stock, iterations: int = GOLDEN_ITERATIONS):
+    """Golden-section search of the entry over the placement index in ``[k - 1, k + 1]``: for profiles with
+    a sharp corner, whose entry jumps where the corner passes (no parabola fits there; a search that
+    keeps the lower side of every comparison still closes on the lowest value). The residual reported
+    is the largest gap between the lower of the two last inner values and the best value found."""
+    n = T.shape[0]
+    g = (math.sqrt(5.0) - 1.0) / 2.0
+    a = np.maximum(k - 1.0, 0.0)
+    b = np.minimum(k + 1.0, n - 1.0)
+    x1, x2 = b - g * (b - a), a + g * (b - a)
+    f1 = _entry_at(cutter, P, N, T, A, x1, t_k, depth, stock)
+    f2 = _entry_at(cutter, P, N, T, A, x2, t_k, depth, stock)
+    best_f, best_x = t_k.copy(), k.astype(float)
+    for _ in range(iterations):
+        left = f1 <= f2  # the lowest value lies in [a, x2]
+        b = np.where(left, x2, b)
+        a = np.where(left, a, x1)
+        nx1 = np.where(left, b - g * (b - a), x2)
+        nx2 = np.where(left, x1, a + g * (b - a))
+        nf1 = np.where(left, np.nan, f2)
+        nf2 = np.where(left, f1, np.nan)
+        probe = np.where(left, nx1, nx2)
+        fp = _entry_at(cutter, P, N, T, A, probe, np.minimum(best_f, t_k), depth, stock)
+        f1 = np.where(left, fp, nf1)
+        f2 = np.where(left, nf2, fp)
+        x1, x2 = nx1, nx2
+        for f_, x_ in ((f1, x1), (f2, x2)):
+            better = f_ < best_f
+            best_f = np.where(better, f_, best_f)
+            best_x = np.where(better, x_, best_x)
+    inner = np.fmin(f1, f2)
+    fin = np.isfinite(inner)
+    residual = float((inner - best_f)[fin].max()) if fin.any() else 0.0
+    return best_f, best_x, residual
 
 
 def _refine_motion(cutter, P, N, T, A, k, t_k, depth, stock):
