@@ -10,7 +10,16 @@ import json
 import platform
 import sys
 
-from . import bench_envelope, bench_eval, bench_flank, bench_offset, bench_reff, bench_step, bench_verify
+from . import (
+    bench_envelope,
+    bench_eval,
+    bench_flank,
+    bench_offset,
+    bench_reff,
+    bench_simulate,
+    bench_step,
+    bench_verify,
+)
 
 
 def main(argv=None) -> int:
@@ -39,6 +48,12 @@ def main(argv=None) -> int:
     for row in bench_step.step_rows(quick=args.quick):
         rows.append(row)
         _print_row(row, header=False)
+    for row in bench_simulate.simulate_rows(quick=args.quick):
+        rows.append(row)
+        _print_row(row, header=False)
+    print("* brute force on a random subset of the finest samples, scaled to all samples")
+    iso_rows = bench_simulate.isoscallop_rows(quick=args.quick)
+    bench_simulate.print_iso(iso_rows)
     offset_rows = bench_offset.offset_fit_rows(quick=args.quick)
     bench_offset.print_rows(offset_rows)
     if args.json:
@@ -49,6 +64,7 @@ def main(argv=None) -> int:
                     "machine": platform.machine(),
                     "rows": rows,
                     "offset_fit": offset_rows,
+                    "iso_scallop": iso_rows,
                 },
                 fh,
                 indent=2,

@@ -342,7 +342,11 @@ def iso_scallop_paths(
     over = em.R if overrun is None else float(overrun)
     if not (math.isfinite(over) and over >= 0):
         raise InputError(f"overrun must be >= 0 mm, got {overrun!r}")
-    tips, axes, ccs, extras, runs_over = [], [], [], [], []
+    tips: list = []
+    axes: list = []
+    ccs: list = []
+    extras: list = []
+    runs_over: list[dict] = []
     chord_err = axis_err = 0.0
     for lvl, uv in enumerate(passes_uv):
         for fin in _runs(np.isfinite(uv).all(axis=1)):

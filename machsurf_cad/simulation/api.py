@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -32,7 +33,7 @@ class SimulationResult(Result):
     trimmed face, for maps."""
 
     toolpath: ToolPath
-    cutter: object
+    cutter: Any
     points: np.ndarray
     normals: np.ndarray
     face: np.ndarray
