@@ -263,11 +263,11 @@ def simulate(
 
     >>> import numpy as np
     >>> from machsurf_cad import BallEndMill, ToolPath, simulate
-    >>> from machsurf_cad.geometry.builders import plane_surface
+    >>> from machsurf_cad.geometry.builders import plane_patch
     >>> x = np.linspace(-3, 3, 31)
     >>> tips = [np.stack([x, np.full_like(x, y), np.zeros_like(x)], 1) for y in (-1.0, 1.0)]
     >>> tp = ToolPath.from_passes(tips, [np.tile([0.0, 0, 1], (31, 1))] * 2, cutter=BallEndMill(10))
-    >>> res = simulate(plane_surface((-1, 1, -1.0, 1.0)), tp, resolution=0.05)
+    >>> res = simulate(plane_patch((-1, -1, 0), (2, 0, 0), (0, 2, 0)), tp, resolution=0.05)
     >>> round(res.max_scallop, 4), round(5 - (25 - 1) ** 0.5, 4)
     (0.101, 0.101)
     """
