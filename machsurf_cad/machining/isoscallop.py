@@ -148,10 +148,15 @@ def _offset(ms, F, rev, cur, forward, scallop, bounds):
     r_eff, kappa, c, _ = cross_feed(ms, cur, _tangents(F.evaluate(cur[:, 0], cur[:, 1]), _STENCIL))
     c = np.where((_uv_step(F, cur, c) * forward(cur)).sum(axis=1)[:, None] < 0, -c, c)  # towards uncut
     w = spacing_for_scallop(scallop, r_eff, kappa)
-    w = np.where(np.isinf(r_eff), np.nanmax(np.where(np.isfinite(w), w, np.nan), initial=0.0), w)
-    if np.all(~np.isfinite(w)):
-        raise InputError("no spacing leaves that scallop on this face (concave regions tighter than the tool)")
-    w = np.where(np.isfinite(w), w, np.nanmin(w))
+    good = np.isfinite(w) & (w > 0)
+    if not good.any():
+        raise InputError(
+            "no spacing leaves that scallop on this pass (flat spots with an infinite effective radius, or concave "
+            "regions tighter than the tool)"
+        )
+    # an infinite effective radius (a flat spot) allows any spacing: the largest of the pass; a concave region
+    # tighter than the tool none: the smallest
+    w = np.where(np.isinf(r_eff), w[good].max(), np.where(good, w, w[good].min()))
     nxt = _move_on_surface(F, rev, cur, c, w, bounds)
 
     probe = np.clip(nxt, [u0, v0], [u1, v1])
