@@ -1,17 +1,20 @@
 """Iso-scallop tool paths: passes spaced on the surface so that the predicted scallop is ``h`` (mm, degrees).
 
-The first pass runs along the face's boundary where the strategy's passes start (the iso-line
-``v = v0`` for a feed along u, ``u = u0`` for a feed along v, the lowest plane section for parallel
-planes). Each next pass is the previous pass's contact curve offset **on the surface** by the local
-spacing ``w``: at every contact point, across the feed (``c = +-(n x f)``, ``f`` the pass's tangent),
-the tool's effective radius in that section (relation (30) in the tool frame: the angle ``S``
-between the axis and the normal, ``alpha`` between the steepest slope and the feed; the ball's
-radius for a ball) and the surface's normal curvature across the feed give ``w`` by the
-circle-circle construction (:func:`~machsurf_cad.simulation.scallop.spacing_for_scallop`). The point
-is moved by ``w`` along ``c`` on the surface (in four steps, re-projected on the tangent plane), and
-``w`` is re-evaluated where it lands: the smaller of the two is kept, so that both passes' geometry
-respects ``h``. The offset curve is extended to the domain's edges, clipped to the trimmed face and
-resampled; passes end when an offset curve leaves the face, and a last pass runs along the far edge.
+The passes are fronts over the face's parameter box: ``level = f(t)`` on a fixed grid of the parameter
+the passes run along (``v`` stepping in ``u`` or the reverse: the strategy's iso direction, or for
+parallel planes the parameter across which their level grows most). The first pass runs along the
+box's edge where the strategy starts. Each next pass is the previous pass's contact curve offset **on
+the surface** by the local spacing ``w``: at every contact point, across the pass (``c = +-(n x f)``,
+``f`` the pass's direction read over a few points), the tool's effective radius in that section
+(relation (30) in the tool frame: the angle ``S`` between the axis and the normal, ``alpha`` between
+the steepest slope and the pass; the ball's radius for a ball) and the surface's normal curvature across
+the pass give ``w`` by the circle-circle construction
+(:func:`~machsurf_cad.simulation.scallop.spacing_for_scallop`). The point is moved by ``w`` along ``c`` on
+the surface (four steps, re-projected on the tangent plane), ``w`` is evaluated again where it lands and
+the smaller of the two kept. Where the moved points fold over each other the front keeps the least
+advance (no spacing exceeds its own). Passes end when the front has crossed the far edge, where a last
+pass runs; positions are clipped to the trimmed face, and each pass runs on past the face's edge along
+the face's smooth extrapolation (``overrun``).
 """
 
 from __future__ import annotations
@@ -115,30 +118,6 @@ def _resample(uv, F, n_points: int):
     return np.stack([np.interp(t, s, uv[:, 0]), np.interp(t, s, uv[:, 1])], 1)
 
 
-def _extend_to_box(uv, bounds):
-    """Extend both ends along their end tangents (in uv) to the parameter box."""
-    u0, u1, v0, v1 = bounds
-    out = [uv]
-    for end, nxt, where in ((uv[0], uv[1], 0), (uv[-1], uv[-2], 1)):
-        dvec = end - nxt
-        nrm = np.hypot(*dvec)
-        if nrm < 1e-15:
-            continue
-        dvec = dvec / nrm
-        ts = []
-        for k, (lo, hi) in enumerate(((u0, u1), (v0, v1))):
-            if abs(dvec[k]) > 1e-15:
-                for b in (lo, hi):
-                    t = (b - end[k]) / dvec[k]
-                    if t > 0:
-                        ts.append(t)
-        if ts:
-            t = min(ts)
-            new = (end + t * dvec)[None]
-            out = [new, *out] if where == 0 else [*out, new]
-    return np.concatenate(out)
-
-
 def _offset(ms, F, rev, cur, forward, scallop, bounds):
     """The next pass from ``cur``: every point moved across the feed by the spacing that leaves ``scallop``
     (the smaller of the spacings at the start and where it lands). Returns spacing and points."""
@@ -205,36 +184,6 @@ def _plane_start(F, feed: PlanesFeed, bounds):
     if abs(gu) < 1e-12 and abs(gv) < 1e-12:
         raise InputError("the guiding planes are parallel to the face: choose another plane direction")
     return (0, 1.0 if gu > 0 else -1.0) if abs(gu) >= abs(gv) else (1, 1.0 if gv > 0 else -1.0)
-
-
-def _to_box(pts, run, bounds):
-    """The inside stretch ``pts[run]`` closed at the box: where the offset curve leaves the box, the crossing
-    (interpolated between the last point in and the first out); where it stops short, extended along its end."""
-    u0, u1, v0, v1 = bounds
-    piece = pts[run]
-    ends = []
-    for i_in, i_out in ((run[0], run[0] - 1), (run[-1], run[-1] + 1)):
-        if 0 <= i_out < pts.shape[0]:
-            a, b = pts[i_in], pts[i_out]
-            t = 1.0
-            for k, (lo, hi) in enumerate(((u0, u1), (v0, v1))):
-                if b[k] < lo:
-                    t = min(t, (lo - a[k]) / (b[k] - a[k]))
-                elif b[k] > hi:
-                    t = min(t, (hi - a[k]) / (b[k] - a[k]))
-            ends.append(a + t * (b - a))
-        else:
-            ends.append(None)
-    if ends[0] is not None:
-        piece = np.concatenate([ends[0][None], piece])
-    if ends[1] is not None:
-        piece = np.concatenate([piece, ends[1][None]])
-    if ends[0] is None or ends[1] is None:
-        ext = _extend_to_box(piece, bounds)
-        head = ext[:1] if ends[0] is None and ext.shape[0] > piece.shape[0] else np.empty((0, 2))
-        tail = ext[-1:] if ends[1] is None and ext.shape[0] > piece.shape[0] + head.shape[0] else np.empty((0, 2))
-        piece = np.concatenate([head, piece, tail])
-    return piece
 
 
 def _runs(mask):
