@@ -141,7 +141,7 @@ def _offset(ms, F, rev, cur, forward, scallop, bounds):
     probe = np.clip(nxt, [u0, v0], [u1, v1])
     r2, k2, _, _ = cross_feed(ms, probe, _tangents(F.evaluate(nxt[:, 0], nxt[:, 1]), _STENCIL))
     w2 = spacing_for_scallop(scallop, r2, k2)
-    w2 = np.where(np.isfinite(w2), w2, w)
+    w2 = np.where(np.isfinite(w2) & (w2 > 0), w2, w)
     if np.any(w2 < w):
         w = np.minimum(w, w2)
         nxt = _move_on_surface(F, rev, cur, c, w, bounds)
