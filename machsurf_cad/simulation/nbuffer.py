@@ -158,7 +158,7 @@ def candidate_pairs(tree: cKDTree, T, A, heights, radii, reach: float, chunk: in
         e = min(n, s + chunk)
         c = T[s:e, None, :] + heights[None, :, None] * A[s:e, None, :]
         r = np.broadcast_to(radii[None, :] + reach, c.shape[:2])
-        hits = tree.query_ball_point(c.reshape(-1, 3), r.ravel(), return_sorted=False)
+        hits = tree.query_ball_point(c.reshape(-1, 3), r.ravel(), return_sorted=False, workers=-1)
         lens = np.fromiter((len(h) for h in hits), int, count=len(hits))
         if lens.sum() == 0:
             yield s, e, np.empty(0, int), np.empty(0, int)
@@ -299,7 +299,8 @@ def _settle(cutter, P, N, T, A, si, pi, best, clamped, depth, stock, margin, max
         if a_s.size == 0:
             continue
         stats["marched"] += a_s.size
-        t, st = march(cutter, P[a_s], N[a_s], T[a_p], A[a_p], -depth, stock, max_steps)
+        # a placement away from the nominal point (g0 > 0) can only count at t >= g0 (see the docstring): start there
+        t, st = march(cutter, P[a_s], N[a_s], T[a_p], A[a_p], np.where(a_g > 0, a_g, -depth), stock, max_steps)
         stats["unconv"] += int((st == 3).sum())
         t = np.where((t < 0) & (a_g > 0), np.inf, t)  # cuts below the nominal only: see the docstring
         fin = np.isfinite(t)
