@@ -244,16 +244,30 @@ def nbuffer(
         lower_prev[1:] = same_next[:-1] & (rt[:-1] < rt[1:])
         loc = ~(lower_next | lower_prev)
         rs, rp, rt = rs[loc], rp[loc], rt[loc]
-        n_refined = int(rs.size)
         refine = _refine_golden if sharp else _refine_motion
-        t_ref, x_ref, residual = refine(cutter, P[rs], N[rs], T, A, rp, rt, depth, stock)
-        o = np.lexsort((t_ref, rs))
-        rs, t_ref, x_ref = rs[o], t_ref[o], x_ref[o]
-        first = np.ones(rs.size, bool)
-        first[1:] = rs[1:] != rs[:-1]
-        better = t_ref[first] < best[rs[first]]
-        best[rs[first][better]] = t_ref[first][better]
-        pose[rs[first]] = x_ref[first]
+        # the lowest sampled candidate of each sample first; the others only where they can still beat it
+        o = np.lexsort((rt, rs))
+        rs, rp, rt = rs[o], rp[o], rt[o]
+        lead = np.ones(rs.size, bool)
+        lead[1:] = rs[1:] != rs[:-1]
+        residual = 0.0
+        n_refined = 0
+        for stage in (lead, ~lead):
+            if stage is not lead:
+                stage = stage & (rt - margin < best[rs])
+            if not stage.any():
+                continue
+            s_s, s_p, s_t = rs[stage], rp[stage], rt[stage]
+            n_refined += int(s_s.size)
+            t_ref, x_ref, res_ = refine(cutter, P[s_s], N[s_s], T, A, s_p, s_t, depth, stock)
+            residual = max(residual, res_)
+            o2 = np.lexsort((t_ref, s_s))
+            s_s, t_ref, x_ref = s_s[o2], t_ref[o2], x_ref[o2]
+            first = np.ones(s_s.size, bool)
+            first[1:] = s_s[1:] != s_s[:-1]
+            better = t_ref[first] < best[s_s[first]]
+            best[s_s[first][better]] = t_ref[first][better]
+            pose[s_s[first][better]] = x_ref[first][better]
     if progress is not None:
         progress(1, 1, "simulating the cut")
     t_out = np.where(reached, best, stock)
