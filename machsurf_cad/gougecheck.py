@@ -125,27 +125,35 @@ class VerifyResult(Result):
         }
 
 
-def _faces(part) -> list[Face]:
+def _faces(part, what: str = "verify") -> list[Face]:
+    """The part as a list of :class:`Face` (B-spline surfaces wrapped); ``what`` names the caller in errors."""
     items = part if isinstance(part, (list, tuple)) else [part]
     out = []
     for i, f in enumerate(items):
         if isinstance(f, BSplineSurface):
             f = Face(f, name=f.name or f"face_{i}")
         if not isinstance(f, Face):
-            raise InputError("verify needs the part's faces (Face or BSplineSurface objects)")
+            raise InputError(f"{what} needs the part's faces (Face or BSplineSurface objects)")
         out.append(f)
     if not out:
-        raise InputError("verify needs at least one face of the part")
+        raise InputError(f"{what} needs at least one face of the part")
     return out
+
+
+def face_size(face: Face) -> tuple[float, float]:
+    """Longest iso-line lengths of the face's parameter box along u and along v (mm, 9 x 9 samples)."""
+    u0, u1, v0, v1 = face.uv_bounds
+    g = face.surface.evaluate_grid(np.linspace(u0, u1, 9), np.linspace(v0, v1, 9))
+    lu = float(np.linalg.norm(np.diff(g, axis=0), axis=-1).sum(axis=0).max())
+    lv = float(np.linalg.norm(np.diff(g, axis=1), axis=-1).sum(axis=1).max())
+    return lu, lv
 
 
 def _sample_face(face: Face, spacing: float):
     """Trim-aware parameter grid about ``spacing`` mm apart; returns points, u, v, du, dv."""
     s = face.surface
     u0, u1, v0, v1 = face.uv_bounds
-    g = s.evaluate_grid(np.linspace(u0, u1, 9), np.linspace(v0, v1, 9))
-    lu = np.linalg.norm(np.diff(g, axis=0), axis=-1).sum(axis=0).max()
-    lv = np.linalg.norm(np.diff(g, axis=1), axis=-1).sum(axis=1).max()
+    lu, lv = face_size(face)
     nu = int(np.clip(math.ceil(lu / spacing) + 1, 8, 3000))
     nv = int(np.clip(math.ceil(lv / spacing) + 1, 8, 3000))
     us, vs = np.linspace(u0, u1, nu), np.linspace(v0, v1, nv)

@@ -2,12 +2,8 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-from typing import Any
-
-from ..errors import InputError
 from .base import EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, finish
-from .run_verify import part_faces, read_toolpath_file
+from .run_verify import part_faces, toolpath_and_cutter
 from .specs import SimulateJob
 
 
@@ -65,15 +61,7 @@ def simulate_path(
 
 
 def run_simulate(spec: SimulateJob, out, say: Say, progress=None) -> JobOutcome:
-    from ..cutters import parse_cutter
-
-    path = Path(spec.toolpath)
-    tp = read_toolpath_file(path)
-    cutter: Any = parse_cutter(spec.tool) if spec.tool else tp.cutter
-    if cutter is None:
-        raise InputError(f"{path.name} names no usable CUTTER: give --tool")
-    if spec.tool and tp.cutter is not None and tp.cutter.apt_parameters() != cutter.apt_parameters():
-        say(f"warning: {path.name} names the tool {tp.cutter.spec()}, --tool says {cutter.spec()}: using --tool")
+    path, tp, cutter = toolpath_and_cutter(spec.toolpath, spec.tool, say)
     faces = part_faces(spec.part, spec.faces)
     say(
         f"part: {spec.part} ({len(faces)} face(s) simulated); tool path: {path.name}, {tp.n_positions} positions, "

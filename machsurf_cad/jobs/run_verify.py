@@ -192,14 +192,23 @@ def read_toolpath_file(path: Path):
     raise InputError(f"tool path must be .csv (ours) or APT CLDATA (.apt, .cls, .cl), got {path.name}")
 
 
-def run_verify(spec: VerifyJob, out, say: Say, progress=None) -> JobOutcome:
+def toolpath_and_cutter(toolpath: str, tool: str | None, say: Say):
+    """The tool path file and its cutter: ``tool`` (a cutter string) wins over the file's CUTTER, with a
+    warning when they disagree; one of them must exist."""
     from ..cutters import parse_cutter
 
-    path = Path(spec.toolpath)
+    path = Path(toolpath)
     tp = read_toolpath_file(path)
-    cutter: Any = parse_cutter(spec.tool) if spec.tool else tp.cutter
+    cutter: Any = parse_cutter(tool) if tool else tp.cutter
     if cutter is None:
         raise InputError(f"{path.name} names no usable CUTTER: give --tool")
+    if tool and tp.cutter is not None and tp.cutter.apt_parameters() != cutter.apt_parameters():
+        say(f"warning: {path.name} names the tool {tp.cutter.spec()}, --tool says {cutter.spec()}: using --tool")
+    return path, tp, cutter
+
+
+def run_verify(spec: VerifyJob, out, say: Say, progress=None) -> JobOutcome:
+    path, tp, cutter = toolpath_and_cutter(spec.toolpath, spec.tool, say)
     cutter = dataclasses.replace(cutter, shank=_shank(spec.shank, "shank"), holder=_shank(spec.holder, "holder"))
     if cutter.holder is not None and cutter.shank is not None and cutter.holder.diameter < cutter.shank.diameter:
         say("warning: the holder is narrower than the shank")

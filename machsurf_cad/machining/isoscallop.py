@@ -82,7 +82,7 @@ def cross_feed(ms: MachiningSurface, uv: np.ndarray, feed3: np.ndarray):
     return r_eff, -kn, c, n
 
 
-def _move_on_surface(F, reversed_, uv, c, w, bounds):
+def _move_on_surface(F, reversed_, uv, c, w):
     """Move each point by arc length ``w`` along the tangent direction ``c`` (re-projected each step)."""
     uv = uv.copy()
     c = c.copy()
@@ -136,7 +136,7 @@ def _offset(ms, F, rev, cur, forward, scallop, bounds):
     # an infinite effective radius (a flat spot) allows any spacing: the largest of the pass; a concave region
     # tighter than the tool none: the smallest
     w = np.where(np.isinf(r_eff), w[good].max(), np.where(good, w, w[good].min()))
-    nxt = _move_on_surface(F, rev, cur, c, w, bounds)
+    nxt = _move_on_surface(F, rev, cur, c, w)
 
     probe = np.clip(nxt, [u0, v0], [u1, v1])
     r2, k2, _, _ = cross_feed(ms, probe, _tangents(F.evaluate(nxt[:, 0], nxt[:, 1]), _STENCIL))
@@ -144,7 +144,7 @@ def _offset(ms, F, rev, cur, forward, scallop, bounds):
     w2 = np.where(np.isfinite(w2) & (w2 > 0), w2, w)
     if np.any(w2 < w):
         w = np.minimum(w, w2)
-        nxt = _move_on_surface(F, rev, cur, c, w, bounds)
+        nxt = _move_on_surface(F, rev, cur, c, w)
     return w, nxt
 
 

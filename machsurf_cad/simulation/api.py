@@ -11,9 +11,9 @@ import numpy as np
 
 from ..cam.toolpath import ToolPath
 from ..errors import InputError
-from ..geometry.bspline import BSplineSurface
 from ..geometry.face import Face
 from ..geometry.normals import unit_normals
+from ..gougecheck import _faces, face_size
 from ..results import Progress, Result
 from .nbuffer import motion_poses, nbuffer, smallest_profile_radius
 
@@ -143,26 +143,8 @@ class SimulationResult(Result):
         return out
 
 
-def _faces(part) -> list[Face]:
-    items = part if isinstance(part, (list, tuple)) else [part]
-    out = []
-    for i, f in enumerate(items):
-        if isinstance(f, BSplineSurface):
-            f = Face(f, name=f.name or f"face_{i}")
-        if not isinstance(f, Face):
-            raise InputError("simulate needs the part's faces (Face or BSplineSurface objects)")
-        out.append(f)
-    if not out:
-        raise InputError("simulate needs at least one face of the part")
-    return out
-
-
 def _face_size(face: Face) -> tuple[float, float]:
-    s = face.surface
-    u0, u1, v0, v1 = face.uv_bounds
-    g = s.evaluate_grid(np.linspace(u0, u1, 9), np.linspace(v0, v1, 9))
-    lu = float(np.linalg.norm(np.diff(g, axis=0), axis=-1).sum(axis=0).max())
-    lv = float(np.linalg.norm(np.diff(g, axis=1), axis=-1).sum(axis=1).max())
+    lu, lv = face_size(face)
     return max(lu, 1e-9), max(lv, 1e-9)
 
 
@@ -278,7 +260,7 @@ def simulate(
     for name, val in (("depth", depth), ("stock", stock), ("tolerance", tolerance)):
         if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
             raise InputError(f"{name} must be > 0 mm, got {val!r}")
-    faces = _faces(part)
+    faces = _faces(part, "simulate")
     if resolution is None:
         area = sum(a * b for a, b in map(_face_size, faces))
         resolution = max(math.sqrt(area / 200_000), 1e-3)
