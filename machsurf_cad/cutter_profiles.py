@@ -171,6 +171,21 @@ def _segment_distance(seg, rho, z) -> np.ndarray:
     return np.where(on, np.minimum(d_circle, d_end), d_end)
 
 
+def rounded_core_distance(R_t: float, r: float, L: float, rho, z) -> np.ndarray:
+    """Exact signed distance (mm, inside < 0) to the half-section of a flat (``r = 0``), bull-nose or
+    ball (``R_t = 0``) end mill closed by its top at ``z = L >= r``: the rectangle ``[0, R_t] x [r, L]``
+    grown by ``r`` (a Minkowski sum with a disc: its distance is the rectangle's minus ``r``), cut at
+    ``z = L``. Equal to :func:`_region_distance` on the same profile (tested), a few times faster."""
+    qx = rho - R_t
+    below = r - z
+    qz = np.maximum(below, z - L)
+    box = np.hypot(np.maximum(qx, 0.0), np.maximum(qz, 0.0)) + np.minimum(np.maximum(qx, qz), 0.0)
+    d = box - r
+    # inside: the top plane may be nearer than the rounded side; above the top: to the top disc
+    d = np.where(d < 0, np.maximum(d, z - L), d)
+    return np.where(z > L, np.hypot(np.maximum(rho - R_t - r, 0.0), z - L), d)
+
+
 def _region_distance(segs, rho, z) -> np.ndarray:
     """Signed distance to the half-section region bounded by ``segs`` and the axis (inside < 0)."""
     d = np.full(rho.shape, np.inf)

@@ -35,6 +35,7 @@ from .cutter_profiles import (
     LineSegment,
     SphereFamilySegment,
     _family_of,
+    rounded_core_distance,
     _region_distance,
     _segment_rho_at,
     _segment_z_at,
@@ -238,7 +239,15 @@ class Cutter:
         (the revolved profile closed by its top): negative inside."""
         rho = np.asarray(rho, float)
         z = np.asarray(z, float)
+        core = self._rounded_core()
+        if core is not None:
+            return rounded_core_distance(*core, rho, z)
         return _region_distance(self._outline(), rho, z)
+
+    def _rounded_core(self) -> tuple[float, float, float] | None:
+        """``(R_t, r, length)`` where the cutting part is a rectangle grown by a disc of radius ``r``
+        (ball, flat, bull-nose with ``length >= r``), else None."""
+        return None
 
     def holder_distance_rz(self, rho, z) -> np.ndarray:
         """Signed distance (mm) of ``(rho, z)`` to the shank and holder cylinders (``inf`` without them)."""
@@ -311,6 +320,9 @@ class BallEndMill(Cutter):
         R = self.D / 2
         return [ArcSegment(0.0, R, R, -90.0, 0.0), LineSegment(R, R, R, self.length)]
 
+    def _rounded_core(self):
+        return (0.0, self.D / 2, self.length) if self.length >= self.D / 2 else None
+
     def spec(self):
         return f"ball:D={self.D:g}"
 
@@ -350,6 +362,9 @@ class FlatEndMill(Cutter):
     def profile(self):
         R = self.D / 2
         return [LineSegment(0.0, 0.0, R, 0.0), LineSegment(R, 0.0, R, self.length)]
+
+    def _rounded_core(self):
+        return (self.D / 2, 0.0, self.length)
 
     def spec(self):
         return f"flat:D={self.D:g}"
@@ -404,6 +419,9 @@ class BullNoseEndMill(Cutter):
             segs.append(LineSegment(0.0, 0.0, self.R_t, 0.0))
         segs += [ArcSegment(self.R_t, r, r, -90.0, 0.0), LineSegment(R, r, R, self.length)]
         return segs
+
+    def _rounded_core(self):
+        return (self.R_t, self.r, self.length) if self.length >= self.r else None
 
     def spec(self):
         return f"bull:D={self.D:g},r={self.r:g}"

@@ -181,6 +181,22 @@ def test_signed_distance_matches_a_brute_force_of_the_half_section(spec, rng):
     assert (np.sign(got[far]) == np.sign(ref[far])).all()
 
 
+@pytest.mark.parametrize("spec", ["ball:D=10", "flat:D=12", "bull:D=20,r=4", "bull:D=10,r=5", "ball:D=10,L=20"])
+def test_rounded_core_distance_equals_the_profile_distance_and_the_brute_force(spec, rng):
+    """The closed form used for ball, flat and bull (a rectangle grown by a disc, cut at the top) against
+    the general distance to the profile's segments and the polyline brute force, inside and out."""
+    from machsurf_cad.cutter_profiles import _region_distance
+
+    c = parse_cutter(spec)
+    assert c._rounded_core() is not None
+    rho = np.concatenate([rng.uniform(0, c.D, 3000), np.zeros(50)])
+    z = rng.uniform(-c.D / 2, c.length + c.D / 2, rho.size)
+    fast = c.cutting_distance_rz(rho, z)
+    assert np.abs(fast - _region_distance(c._outline(), rho, z)).max() < 1e-12
+    assert np.abs(fast - _brute_signed_distance(c, rho, z)).max() < 1e-5
+    assert BallEndMill(10, 3)._rounded_core() is None  # cutting length below the radius: the general form
+
+
 def test_signed_distance_placed_and_with_a_shank():
     c = BullNoseEndMill(20, 4, 30, shank=Shank(16, 50))
     tip, axis = np.array([10.0, -5.0, 2.0]), np.array([0.0, 0.6, 0.8])

@@ -231,6 +231,7 @@ def nbuffer(
         rs = np.concatenate([r[0] for r in records])
         rp = np.concatenate([r[1] for r in records])
         rt = np.concatenate([r[2] for r in records])
+        known = _Known(rs, rp, rt, n_poses)
         keep = (rt <= best[rs] + margin) & ~clamped[rs]
         rs, rp, rt = rs[keep], rp[keep], rt[keep]
         # one per local minimum along the path: drop a placement whose neighbour on the path cuts deeper
@@ -259,7 +260,7 @@ def nbuffer(
                 continue
             s_s, s_p, s_t = rs[stage], rp[stage], rt[stage]
             n_refined += int(s_s.size)
-            t_ref, x_ref, res_ = refine(cutter, P[s_s], N[s_s], T, A, s_p, s_t, depth, stock)
+            t_ref, x_ref, res_ = refine(cutter, P[s_s], N[s_s], T, A, s_p, s_t, depth, stock, known.neighbours(s_s, s_p))
             residual = max(residual, res_)
             o2 = np.lexsort((t_ref, s_s))
             s_s, t_ref, x_ref = s_s[o2], t_ref[o2], x_ref[o2]
@@ -354,7 +355,42 @@ def _entry_at(cutter, P, N, T, A, x, t_hint, depth, stock):
     return np.where(np.isfinite(t), t, np.inf)
 
 
-def _refine_golden(cutter, P, N, T, A, k, t_k, depth, stock, iterations: int = GOLDEN_ITERATIONS):
+class _Known:
+    """Entries already marched, looked up by sample and placement."""
+
+    def __init__(self, samples: np.ndarray, poses: np.ndarray, t: np.ndarray, n_poses: int):
+        self.n_poses = n_poses
+        keys = samples.astype(np.int64) * n_poses + poses
+        o = np.argsort(keys)
+        self.keys, self.t = keys[o], t[o]
+
+    def _get(self, s: np.ndarray, p: np.ndarray) -> np.ndarray:
+        out = np.full(s.shape, np.nan)
+        ok = (p >= 0) & (p < self.n_poses)
+        if self.keys.size == 0 or not ok.any():
+            return out
+        keys = s[ok].astype(np.int64) * self.n_poses + p[ok]
+        j = np.minimum(np.searchsorted(self.keys, keys), self.keys.size - 1)
+        out[ok] = np.where(self.keys[j] == keys, self.t[j], np.nan)
+        return out
+
+    def neighbours(self, s: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Entries at placements ``p - 1`` and ``p + 1`` of samples ``s`` (NaN where not marched)."""
+        return self._get(s, p - 1), self._get(s, p + 1)
+
+
+def _entry_or_known(cutter, P, N, T, A, x, t_hint, depth, stock, known):
+    if known is None:
+        return _entry_at(cutter, P, N, T, A, x, t_hint, depth, stock)
+    out = np.array(known, float, copy=True)
+    # the path's ends clamp x to the neighbour index itself: recompute there as well
+    miss = np.isnan(out)
+    if miss.any():
+        out[miss] = _entry_at(cutter, P[miss], N[miss], T, A, x[miss], t_hint[miss], depth, stock)
+    return out
+
+
+def _refine_golden(cutter, P, N, T, A, k, t_k, depth, stock, neighbours=None, iterations: int = GOLDEN_ITERATIONS):
     """Golden-section search of the entry over the placement index in ``[k - 1, k + 1]``: for profiles with
     a sharp corner, whose entry jumps where the corner passes (no parabola fits there; a search that
     keeps the lower side of every comparison still closes on the lowest value). The residual reported
@@ -390,13 +426,16 @@ def _refine_golden(cutter, P, N, T, A, k, t_k, depth, stock, iterations: int = G
     return best_f, best_x, residual
 
 
-def _refine_motion(cutter, P, N, T, A, k, t_k, depth, stock):
-    """Rounds of safeguarded parabolic interpolation of the entry over the placement index."""
+def _refine_motion(cutter, P, N, T, A, k, t_k, depth, stock, neighbours=None):
+    """Rounds of safeguarded parabolic interpolation of the entry over the placement index.
+
+    ``neighbours``: the entries already marched at placements ``k - 1`` and ``k + 1`` (NaN where not
+    known; those are marched here)."""
     n = T.shape[0]
     x0 = k.astype(float)
     xl, xr = np.maximum(x0 - 1, 0.0), np.minimum(x0 + 1, n - 1.0)
-    fl = _entry_at(cutter, P, N, T, A, xl, t_k, depth, stock)
-    fr = _entry_at(cutter, P, N, T, A, xr, t_k, depth, stock)
+    fl = _entry_or_known(cutter, P, N, T, A, xl, t_k, depth, stock, None if neighbours is None else neighbours[0])
+    fr = _entry_or_known(cutter, P, N, T, A, xr, t_k, depth, stock, None if neighbours is None else neighbours[1])
     xb, fb = x0.copy(), t_k.copy()
     residual = 0.0
     for _ in range(REFINE_ROUNDS):
