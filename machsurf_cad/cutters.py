@@ -35,10 +35,10 @@ from .cutter_profiles import (
     LineSegment,
     SphereFamilySegment,
     _family_of,
-    rounded_core_distance,
     _region_distance,
     _segment_rho_at,
     _segment_z_at,
+    rounded_core_distance,
 )
 from .errors import InputError
 

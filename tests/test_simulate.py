@@ -336,3 +336,31 @@ def test_flat_end_mill_with_lead_on_a_plane_leaves_the_rim_ellipse():
     exact = np.minimum(b * (1 - np.sqrt(1 - ((y + s / 2) / R) ** 2)), b * (1 - np.sqrt(1 - ((y - s / 2) / R) ** 2)))
     assert_close(res.value, exact, 5e-5, "flat end mill's rim ellipse")
     assert res.motion_bound_smooth_mm is None  # a sharp corner: no smooth bound is claimed
+
+
+@pytest.mark.parametrize("spec", ["ball:D=10", "flat:D=10", "bull:D=16,r=3", "bull:D=10,r=5"])
+def test_closed_form_ray_entry_agrees_with_sphere_tracing_the_profile(spec, rng):
+    """The exact entry of rays into ball, flat and bull bodies (cylinders and spheres as quadratics, the
+    torus traced on its own) against sphere tracing on the general profile distance with no step limit,
+    on random rays through and beside the body: same status everywhere; the traced entry is not later
+    (but for the torus, traced in both) and within 1e-6 mm on 99 % of the rays (the tracing stops
+    1e-7 mm from the body: earlier by 1e-7 / sin of the grazing angle)."""
+    from machsurf_cad.simulation.nbuffer import _sphere_trace, march
+
+    c = ms.parse_cutter(spec)
+    n = 40000
+    ax = rng.normal(size=(n, 3))
+    ax[:, 2] = np.abs(ax[:, 2]) + 1
+    A = ax / np.linalg.norm(ax, axis=1)[:, None]
+    T = rng.uniform(-1, 1, (n, 3))
+    P = rng.uniform([-12, -12, -4], [12, 12, 20], (n, 3))
+    N = rng.normal(size=(n, 3))
+    N /= np.linalg.norm(N, axis=1)[:, None]
+    a, sa = march(c, P, N, T, A, -5.0, 5.0)
+    b, sb = _sphere_trace(c, P, N, T, A, -5.0, 5.0, max_steps=20000)
+    ok = sa != 3  # a bull's torus march may stop on a grazing ray: its value is a lower bound, counted
+    assert (sa == 3).mean() < 1e-3 and np.all(a[~ok] <= b[~ok] + 1e-9)
+    assert np.array_equal(sa[ok], sb[ok])
+    fin = ok & np.isfinite(a)
+    gap = a[fin] - b[fin]
+    assert fin.sum() > n / 10 and gap.min() > -1e-6 and np.quantile(gap, 0.99) < 1e-6 and gap.max() < 1e-3

@@ -109,7 +109,8 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
                     f"iso-scallop passes for {spec.scallop:g} mm: spacing on the surface {i['spacing_min_mm']:.4g}.."
                     f"{i['spacing_max_mm']:.4g} mm (mean {i['spacing_mean_mm']:.4g}); {i['n_passes_planned']} passes "
                     f"where a constant spacing keeping the same scallop needs {i['n_passes_constant_spacing']}; "
-                    f"overrun {i['overrun_mm']:g} mm ({i['n_overruns_dropped_for_gouging']} cut off: they would gouge)"
+                    f"overrun {i['overrun_mm']:g} mm ({i['n_overruns_shortened_for_gouging']} shortened where they "
+                    "would gouge)"
                 )
             else:
                 tp = tool_paths(ms, stepover=spec.stepover, chordal_tolerance=spec.chordal, clearance=spec.clearance)

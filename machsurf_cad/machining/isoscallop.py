@@ -352,7 +352,7 @@ def iso_scallop_paths(
         "axis_error_deg_measured": axis_err if ms.axes == 5 else None,
         "n_cut_positions": int(sum(t.shape[0] for t in tips)),
         "overrun_mm": over,
-        "n_overruns_dropped_for_gouging": dropped,
+        "n_overruns_shortened_for_gouging": dropped,
     }
     return ToolPath.from_passes(
         tips, axes, cc=ccs, extras=extras, clearance=clearance, cutter=ms.cutter, name="iso_scallop", info=info
@@ -391,7 +391,8 @@ def _extend_past_edges(seg, F, bounds, length: float):
 
 def _drop_gouging_overruns(ms: MachiningSurface, runs: list) -> int:
     """Overruns follow the face's extrapolation; one that still cuts into the face (checked by the tool-body
-    check on the exact face, motion sampled every 0.25 mm) is cut off at the face's edge. Returns how many."""
+    check on the exact face, motion sampled every 0.25 mm) is shortened to its placements before the first
+    gouging one (at worst cut off at the face's edge). Returns how many were shortened."""
     from ..gougecheck import verify
 
     stretches = []  # (run, slice of the overrun with the edge position)
@@ -412,11 +413,19 @@ def _drop_gouging_overruns(ms: MachiningSurface, runs: list) -> int:
     depth = np.maximum(0.0, -np.asarray(res.cut_distance))
     bad: dict[int, list] = {}
     n_bad = 0
-    for k, (i, _lo, _hi, rr) in enumerate(stretches):
-        sel = (chk.pass_index == k) & (chk.move == Move.CUT)
-        if sel.any() and depth[sel].max() > 1e-4:
-            bad.setdefault(i, []).extend(rr.tolist())
-            n_bad += 1
+    for k, (i, lo, _hi, rr) in enumerate(stretches):
+        sel = np.flatnonzero((chk.pass_index == k) & (chk.move == Move.CUT))
+        if sel.size == 0 or depth[sel].max() <= 1e-4:
+            continue
+        # keep the overrun from the edge up to its first gouging placement (a placement's figure covers the
+        # motion into it); the edge position sits at the stretch's end nearer the face
+        d = depth[sel]  # along the stretch, lo..hi
+        from_edge = d if rr[0] > lo else d[::-1]
+        cut_at = int(np.argmax(from_edge > 1e-4))
+        n_keep = max(cut_at - 1, 0)  # overrun placements kept (the edge position is the first of from_edge)
+        drop = rr[n_keep:] if rr[0] > lo else rr[: rr.size - n_keep]
+        bad.setdefault(i, []).extend(drop.tolist())
+        n_bad += 1
     for i, idx in bad.items():
         keep = np.ones(runs[i]["tip"].shape[0], bool)
         keep[idx] = False

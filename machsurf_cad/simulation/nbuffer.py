@@ -9,12 +9,15 @@ that entry parameter ``t`` (mm along ``n``): ``t > 0`` is material left (a scall
 
 Exactness:
 
-* **Against one placement** the entry is found on the exact revolved profile: the signed distance
-  of a blade point to the body is exact for line and arc profiles
+* **Against one placement** the entry is found on the exact revolved profile. Ball, flat and bull
+  bodies are cylinders, a sphere and a torus: the entry is a closed form (quadratics) but for the
+  torus (:mod:`~machsurf_cad.simulation.rays`). Any other profile: the signed distance of a blade
+  point to the body is exact for line and arc profiles
   (:meth:`~machsurf_cad.cutters.Cutter.cutting_distance_rz`), and the ray is marched by that
   distance (sphere tracing: each step is the distance to the body, so no step passes through it)
-  until the distance is below ``1e-7`` mm. A march that has not converged in ``max_steps`` leaves
-  its lower bound (a deeper cut, on the safe side for gouges) and is counted.
+  until the distance is below ``1e-7`` mm. A march that has not converged in ``max_steps`` (the
+  torus: ten times that) leaves its lower bound (a deeper cut, on the safe side for gouges) and is
+  counted.
 * **The motion between placements** is sampled ``motion_step`` mm apart (tip and every point of the
   cutting part, axis interpolated linearly and normalised, as :func:`~machsurf_cad.gougecheck.verify`
   does). For each sample the best placement and its two neighbours are then refined by four rounds of
@@ -39,6 +42,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
+from .rays import ray_core, ray_entry
 
 _CONVERGED_MM = 1e-7
 GOLDEN_ITERATIONS = 16
@@ -126,6 +130,14 @@ def march(cutter, P, N, T, A, t_start, t_end: float, max_steps: int = 60):
     Returns ``(t, status)``: status 0 entered at ``t``, 1 inside already at ``t_start`` (``t`` =
     ``t_start``), 2 no entry before ``t_end`` (``t`` = inf), 3 not converged (``t`` a lower bound).
     """
+    core = ray_core(cutter)
+    if core is not None:  # ball, flat, bull: closed-form entry (sphere tracing only on a bull's torus)
+        return ray_entry(core, P, N, T, A, t_start, t_end, max_steps)
+    return _sphere_trace(cutter, P, N, T, A, t_start, t_end, max_steps)
+
+
+def _sphere_trace(cutter, P, N, T, A, t_start, t_end: float, max_steps: int = 60):
+    """:func:`march` by sphere tracing on the body's exact signed distance (any profile)."""
     m = P.shape[0]
     t = np.array(t_start, float, copy=True) if np.ndim(t_start) else np.full(m, float(t_start))
     status = np.full(m, 3, np.int8)
@@ -260,7 +272,8 @@ def nbuffer(
                 continue
             s_s, s_p, s_t = rs[stage], rp[stage], rt[stage]
             n_refined += int(s_s.size)
-            t_ref, x_ref, res_ = refine(cutter, P[s_s], N[s_s], T, A, s_p, s_t, depth, stock, known.neighbours(s_s, s_p))
+            nb = known.neighbours(s_s, s_p)
+            t_ref, x_ref, res_ = refine(cutter, P[s_s], N[s_s], T, A, s_p, s_t, depth, stock, nb)
             residual = max(residual, res_)
             o2 = np.lexsort((t_ref, s_s))
             s_s, t_ref, x_ref = s_s[o2], t_ref[o2], x_ref[o2]
