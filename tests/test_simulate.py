@@ -364,3 +364,40 @@ def test_closed_form_ray_entry_agrees_with_sphere_tracing_the_profile(spec, rng)
     fin = ok & np.isfinite(a)
     gap = a[fin] - b[fin]
     assert fin.sum() > n / 10 and gap.min() > -1e-6 and np.quantile(gap, 0.99) < 1e-6 and gap.max() < 1e-3
+
+
+def test_flank_cylinder_around_a_convex_cylinder_cuts_the_chord_sag():
+    """Flank milling: a cylindrical cutter D10 (axis parallel to the face's axis, the side in contact)
+    moved around a convex cylinder R_s 30 in straight motions 2 deg apart. Its side cuts into the face
+    between positions; each sample's thickness against a brute force written here (the section is 2-D:
+    the ray along the radius against 1001 discs of radius R along every chord, closed form), and the
+    deepest cut the closed form (R_s + R)(1 - cos(1 deg)) up to where the samples fall."""
+    R, Rs = 5.0, 30.0
+    face = ms.Face(builders.cylinder_patch(Rs, 20.0, 40.0), name="cyl", reversed=True)
+    th = np.radians(np.arange(-6.0, 46.1, 2.0))
+    centres = (Rs + R) * np.stack([np.cos(th), np.sin(th)], 1)
+    tips = np.concatenate([centres, np.full((th.size, 1), -10.0)], 1)
+    tp = _passes([tips], [np.tile([0.0, 0.0, 1.0], (th.size, 1))], ms.FlatEndMill(2 * R, 40.0))
+    res = ms.simulate(face, tp, resolution=0.25, depth=0.5, stock=0.5)
+    assert res.reached.all()
+    deepest = (Rs + R) * (1 - math.cos(math.radians(1.0)))  # 0.00533 mm, between two positions
+    # the samples nearest the mid angle are at most 0.125 mm off it: sag 0.125^2 / (2 R_s) lower at most
+    assert deepest - 0.125**2 / (2 * Rs) <= res.max_gouge <= deepest + 1e-9
+    band = np.abs(np.asarray(res.points)[:, 2] - 10.0) < 2.0  # the section is the same at every height
+    pts = np.asarray(res.points)[band]
+    n2 = pts[:, :2] / np.linalg.norm(pts[:, :2], axis=1, keepdims=True)  # outward normal in the section
+    s = np.linspace(0.0, 1.0, 1001)[:, None]
+    discs = np.concatenate([centres[k] * (1 - s) + centres[k + 1] * s for k in range(th.size - 1)])
+    best = np.full(pts.shape[0], np.inf)
+    for i in range(0, discs.shape[0], 4000):
+        w = pts[:, None, :2] - discs[None, i : i + 4000]
+        b = np.einsum("ijk,ik->ij", w, n2)
+        disc = b * b - (np.einsum("ijk,ijk->ij", w, w) - R * R)
+        t = np.where(disc >= 0, -b - np.sqrt(np.maximum(disc, 0.0)), np.inf)
+        best = np.minimum(best, t.min(axis=1))
+    assert np.abs(np.asarray(res.value)[band] - best).max() < 2e-6
+    assert_close(res.max_gouge, -best.min(), 2e-6, "deepest cut against the brute force")
+    # at the positions' angles the side of the neighbouring motions cuts R (1 / cos(1 deg) - 1) deep
+    at20 = np.abs(np.degrees(np.arctan2(pts[:, 1], pts[:, 0])) - 20.0) < 1e-9
+    assert at20.sum() >= 5
+    assert_close(np.asarray(res.value)[band][at20], -R * (1 / math.cos(math.radians(1.0)) - 1), 2e-6)

@@ -334,7 +334,7 @@ def _settle(cutter, P, N, T, A, si, pi, best, clamped, depth, stock, margin, max
         fin = np.isfinite(t)
         records.append((a_s[fin], a_p[fin], t[fin]))
         np.minimum.at(best, a_s[fin], t[fin])
-        cl = fin & (st == 1)
+        cl = fin & (st == 1) & (a_g <= 0)  # inside at -depth (a start at g0 > 0 is only on the boundary)
         clamped[a_s[cl]] = True
 
 
