@@ -14,7 +14,7 @@ from dataclasses import fields
 
 from . import __version__
 from .errors import InputError, MachsurfError
-from .jobs import EXIT_INPUT, SPECS, run_job
+from .jobs import EXIT_INPUT, SPECS, JobSpec, run_job
 
 
 class _Parser(argparse.ArgumentParser):
@@ -100,10 +100,32 @@ def _post(p) -> None:
     g.add_argument("--simulate-resolution", type=float, default=None, help="sample spacing of --simulate, mm")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="machsurf", description="Free-form surface machining geometry (mm, degrees).")
+class _StrictParser(_Parser):
+    def error(self, message):  # a batch job's command line: the message only, the batch goes on
+        raise InputError(message)
+
+
+def spec_from_argv(argv) -> JobSpec:
+    """The job spec of one command line without ``-o`` (what :func:`machsurf_cad.batch` runs).
+
+    Raises :class:`~machsurf_cad.errors.InputError` with the parser's one-line message on bad usage.
+    """
+    argv = [str(a) for a in argv]
+    if any(a in ("-o", "--out") or a.startswith("--out=") for a in argv):
+        raise InputError("a batch job's command line takes no -o: the batch writes OUT/<name>/")
+    if argv[:1] in (["batch"], ["demo"]):
+        raise InputError(f"'{argv[0]}' cannot run as a batch job")
+    args = build_parser(_StrictParser).parse_args(argv)
+    if not getattr(args, "command", None):
+        raise InputError("empty command line")
+    return _spec(args)
+
+
+def build_parser(parser_class=None) -> argparse.ArgumentParser:
+    parser_class = parser_class or _Parser
+    p = parser_class(prog="machsurf", description="Free-form surface machining geometry (mm, degrees).")
     p.add_argument("--version", action="version", version=f"machsurf_cad {__version__}")
-    sub = p.add_subparsers(dest="command", parser_class=_Parser)
+    sub = p.add_subparsers(dest="command", parser_class=parser_class)
 
     d = sub.add_parser("demo", help="main job on the embedded example part: STEP, STL, deviation map, report")
     d.add_argument("-o", "--out", default="out", help="output folder (default: out)")
@@ -234,6 +256,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--motion-step", type=float, default=None, help="placement spacing on the motion, mm (default R/10)")
     s.add_argument("--heights", default="0.001,0.002,0.005,0.01,0.02,0.05,0.1", help="area fractions above these, mm")
     s.add_argument("--max-samples", type=int, default=10_000_000, help="memory budget in samples (~400 B each)")
+    s.add_argument(
+        "--chunks", type=int, default=1, help="split the samples into N chunks (spread over the cluster in a batch)"
+    )
     s.add_argument("--no-render", dest="render", action="store_false", help="numbers and VTP-free report only")
     s.add_argument("-o", "--out", default="out/simulate", help="output folder")
 
@@ -265,7 +290,45 @@ def build_parser() -> argparse.ArgumentParser:
     _gouge(v, "0.01")
     _post(v)
     v.add_argument("-o", "--out", default="out/envelope", help="output folder")
+    _batch_parser(sub)
     return p
+
+
+def _batch_parser(sub) -> None:
+    b = sub.add_parser("batch", help="run many jobs (one command line each) on Dask: a local cluster or a scheduler")
+    b.add_argument("jobs", help='jobs file: JSON {"jobs": [{"name": ..., "argv": [command line without -o]}]} or TOML')
+    b.add_argument("--scheduler", default=None, help="address of a running Dask scheduler, tcp://host:port")
+    b.add_argument("--workers", type=int, default=None, help="local cluster: worker processes (default one per core)")
+    b.add_argument("--retries", type=int, default=2, help="runs again of a job whose task failed (default 2)")
+    b.add_argument("--timeout", type=float, default=10.0, help="time to reach --scheduler, s (default 10)")
+    b.add_argument("--overwrite", action="store_true", help="replace an earlier batch in the output folder")
+    b.add_argument("-o", "--out", default="out/batch", help="output folder: <name>/ per job, batch_report.json")
+
+
+def _run_batch(args) -> int:
+    from .batch import batch, read_jobs
+    from .progress import Bar
+
+    jobs = read_jobs(args.jobs)
+    with Bar("batch jobs", len(jobs)) as bar:
+        res = batch(
+            jobs,
+            args.out,
+            scheduler=args.scheduler,
+            workers=args.workers,
+            retries=args.retries,
+            overwrite=args.overwrite,
+            timeout_s=args.timeout,
+            say=_say,
+            progress=bar,
+        )
+    rep = res.report()
+    _say(
+        f"{rep['n_ok']} of {rep['n_jobs']} job(s) ok in {rep['wall_time_s']:.1f} s on {rep['n_workers']} worker(s) "
+        f"(jobs' own time {rep['job_time_sum_s']:.1f} s); outputs in {args.out}/: batch_report.json, "
+        "batch_figures.csv, <name>/"
+    )
+    return res.exit_code
 
 
 _BAR_TITLES = {
@@ -301,6 +364,8 @@ def main(argv=None) -> int:
         previous = signal.signal(signal.SIGTERM, _on_sigterm)
         previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)  # even when started ignored
     try:
+        if args.command == "batch":
+            return _run_batch(args)
         spec = _spec(args)
         with Bar(_BAR_TITLES.get(args.command, args.command)) as bar:
             return run_job(spec, args.out, say=_say, progress=bar).exit_code

@@ -19,7 +19,7 @@ def _imports(path: Path) -> set[str]:
     return out
 
 
-def test_only_occ_imports_the_kernel_and_only_viz_imports_pyvista():
+def test_only_occ_imports_the_kernel_only_viz_imports_pyvista_only_batch_imports_dask():
     for path in PKG.rglob("*.py"):
         rel = path.relative_to(PKG).parts
         mods = _imports(path)
@@ -27,6 +27,8 @@ def test_only_occ_imports_the_kernel_and_only_viz_imports_pyvista():
             assert not mods & {"OCP", "cadquery"}, f"{path} imports the kernel"
         if rel[0] != "viz":
             assert not mods & {"pyvista", "vtk", "vtkmodules"}, f"{path} imports pyvista/vtk"
+        if rel[0] != "batch":
+            assert not mods & {"dask", "distributed"}, f"{path} imports dask"
 
 
 def test_core_avoids_numpy2_only_api():

@@ -60,6 +60,15 @@ def simulate_path(
     return res, rep
 
 
+def _chunk_map(chunks: int):
+    """Chunks of a batch job run over its Dask cluster; elsewhere one after the other."""
+    if int(chunks) <= 1:
+        return None
+    from ..batch.runner import worker_map
+
+    return worker_map()
+
+
 def run_simulate(spec: SimulateJob, out, say: Say, progress=None) -> JobOutcome:
     path, tp, cutter = toolpath_and_cutter(spec.toolpath, spec.tool, say)
     faces = part_faces(spec.part, spec.faces)
@@ -83,6 +92,8 @@ def run_simulate(spec: SimulateJob, out, say: Say, progress=None) -> JobOutcome:
             motion_step=spec.motion_step,
             heights=spec.height_values(),
             max_samples=int(spec.max_samples),
+            chunks=int(spec.chunks),
+            map_chunks=_chunk_map(spec.chunks),
         )
         code = EXIT_TOLERANCE if res.gouged else EXIT_OK
         say(

@@ -302,6 +302,7 @@ class SimulateJob(JobSpec):
     motion_step: float | None = None
     heights: str = "0.001,0.002,0.005,0.01,0.02,0.05,0.1"
     max_samples: int = 10_000_000
+    chunks: int = 1
     render: bool = True
     command = "simulate"
 
@@ -315,6 +316,8 @@ class SimulateJob(JobSpec):
         _positive("motion_step (mm)", self.motion_step, allow_none=True)
         if int(self.max_samples) < 1:
             raise InputError("max_samples must be >= 1")
+        if int(self.chunks) < 1:
+            raise InputError(f"chunks must be >= 1, got {self.chunks}")
         self.height_values()
 
     def height_values(self) -> tuple:

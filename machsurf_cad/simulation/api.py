@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -199,6 +200,8 @@ def simulate(
     motion_step: float | None = None,
     heights: tuple = DEFAULT_HEIGHTS_MM,
     max_samples: int = 10_000_000,
+    chunks: int = 1,
+    map_chunks=None,
     progress: Progress | None = None,
 ) -> SimulationResult:
     """Simulate the cut of a tool path on the nominal faces (N-buffer) and measure what it leaves.
@@ -226,6 +229,12 @@ def simulate(
         Heights (mm) whose exceeded area fractions are reported.
     max_samples : int
         Memory budget in samples (about 400 bytes each); a finer resolution is refused with its size.
+    chunks : int
+        Split the samples into this many chunks, simulated independently (each sample's result does
+        not depend on the others: the figures are the same to the last digit).
+    map_chunks : callable, optional
+        ``map``-like callable running the chunks, e.g. over a Dask cluster
+        (:func:`machsurf_cad.batch.dask_map`); default: one after the other here.
     progress : Progress, optional
 
     Returns
@@ -278,7 +287,23 @@ def simulate(
     # how much lower the swept motion can cut than its sampled placements: the sagitta of the smallest
     # profile radius over a step (no sharp corner), else half a step (a corner sweeping across)
     margin = step * step / (8 * rho) if smooth else 0.5 * step
-    out = nbuffer(c, P, N, T, A, depth=depth, stock=stock, margin=margin, sharp=not smooth, progress=progress)
+    kw = {"depth": depth, "stock": stock, "margin": margin, "sharp": not smooth}
+    n_chunks = int(chunks)
+    if n_chunks < 1:
+        raise InputError(f"chunks must be >= 1, got {chunks!r}")
+    if n_chunks == 1:
+        out = nbuffer(c, P, N, T, A, progress=progress, **kw)
+    else:
+        cuts = np.linspace(0, P.shape[0], n_chunks + 1).astype(int)
+        runner = map_chunks if map_chunks is not None else map
+        parts = list(
+            runner(
+                functools.partial(_nbuffer_chunk, c, T, A, kw),
+                [P[a:b] for a, b in zip(cuts[:-1], cuts[1:])],
+                [N[a:b] for a, b in zip(cuts[:-1], cuts[1:])],
+            )
+        )
+        out = _merge_chunks(parts)
     value, clamped = out["t"], out["clamped"]
     t2 = time.perf_counter()
     if not out["reached"].any():
@@ -312,6 +337,19 @@ def simulate(
         out["n_unconverged"],
         times,
     )
+
+
+def _nbuffer_chunk(cutter, T, A, kw, P, N) -> dict:
+    """One chunk of samples (module level: it travels to other processes)."""
+    return nbuffer(cutter, P, N, T, A, **kw)
+
+
+def _merge_chunks(parts: list) -> dict:
+    out: dict[str, Any] = {k: np.concatenate([p[k] for p in parts]) for k in ("t", "reached", "clamped", "pose")}
+    for k in ("n_pairs", "n_marched", "n_refined", "n_unconverged"):
+        out[k] = int(sum(p[k] for p in parts))
+    out["motion_residual_mm"] = float(max(p["motion_residual_mm"] for p in parts))
+    return out
 
 
 def _has_sharp_corner(cutter) -> bool:
