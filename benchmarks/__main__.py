@@ -11,6 +11,7 @@ import platform
 import sys
 
 from . import (
+    bench_batch,
     bench_envelope,
     bench_eval,
     bench_flank,
@@ -52,6 +53,9 @@ def main(argv=None) -> int:
         rows.append(row)
         _print_row(row, header=False)
     print("* brute force on a random subset of the finest samples, scaled to all samples")
+    for row in bench_batch.batch_rows(quick=args.quick):
+        rows.append(row)
+        _print_row(row, header=False)
     iso_rows = bench_simulate.isoscallop_rows(quick=args.quick)
     bench_simulate.print_iso(iso_rows)
     offset_rows = bench_offset.offset_fit_rows(quick=args.quick)

@@ -71,6 +71,8 @@ def test_a_job_command_line_is_parsed_as_the_cli_does_and_takes_no_output():
         prepare(BatchJob("a", ("reff", "--example", "bezier5")))
     with pytest.raises(ms.InputError, match="file not found"):
         prepare(BatchJob("a", ("info", "nowhere.step"), base_dir=str(ROOT)))
+    flag = ("machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--toolpath")
+    assert prepare(BatchJob("a", flag))[1] == {}  # machining-surface's --toolpath is a flag, not a file
     spec, inputs = prepare(BatchJob("a", ("info", "example_parts/bezier5_patch.step"), base_dir=str(ROOT)))
     assert spec.command == "info" and inputs["part"][0] == str(PART.resolve()) and len(inputs["part"][1]) == 64
 

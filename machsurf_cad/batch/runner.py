@@ -102,7 +102,7 @@ def prepare(job: BatchJob):
     inputs = {}
     for name in PATH_FIELDS:
         value = getattr(spec, name, None)
-        if not value:
+        if not value or not isinstance(value, str):  # machining-surface's toolpath is a flag
             continue
         p = Path(value)
         if not p.is_absolute():
@@ -167,7 +167,8 @@ def dask_map(client):
     (for :func:`~machsurf_cad.simulate`'s ``map_chunks``)."""
 
     def _map(fn, *iterables):
-        return client.gather(client.map(fn, *iterables, pure=False))
+        args = [client.scatter(list(it)) for it in iterables]  # large chunks travel once, not in the graph
+        return client.gather(client.map(fn, *args, pure=False))
 
     return _map
 
@@ -184,7 +185,8 @@ def worker_map():
 
     def _map(fn, *iterables):
         with worker_client() as client:
-            return client.gather(client.map(fn, *iterables, pure=False))
+            args = [client.scatter(list(it)) for it in iterables]
+            return client.gather(client.map(fn, *args, pure=False))
 
     return _map
 
