@@ -2,7 +2,7 @@
 
 1. Eight machining-surface jobs with tool paths checked against the part (the example free-form,
    ball/bull/flat, 3 and 5 axes): one after the
-   other in this process against ``machsurf_cad.batch`` on the local cluster (wall time, cluster start
+   other in this process against ``machsurf_cad.batchrun`` on the local cluster (wall time, cluster start
    included).
 2. One large simulation (the 5-axis ball path of bench_simulate, 10,200 positions on 1.07 M samples)
    in one run against 4 chunks of samples spread over the cluster (``simulate(map_chunks=dask_map(client))``);
@@ -30,7 +30,7 @@ _TOOLS = [
 
 
 def _jobs():
-    from machsurf_cad.batch import BatchJob
+    from machsurf_cad.batchrun import BatchJob
 
     out = []
     for i, (tool, axes, lead) in enumerate(_TOOLS):
@@ -46,7 +46,7 @@ def batch_rows(quick=False):
     import os
 
     import machsurf_cad as ms
-    from machsurf_cad.batch import dask_map
+    from machsurf_cad.batchrun import dask_map
     from machsurf_cad.cli import spec_from_argv
 
     jobs = _jobs()[: 4 if quick else 8]

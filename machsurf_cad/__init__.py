@@ -21,7 +21,7 @@ True
 
 from ._version import __version__
 from .approx import SurfaceFit, fit_surface
-from .batch import BatchJob, BatchJobResult, BatchResult, batch, read_jobs
+from .batchrun import BatchJob, BatchJobResult, BatchResult, batch, read_jobs
 from .cam import Move, PostOptions, ToolPath, read_apt, read_csv, write_apt, write_csv, write_json
 from .cutters import (
     APTCutter,

@@ -306,7 +306,7 @@ def _batch_parser(sub) -> None:
 
 
 def _run_batch(args) -> int:
-    from .batch import batch, read_jobs
+    from .batchrun import batch, read_jobs
     from .progress import Bar
 
     jobs = read_jobs(args.jobs)

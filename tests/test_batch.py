@@ -16,8 +16,8 @@ import pytest
 from conftest import ROOT, needs_kernel
 
 import machsurf_cad as ms
-from machsurf_cad.batch import BatchJob, parse_jobs, read_jobs
-from machsurf_cad.batch.runner import prepare, run_on_worker
+from machsurf_cad.batchrun import BatchJob, parse_jobs, read_jobs
+from machsurf_cad.batchrun.runner import prepare, run_on_worker
 
 distributed = pytest.importorskip("distributed", reason="dask[distributed] is not installed (machsurf_cad[batch])")
 

@@ -27,7 +27,7 @@ def test_only_occ_imports_the_kernel_only_viz_imports_pyvista_only_batch_imports
             assert not mods & {"OCP", "cadquery"}, f"{path} imports the kernel"
         if rel[0] != "viz":
             assert not mods & {"pyvista", "vtk", "vtkmodules"}, f"{path} imports pyvista/vtk"
-        if rel[0] != "batch":
+        if rel[0] != "batchrun":
             assert not mods & {"dask", "distributed"}, f"{path} imports dask"
 
 

@@ -64,7 +64,7 @@ def _chunk_map(chunks: int):
     """Chunks of a batch job run over its Dask cluster; elsewhere one after the other."""
     if int(chunks) <= 1:
         return None
-    from ..batch.runner import worker_map
+    from ..batchrun.runner import worker_map
 
     return worker_map()
 

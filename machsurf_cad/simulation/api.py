@@ -234,7 +234,7 @@ def simulate(
         not depend on the others: the figures are the same to the last digit).
     map_chunks : callable, optional
         ``map``-like callable running the chunks, e.g. over a Dask cluster
-        (:func:`machsurf_cad.batch.dask_map`); default: one after the other here.
+        (:func:`machsurf_cad.batchrun.dask_map`); default: one after the other here.
     progress : Progress, optional
 
     Returns
