@@ -239,6 +239,7 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     w.add_argument("--step", type=float, default=1.0, help="largest tip step along each move, mm (default 1)")
     w.add_argument("--step-deg", type=float, default=1.0, help="largest axis step along each move, deg (default 1)")
     w.add_argument("--spacing", type=float, default=None, help="part sample spacing, mm (default min(1, D/8))")
+    w.add_argument("--chunks", type=int, default=1, help="split the placements into N chunks (over the cluster in a batch)")
     w.add_argument("--no-render", dest="render", action="store_false", help="numbers only")
     w.add_argument("-o", "--out", default="out/verify", help="output folder")
 

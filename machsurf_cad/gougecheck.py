@@ -25,6 +25,7 @@ least that depth.
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass
@@ -182,6 +183,61 @@ def _placements(tp: ToolPath, step_mm: float, step_deg: float):
     return np.concatenate(tips), np.concatenate(axes), np.concatenate(owner)
 
 
+def _coarse(c, tree, P, h, tolerance, T, A, progress=None):
+    """The sampled pass over placements ``(T, A)``: per placement the smallest signed distance of a part
+    sample to the cutting part, to shank and holder, and that sample; the samples inside the cutting
+    part with their depth (indices, depths). Module level: chunks of placements travel to workers."""
+    m = T.shape[0]
+    L_cut = float(c.length)
+    r_cut = float(c.profile_points(16)[:, 0].max())
+    L_all, r_all = c.body_length(), c.max_radius()
+    has_holder = bool(c.body_parts())
+    reach = math.hypot(L_all / 2, r_all) + h + tolerance
+    cut_d = np.full(m, np.inf)
+    hold_d = np.full(m, np.inf)
+    seed = np.full(m, -1)
+    d_idx: list = []
+    d_val: list = []
+    chunk = 256
+    for start in range(0, m, chunk):
+        sl = slice(start, min(m, start + chunk))
+        centers = T[sl] + A[sl] * (L_all / 2)
+        lists = tree.query_ball_point(centers, reach, workers=-1)
+        counts = np.fromiter((len(x) for x in lists), int, len(lists))
+        if counts.sum() == 0:
+            continue
+        pl = np.repeat(np.arange(sl.start, sl.stop), counts)
+        pi = np.concatenate([np.asarray(x, int) for x in lists if x])
+        rel = P[pi] - T[pl]
+        z = np.einsum("ij,ij->i", rel, A[pl])
+        rho = np.linalg.norm(rel - z[:, None] * A[pl], axis=1)
+        near = (z > -h - tolerance) & (z < L_cut + h + tolerance) & (rho < r_cut + h + tolerance)
+        sd = np.full(pi.size, np.inf)
+        sd[near] = c.cutting_distance_rz(rho[near], z[near])
+        inside = sd < 0
+        d_idx.append(pi[inside])
+        d_val.append(-sd[inside])
+        # per placement (pairs are grouped by placement): the smallest distance and its sample
+        nz = counts > 0
+        starts = np.r_[0, np.cumsum(counts[nz])[:-1]]
+        mins = np.minimum.reduceat(sd, starts)
+        first = np.flatnonzero(sd == np.repeat(mins, counts[nz]))
+        grp = np.searchsorted(starts, first, side="right") - 1
+        _, take = np.unique(grp, return_index=True)
+        owners = np.arange(sl.start, sl.stop)[nz]
+        better = mins < cut_d[owners]
+        cut_d[owners[better]] = mins[better]
+        seed[owners[better]] = pi[first[take]][better]
+        if has_holder:
+            hd = c.holder_distance_rz(rho, z)
+            np.minimum.at(hold_d, pl, hd)
+        if progress is not None:
+            progress(sl.stop, m, "tool placements")
+    idx = np.concatenate(d_idx) if d_idx else np.empty(0, int)
+    val = np.concatenate(d_val) if d_val else np.empty(0)
+    return cut_d, hold_d, seed, idx, val
+
+
 def verify(
     part,
     toolpath: ToolPath,
@@ -193,6 +249,8 @@ def verify(
     spacing_mm: float | None = None,
     progress: Progress | None = None,
     max_samples: int = 20_000_000,
+    chunks: int = 1,
+    map_chunks=None,
 ) -> VerifyResult:
     """Gouges and collisions of a tool path's tool body against every face of a part.
 
@@ -217,6 +275,11 @@ def verify(
         ``progress(done, total, message)`` over the placements.
     max_samples : int
         Work-size bound on the part's samples (about 100 bytes each with the k-d tree).
+    chunks : int
+        Split the placements into this many chunks for the sampled pass (each placement's result
+        depends on no other: the figures are the same to the last digit).
+    map_chunks : callable, optional
+        ``map``-like callable running the chunks (e.g. :func:`machsurf_cad.batchrun.dask_map`).
 
     Returns
     -------
@@ -278,48 +341,27 @@ def verify(
     m = T.shape[0]
     L_cut = float(c.length)
     r_cut = float(c.profile_points(16)[:, 0].max())
-    L_all, r_all = c.body_length(), c.max_radius()
-    has_holder = bool(c.body_parts())
-    reach = math.hypot(L_all / 2, r_all) + h + tolerance
-    cut_d = np.full(m, np.inf)
-    hold_d = np.full(m, np.inf)
-    seed = np.full(m, -1)
-    depth = np.zeros(P.shape[0])
     t1 = time.perf_counter()
-    chunk = 256
-    for start in range(0, m, chunk):
-        sl = slice(start, min(m, start + chunk))
-        centers = T[sl] + A[sl] * (L_all / 2)
-        lists = tree.query_ball_point(centers, reach, workers=-1)
-        counts = np.fromiter((len(x) for x in lists), int, len(lists))
-        if counts.sum() == 0:
-            continue
-        pl = np.repeat(np.arange(sl.start, sl.stop), counts)
-        pi = np.concatenate([np.asarray(x, int) for x in lists if x])
-        rel = P[pi] - T[pl]
-        z = np.einsum("ij,ij->i", rel, A[pl])
-        rho = np.linalg.norm(rel - z[:, None] * A[pl], axis=1)
-        near = (z > -h - tolerance) & (z < L_cut + h + tolerance) & (rho < r_cut + h + tolerance)
-        sd = np.full(pi.size, np.inf)
-        sd[near] = c.cutting_distance_rz(rho[near], z[near])
-        inside = sd < 0
-        np.maximum.at(depth, pi[inside], -sd[inside])
-        # per placement (pairs are grouped by placement): the smallest distance and its sample
-        nz = counts > 0
-        starts = np.r_[0, np.cumsum(counts[nz])[:-1]]
-        mins = np.minimum.reduceat(sd, starts)
-        first = np.flatnonzero(sd == np.repeat(mins, counts[nz]))
-        grp = np.searchsorted(starts, first, side="right") - 1
-        _, take = np.unique(grp, return_index=True)
-        owners = np.arange(sl.start, sl.stop)[nz]
-        better = mins < cut_d[owners]
-        cut_d[owners[better]] = mins[better]
-        seed[owners[better]] = pi[first[take]][better]
-        if has_holder:
-            hd = c.holder_distance_rz(rho, z)
-            np.minimum.at(hold_d, pl, hd)
-        if progress is not None:
-            progress(sl.stop, m, "tool placements")
+    n_chunks = int(chunks)
+    if n_chunks < 1:
+        raise InputError(f"chunks must be >= 1, got {chunks!r}")
+    if n_chunks == 1:
+        cut_d, hold_d, seed, d_idx, d_val = _coarse(c, tree, P, h, tolerance, T, A, progress)
+    else:
+        cuts = np.linspace(0, m, n_chunks + 1).astype(int)
+        runner = map_chunks if map_chunks is not None else map
+        parts = list(
+            runner(
+                functools.partial(_coarse, c, tree, P, h, tolerance),
+                [T[a:b] for a, b in zip(cuts[:-1], cuts[1:])],
+                [A[a:b] for a, b in zip(cuts[:-1], cuts[1:])],
+            )
+        )
+        cut_d, hold_d, seed = (np.concatenate([q[k] for q in parts]) for k in range(3))
+        d_idx = np.concatenate([q[3] for q in parts])
+        d_val = np.concatenate([q[4] for q in parts])
+    depth = np.zeros(P.shape[0])
+    np.maximum.at(depth, d_idx, d_val)
     t2 = time.perf_counter()
     # refine every close approach on the exact surfaces
     close = np.nonzero((seed >= 0) & (cut_d < tolerance + h))[0]

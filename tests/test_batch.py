@@ -100,6 +100,20 @@ def test_simulation_in_chunks_equals_one_run():
         ms.simulate(plane, tp, resolution=0.1, chunks=0)
 
 
+def test_verification_in_chunks_equals_one_run():
+    """Each placement's check depends on no other: chunks of placements give the same figures."""
+    plane = ms.geometry.builders.plane_patch()  # z = 0, 100 x 100 mm
+    x = np.linspace(10, 90, 60)
+    tips = [np.stack([x, np.full_like(x, y), np.where(x > 50, -0.03, 0.0)], 1) for y in (30.0, 50.0, 70.0)]
+    tp = ms.ToolPath.from_passes(tips, [np.tile([0.1, 0, 1], (60, 1))] * 3, cutter=ms.BullNoseEndMill(10, 2))
+    one = ms.verify(plane, tp, tolerance=0.01)
+    four = ms.verify(plane, tp, tolerance=0.01, chunks=4)
+    for name in ("cut_distance", "holder_distance", "worst_face", "status", "sample_depth"):
+        assert np.array_equal(getattr(one, name), getattr(four, name)), name
+    assert np.array_equal(one.worst_xyz, four.worst_xyz, equal_nan=True)
+    assert _figures(one.report()) == _figures(four.report()) and one.max_gouge > 0.02
+
+
 # ----------------------------------------------------------------------------- on a cluster
 @pytest.fixture(scope="module")
 def toolpath_csv(tmp_path_factory):
@@ -129,6 +143,17 @@ def test_local_cluster_runs_every_job_like_the_cli_and_reports_the_bad_one(tmp_p
             "3",
             "--no-render",
         ],  # fmt: skip
+        "check": [
+            "verify",
+            str(PART),
+            "--toolpath",
+            str(toolpath_csv),
+            "--tool",
+            "ball:D=10",
+            "--chunks",
+            "3",
+            "--no-render",
+        ],  # fmt: skip
         "bad-face": ["machining-surface", str(PART), "--face", "9", "--tool", "ball:D=10"],
     }
     jobs = [BatchJob(k, tuple(v)) for k, v in argvs.items()]
@@ -136,16 +161,16 @@ def test_local_cluster_runs_every_job_like_the_cli_and_reports_the_bad_one(tmp_p
     by = {j.name: j for j in res.jobs}
     assert [j.name for j in res.jobs] == list(argvs) and res.n_workers == 2
     assert by["bad-face"].status == "error" and by["bad-face"].exit_code == 1 and "face" in by["bad-face"].message
-    assert all(by[k].status == "ok" and by[k].worker is not None for k in ("reff", "surface", "sim"))
+    assert all(by[k].status == "ok" and by[k].worker is not None for k in ("reff", "surface", "sim", "check"))
     assert res.exit_code == 1
     rep = json.loads((tmp_path / "b" / "batch_report.json").read_text())
-    assert rep["n_ok"] == 3 and rep["n_error"] == 1 and rep["jobs"][3]["name"] == "bad-face"
+    assert rep["n_ok"] == 4 and rep["n_error"] == 1 and rep["jobs"][4]["name"] == "bad-face"
     rows = (tmp_path / "b" / "batch_figures.csv").read_text().splitlines()
-    assert len(rows) == 5 and rows[0].startswith("name,status,exit_code,time_s,worker")
+    assert len(rows) == 6 and rows[0].startswith("name,status,exit_code,time_s,worker")
     assert not (tmp_path / "b" / "bad-face").exists()  # a failed job writes nothing
-    # the same figures as direct runs (the simulation split in 3 chunks over the cluster, the direct in one)
-    direct_argv = {"sim": [a for a in argvs["sim"] if a not in ("--chunks", "3")]}
-    for name in ("reff", "surface", "sim"):
+    # the same figures as direct runs (simulation and check split in 3 chunks over the cluster, direct in one)
+    direct_argv = {k: [a for a in argvs[k] if a not in ("--chunks", "3")] for k in ("sim", "check")}
+    for name in ("reff", "surface", "sim", "check"):
         from machsurf_cad.cli import spec_from_argv
 
         d = ms.run_job(spec_from_argv(direct_argv.get(name, argvs[name])), tmp_path / "direct" / name)

@@ -58,10 +58,17 @@ def check_path(
     step_deg=1.0,
     spacing_mm=None,
     progress=None,
+    chunks: int = 1,
 ):
-    """Verify ``tp`` against ``faces``; say and draw the result; return ``(VerifyResult, report)``."""
+    """Verify ``tp`` against ``faces``; say and draw the result; return ``(VerifyResult, report)``.
+    ``chunks`` > 1 splits the placements (over the Dask cluster when the job runs in a batch)."""
     from ..gougecheck import verify
 
+    map_chunks = None
+    if int(chunks) > 1:
+        from ..batchrun.runner import worker_map
+
+        map_chunks = worker_map()
     res = verify(
         faces,
         tp,
@@ -71,6 +78,8 @@ def check_path(
         step_deg=step_deg,
         spacing_mm=spacing_mm,
         progress=progress,
+        chunks=int(chunks),
+        map_chunks=map_chunks,
     )
     rep = res.report()
     say(
@@ -232,6 +241,7 @@ def run_verify(spec: VerifyJob, out, say: Say, progress=None) -> JobOutcome:
             step_deg=spec.step_deg,
             spacing_mm=spec.spacing,
             progress=progress,
+            chunks=int(spec.chunks),
         )
         code = EXIT_OK if res.clean else EXIT_TOLERANCE
         say("clean" if res.clean else "NOT clean: gouges or collisions beyond the tolerance")

@@ -275,6 +275,7 @@ class VerifyJob(JobSpec):
     step: float = 1.0
     step_deg: float = 1.0
     spacing: float | None = None
+    chunks: int = 1
     render: bool = True
     command = "verify"
 
@@ -285,6 +286,8 @@ class VerifyJob(JobSpec):
         _positive("step (mm)", self.step)
         _positive("step_deg (deg)", self.step_deg)
         _positive("spacing (mm)", self.spacing, allow_none=True)
+        if int(self.chunks) < 1:
+            raise InputError(f"chunks must be >= 1, got {self.chunks}")
 
 
 @dataclass(frozen=True)
