@@ -201,6 +201,9 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     e.add_argument("--tilt", type=float, default=0.0, help="tilt angle, degrees (5 axes)")
     e.add_argument("--no-render", dest="render", action="store_false", help="numbers only")
     e.add_argument("--max-memory", type=float, default=4096.0, help="memory budget, MB: bigger work is refused")
+    e.add_argument(
+        "--chunks", type=int, default=1, help="split the directions into N groups (over the cluster in a batch)"
+    )
     e.add_argument("-o", "--out", default="out/reff", help="output folder")
 
     f = sub.add_parser("flank", help="flank milling settings of a cylindrical cutter on a ruled surface")
@@ -239,7 +242,9 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     w.add_argument("--step", type=float, default=1.0, help="largest tip step along each move, mm (default 1)")
     w.add_argument("--step-deg", type=float, default=1.0, help="largest axis step along each move, deg (default 1)")
     w.add_argument("--spacing", type=float, default=None, help="part sample spacing, mm (default min(1, D/8))")
-    w.add_argument("--chunks", type=int, default=1, help="split the placements into N chunks (over the cluster in a batch)")
+    w.add_argument(
+        "--chunks", type=int, default=1, help="split the placements into N chunks (over the cluster in a batch)"
+    )
     w.add_argument("--no-render", dest="render", action="store_false", help="numbers only")
     w.add_argument("-o", "--out", default="out/verify", help="output folder")
 

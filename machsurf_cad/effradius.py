@@ -32,6 +32,7 @@ concave radius is not larger than ``R_eff + h/2`` the cutter cannot reach: NaN w
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -338,6 +339,8 @@ def reff_maps(
     lead: float = 0.0,
     tilt: float = 0.0,
     max_memory_mb: float = 4096.0,
+    chunks: int = 1,
+    map_chunks=None,
 ) -> ReffMaps:
     """Effective radius (and step-over) maps of ``tool`` over a face, for machining directions.
 
@@ -362,6 +365,11 @@ def reff_maps(
         are then measured in the tool frame.
     max_memory_mb : float
         Work-size bound: a grid and set of directions needing more memory is refused with the estimate.
+    chunks : int
+        Split the directions into this many groups (each direction's map depends on no other: the
+        figures are the same to the last digit).
+    map_chunks : callable, optional
+        ``map``-like callable running the groups (e.g. :func:`machsurf_cad.batchrun.dask_map`).
 
     Returns
     -------
@@ -435,10 +443,15 @@ def reff_maps(
         n = -n
     area = np.linalg.norm(np.cross(d.su, d.sv), axis=-1)
     forms = _Forms(d, n, True)
-    maps = []
     t = time.perf_counter()
-    for theta in dirs:
-        maps.append(_direction_map(theta, forms, cutter, comp, scallop, axes, lead, tilt, inside))
+    if int(chunks) < 1:
+        raise InputError(f"chunks must be >= 1, got {chunks!r}")
+    n_groups = min(int(chunks), len(dirs))
+    groups = [list(g) for g in np.array_split(np.asarray(dirs, float), n_groups)]
+    job = functools.partial(_direction_maps, fm=forms, cutter=cutter, comp=comp, scallop=scallop, axes=axes,
+                            lead=lead, tilt=tilt, inside=inside)  # fmt: skip
+    runner = map_chunks if (map_chunks is not None and n_groups > 1) else map
+    maps = [m for group in runner(job, groups) for m in group]
     timings["maps_s"] = time.perf_counter() - t
     best_t = best_v = None
     if len(maps) > 1:
@@ -521,6 +534,11 @@ class _Forms:
         self.det = self.E * self.G - self.F * self.F
         if second:
             self.L, self.M, self.N = _dot(d.suu, n), _dot(d.suv, n), _dot(d.svv, n)
+
+
+def _direction_maps(thetas, *, fm, cutter, comp, scallop, axes, lead, tilt, inside) -> list:
+    """Maps of a group of directions (module level: groups travel to workers)."""
+    return [_direction_map(float(th), fm, cutter, comp, scallop, axes, lead, tilt, inside) for th in thetas]
 
 
 def _direction_map(theta, fm: _Forms, cutter, comp, scallop, axes, lead, tilt, inside) -> DirectionMap:

@@ -114,6 +114,16 @@ def test_verification_in_chunks_equals_one_run():
     assert _figures(one.report()) == _figures(four.report()) and one.max_gouge > 0.02
 
 
+def test_reff_maps_in_direction_groups_equal_one_run():
+    face = ms.example("bezier5")
+    one = ms.reff_maps(face, "bull:D=16,r=3", directions="all", grid=24, scallop=0.01)
+    five = ms.reff_maps(face, "bull:D=16,r=3", directions="all", grid=24, scallop=0.01, chunks=5)
+    assert len(one.directions) == 36 and np.array_equal(one.best_theta_deg, five.best_theta_deg)
+    for a, b in zip(one.directions, five.directions):
+        assert a.theta_deg == b.theta_deg and np.array_equal(a.r_eff, b.r_eff, equal_nan=True)
+    assert _figures(one.report()) == _figures(five.report())
+
+
 # ----------------------------------------------------------------------------- on a cluster
 @pytest.fixture(scope="module")
 def toolpath_csv(tmp_path_factory):
@@ -128,7 +138,20 @@ def toolpath_csv(tmp_path_factory):
 @needs_kernel
 def test_local_cluster_runs_every_job_like_the_cli_and_reports_the_bad_one(tmp_path, toolpath_csv):
     argvs = {
-        "reff": ["reff", "--example", "bezier5", "--tool", "bull:D=16,r=3", "--grid", "12", "--no-render"],
+        "reff": [
+            "reff",
+            "--example",
+            "bezier5",
+            "--tool",
+            "bull:D=16,r=3",
+            "--grid",
+            "12",
+            "--direction",
+            "all",
+            "--chunks",
+            "3",
+            "--no-render",
+        ],  # fmt: skip
         "surface": ["machining-surface", str(PART), "--tool", "ball:D=10", "--axes", "3"],
         "sim": [
             "simulate",
@@ -168,8 +191,8 @@ def test_local_cluster_runs_every_job_like_the_cli_and_reports_the_bad_one(tmp_p
     rows = (tmp_path / "b" / "batch_figures.csv").read_text().splitlines()
     assert len(rows) == 6 and rows[0].startswith("name,status,exit_code,time_s,worker")
     assert not (tmp_path / "b" / "bad-face").exists()  # a failed job writes nothing
-    # the same figures as direct runs (simulation and check split in 3 chunks over the cluster, direct in one)
-    direct_argv = {k: [a for a in argvs[k] if a not in ("--chunks", "3")] for k in ("sim", "check")}
+    # the same figures as direct runs (reff, simulation and check split in 3 over the cluster, direct in one)
+    direct_argv = {k: [a for a in argvs[k] if a not in ("--chunks", "3")] for k in ("sim", "check", "reff")}
     for name in ("reff", "surface", "sim", "check"):
         from machsurf_cad.cli import spec_from_argv
 

@@ -15,6 +15,15 @@ def _f(x, fmt: str = ".4g") -> str:
     return "n/a" if x is None else format(x, fmt)
 
 
+def _chunk_map(chunks: int):
+    """Direction groups of a batch job run over its Dask cluster; elsewhere one after the other."""
+    if int(chunks) <= 1:
+        return None
+    from ..batchrun.runner import worker_map
+
+    return worker_map()
+
+
 def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
     from ..cutters import parse_cutter
     from ..effradius import parse_directions, reff_maps
@@ -35,6 +44,8 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
         lead=spec.lead,
         tilt=spec.tilt,
         max_memory_mb=spec.max_memory,
+        chunks=int(spec.chunks),
+        map_chunks=_chunk_map(spec.chunks),
     )
     rep = maps.report()
     R = cutter.D / 2

@@ -168,12 +168,15 @@ class ReffJob(JobSpec):
     tilt: float = 0.0
     render: bool = True
     max_memory: float = 4096.0
+    chunks: int = 1
     command = "reff"
 
     def __post_init__(self) -> None:
         _one_input(self.part, self.example)
         _choice("axes", self.axes, (3, 5))
         _positive("scallop (mm)", self.scallop, allow_none=True)
+        if int(self.chunks) < 1:
+            raise InputError(f"chunks must be >= 1, got {self.chunks}")
 
 
 @dataclass(frozen=True)
