@@ -211,7 +211,7 @@ def test_local_cluster_runs_every_job_like_the_cli_and_reports_the_bad_one(tmp_p
 def test_an_unreachable_scheduler_is_a_clear_error_within_the_timeout(tmp_path):
     t = time.perf_counter()
     with pytest.raises(ms.InputError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
-        ms.batch([BatchJob("r", ("reff", "--example", "bezier5", "--tool", "ball:D=10"))], tmp_path / "o",
+        ms.batch([{"name": "r", "argv": ["reff", "--example", "bezier5", "--tool", "ball:D=10"]}], tmp_path / "o",
                  scheduler="tcp://127.0.0.1:9", timeout_s=2)  # fmt: skip
     assert time.perf_counter() - t < 15
     assert not (tmp_path / "o").exists()
@@ -280,6 +280,8 @@ def test_batch_command_line(tmp_path):
         {"name": "r2", "argv": ["reff", "--example", "bezier5", "--tool", "bull:D=10,r=2", "--grid", "8",
                                 "--no-render"]},
     ]}))  # fmt: skip
+    with pytest.raises(ms.InputError, match="non-empty list of BatchJob"):
+        ms.batch([], tmp_path / "none")
     r = run("batch", jobs, "-o", tmp_path / "out", "--workers", "1")
     assert r.returncode == 0, r.stdout + r.stderr
     assert "2 of 2 job(s) ok" in r.stdout

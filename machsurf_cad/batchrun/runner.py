@@ -239,8 +239,8 @@ def batch(
 
     Parameters
     ----------
-    jobs : sequence of BatchJob
-        From :func:`read_jobs` or built in Python; names unique.
+    jobs : sequence of BatchJob or of dict
+        From :func:`read_jobs`, built in Python, or mappings ``{"name": ..., "argv": [...]}``; names unique.
     out : str or Path
         Output folder (written whole when the batch ends; an earlier batch there needs ``overwrite``).
     scheduler : str, optional
@@ -262,6 +262,12 @@ def batch(
 
     say = say or (lambda msg="": None)
     jobs = tuple(jobs)
+    if jobs and all(isinstance(j, dict) for j in jobs):  # {"name": ..., "argv": [...]} as in a jobs file
+        from .jobsfile import parse_jobs
+
+        jobs = parse_jobs({"jobs": list(jobs)}, source="batch()")
+    if not jobs or not all(isinstance(j, BatchJob) for j in jobs):
+        raise InputError("batch() needs a non-empty list of BatchJob (or of {'name': ..., 'argv': [...]})")
     names = [j.name for j in jobs]
     if len(set(names)) != len(names):
         raise InputError("duplicate job names: " + ", ".join(sorted({n for n in names if names.count(n) > 1})))
