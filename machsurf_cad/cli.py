@@ -239,7 +239,13 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     w.add_argument("--holder", default=None, help="holder cylinder above the shank: D=..,L=.. (mm)")
     w.add_argument("--faces", default="all", help="faces to check: all (default) or indices 0,3,5")
     w.add_argument("--tol", type=float, default=0.01, help="gouge / collision tolerance, mm (default 0.01)")
-    w.add_argument("--step", type=float, default=1.0, help="largest tip step along each move, mm (default 1)")
+    w.add_argument(
+        "--step",
+        type=float,
+        default=None,
+        help="largest tip step along each move, mm (default min(1, sqrt(4 rho tol)): what the motion between two "
+        "placements can cut deeper stays below tol/2, reported as motion_bound_mm)",
+    )
     w.add_argument("--step-deg", type=float, default=1.0, help="largest axis step along each move, deg (default 1)")
     w.add_argument("--spacing", type=float, default=None, help="part sample spacing, mm (default min(1, D/8))")
     w.add_argument(

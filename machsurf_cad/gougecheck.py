@@ -67,6 +67,7 @@ class VerifyResult(Result):
     n_placements: int
     warnings: tuple = ()
     time_s: dict | None = None
+    motion_bound_mm: float = 0.0
 
     @property
     def gouge_depth(self) -> np.ndarray:
@@ -113,6 +114,7 @@ class VerifyResult(Result):
             "sample_spacing_mm": self.spacing_mm,
             "motion_step_mm": self.step_mm,
             "motion_step_deg": self.step_deg,
+            "motion_bound_mm": self.motion_bound_mm,
             "tolerance_mm": self.tolerance,
             "n_gouging_positions": int(np.count_nonzero(self.status == GOUGE)),
             "max_gouge_mm": self.max_gouge,
@@ -162,6 +164,15 @@ def _sample_face(face: Face, spacing: float):
     P = s.evaluate_grid(us, vs).reshape(-1, 3)
     keep = face.contains_uv(U.ravel(), V.ravel()) if face.is_trimmed else np.ones(U.size, bool)
     return P[keep], U.ravel()[keep], V.ravel()[keep], (u1 - u0) / (nu - 1), (v1 - v0) / (nv - 1)
+
+
+def motion_radius(cutter) -> float:
+    """Smallest radius (mm) whose sagitta bounds what sampling a motion misses: the smallest convex arc
+    of the cutting profile, or the tool radius (its rim's circle in plan)."""
+    from .cutter_profiles import ArcSegment
+
+    rs = [seg.radius for seg in cutter.profile() if isinstance(seg, ArcSegment) and seg.convex]
+    return float(min(rs + [float(cutter.radius)]))
 
 
 def _placements(tp: ToolPath, step_mm: float, step_deg: float):
@@ -244,7 +255,7 @@ def verify(
     cutter=None,
     *,
     tolerance: float = 0.01,
-    step_mm: float = 1.0,
+    step_mm: float | None = None,
     step_deg: float = 1.0,
     spacing_mm: float | None = None,
     progress: Progress | None = None,
@@ -267,7 +278,11 @@ def verify(
         within it of the part, or a rapid move's cutting part inside it, is a collision.
     step_mm, step_deg : float
         Largest step of the tip (mm) and of the axis (degrees) between checked placements along
-        each linear move.
+        each linear move. Between two placements the swept tool can reach deeper than both by up to
+        ``step_mm^2 / (8 rho)`` (``rho`` the smallest profile arc radius, or the tool radius: the rim's
+        circle in plan); that bound is reported (``motion_bound_mm``) and the default step,
+        ``min(1, sqrt(4 rho tolerance))``, keeps it at half the tolerance: a gouge deeper than 1.5
+        times the tolerance is never read as clear.
     spacing_mm : float, optional
         Part sample spacing (default min(1, D/8) mm); every close approach is refined on the exact
         surface to 1/18 of it.
@@ -311,7 +326,8 @@ def verify(
     from .checks import positive
 
     tolerance = positive("tolerance", tolerance)
-    step_mm = positive("step_mm", step_mm)
+    rho_motion = motion_radius(c)
+    step_mm = min(1.0, math.sqrt(4.0 * rho_motion * tolerance)) if step_mm is None else positive("step_mm", step_mm)
     step_deg = positive("step_deg", step_deg, "deg")
     faces = _faces(part)
     h = positive("spacing_mm", spacing_mm) if spacing_mm is not None else min(1.0, c.D / 8.0)
@@ -438,6 +454,7 @@ def verify(
         int(m),
         tuple(warns),
         times,
+        float(step_mm) ** 2 / (8.0 * rho_motion),
     )
 
 

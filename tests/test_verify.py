@@ -8,6 +8,7 @@ from conftest import ROOT, needs_kernel
 from helpers import assert_close
 
 import machsurf_cad as ms
+from machsurf_cad.geometry import builders
 
 
 def _trough(rho: float, half_angle_deg: float = 60.0, length: float = 60.0):
@@ -328,3 +329,22 @@ def test_trim_gouges_writes_the_clear_stretches(tmp_path):  # the command writes
     assert t["recheck"]["clean"] and t["n_cut_kept"] < t["n_cut_before"]
     back = ms.read_apt(out / "toolpath.apt")
     assert ms.verify(face, back, ms.BullNoseEndMill(28, 4)).clean  # what was written is clean, read back from the file
+
+
+def test_the_motion_between_placements_cannot_hide_a_gouge():
+    """A ball D10 moving straight over a convex ridge (two planes meeting at x = 0, slopes -+0.2) with
+    its tip 0.02 mm below the ridge: the motion gouges 0.02 mm at x = 0, where no position is.
+    Placements 1 mm apart (x = +-0.5 nearest) read a clearance of 0.5^2 / (2 R) - 0.02 = 0.005 mm: a
+    silent gouge. The default step sqrt(4 R tol) = 0.447 mm misses at most step^2 / (8 R) = tol / 2
+    (reported): the gouge is flagged and its depth within that bound."""
+    left = builders.plane_patch((-10, -10, -2), (10, 0, 2), (0, 20, 0))
+    right = builders.plane_patch((0, -10, 0), (10, 0, -2), (0, 20, 0))
+    tips = [np.array([[-2.5, 0.0, -0.02], [2.5, 0.0, -0.02]])]
+    tp = ms.ToolPath.from_passes(tips, [np.array([[0.0, 0, 1]] * 2)], cutter=ms.BallEndMill(10), clearance=5)
+    coarse = ms.verify([left, right], tp, tolerance=0.01, step_mm=1.0)
+    assert coarse.clean and abs(coarse.cut_distance.min() - 0.005) < 1e-3  # a 1 mm step sees 0.005 clearance
+    assert abs(coarse.motion_bound_mm - 1 / 40) < 1e-12  # ... and says it may miss 0.025 mm
+    res = ms.verify([left, right], tp, tolerance=0.01)
+    assert math.isclose(res.step_mm, math.sqrt(4 * 5 * 0.01)) and math.isclose(res.motion_bound_mm, 0.005)
+    assert not res.clean and 0.02 - res.motion_bound_mm <= res.max_gouge <= 0.02 + 1e-6
+    assert res.report()["motion_bound_mm"] == res.motion_bound_mm

@@ -54,7 +54,7 @@ def check_path(
     tolerance: float,
     render: bool,
     cutter=None,
-    step_mm=1.0,
+    step_mm=None,
     step_deg=1.0,
     spacing_mm=None,
     progress=None,
@@ -84,7 +84,8 @@ def check_path(
     rep = res.report()
     say(
         f"tool body against {rep['n_faces']} face(s) ({rep['n_placements_checked']} placements, motion steps "
-        f"{res.step_mm:g} mm / {res.step_deg:g} deg, part sampled every {res.spacing_mm:.3g} mm and refined on the "
+        f"{res.step_mm:.3g} mm / {res.step_deg:g} deg, between them at most {res.motion_bound_mm:.2g} mm deeper; "
+        f"part sampled every {res.spacing_mm:.3g} mm and refined on the "
         f"exact faces): {rep['n_gouging_positions']} gouging position(s), max gouge {rep['max_gouge_mm']:.4g} mm "
         f"(tol {tolerance:g}), {rep['n_collisions']} collision(s)"
         + (f", min clearance {rep['min_clearance_mm']:.4g} mm" if rep["min_clearance_mm"] is not None else "")

@@ -275,7 +275,7 @@ class VerifyJob(JobSpec):
     holder: str | None = None
     faces: str = "all"
     tol: float = 0.01
-    step: float = 1.0
+    step: float | None = None
     step_deg: float = 1.0
     spacing: float | None = None
     chunks: int = 1
@@ -286,7 +286,7 @@ class VerifyJob(JobSpec):
         if not self.part or not self.toolpath:
             raise InputError("verify needs a STEP part and --toolpath")
         _positive("tol (mm)", self.tol)
-        _positive("step (mm)", self.step)
+        _positive("step (mm)", self.step, allow_none=True)
         _positive("step_deg (deg)", self.step_deg)
         _positive("spacing (mm)", self.spacing, allow_none=True)
         if int(self.chunks) < 1:
