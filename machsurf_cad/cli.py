@@ -226,6 +226,9 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
         metavar="TOL",
         help="smallest and largest R keeping the whole surface within TOL mm",
     )
+    f.add_argument(
+        "--chunks", type=int, default=1, help="--whole: split the rules into N spans (over the cluster in a batch)"
+    )
     f.add_argument("--no-render", dest="render", action="store_false", help="numbers and files, no pictures")
     _gouge(f, "--tol")
     _post(f)

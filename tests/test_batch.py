@@ -124,6 +124,19 @@ def test_reff_maps_in_direction_groups_equal_one_run():
     assert _figures(one.report()) == _figures(five.report())
 
 
+@pytest.mark.parametrize("kind", ["optimum", "standard-distributed"])
+def test_flank_rules_in_spans_equal_one_run(kind):
+    """Each span of rules starts from the settings a single run has there: the same rules and figures."""
+    from machsurf_cad.flank_milling import flank_path
+
+    surf = ms.examples.liu_ruled()
+    one = flank_path(surf, 10.0, kind, tolerance=0.005)
+    four = flank_path(surf, 10.0, kind, tolerance=0.005, chunks=4)
+    assert len(one.settings) > 20 and np.array_equal(one.u, four.u)
+    assert np.array_equal(one.tip, four.tip) and np.array_equal(one.axis, four.axis)
+    assert _figures(one.report()) == _figures(four.report())
+
+
 # ----------------------------------------------------------------------------- on a cluster
 @pytest.fixture(scope="module")
 def toolpath_csv(tmp_path_factory):
@@ -178,6 +191,7 @@ def test_local_cluster_runs_every_job_like_the_cli_and_reports_the_bad_one(tmp_p
             "--no-render",
         ],  # fmt: skip
         "bad-face": ["machining-surface", str(PART), "--face", "9", "--tool", "ball:D=10"],
+        "flank": ["flank", "--example", "liu", "--tool", "cyl:D=20", "--whole", "--chunks", "3", "--no-render"],
     }
     jobs = [BatchJob(k, tuple(v)) for k, v in argvs.items()]
     res = ms.batch(jobs, tmp_path / "b", workers=2)
@@ -185,15 +199,17 @@ def test_local_cluster_runs_every_job_like_the_cli_and_reports_the_bad_one(tmp_p
     assert [j.name for j in res.jobs] == list(argvs) and res.n_workers == 2
     assert by["bad-face"].status == "error" and by["bad-face"].exit_code == 1 and "face" in by["bad-face"].message
     assert all(by[k].status == "ok" and by[k].worker is not None for k in ("reff", "surface", "sim", "check"))
-    assert res.exit_code == 1
+    # the flank path misses its 0.01 mm on Liu's surface with R 10: exit 2, its outputs written
+    assert by["flank"].exit_code == 2 and "NOT met" in by["flank"].message and "envelope.step" in by["flank"].files
+    assert res.exit_code == 2  # a job missed a tolerance
     rep = json.loads((tmp_path / "b" / "batch_report.json").read_text())
-    assert rep["n_ok"] == 4 and rep["n_error"] == 1 and rep["jobs"][4]["name"] == "bad-face"
+    assert rep["n_ok"] == 4 and rep["n_error"] == 2 and rep["jobs"][4]["name"] == "bad-face"
     rows = (tmp_path / "b" / "batch_figures.csv").read_text().splitlines()
-    assert len(rows) == 6 and rows[0].startswith("name,status,exit_code,time_s,worker")
+    assert len(rows) == 7 and rows[0].startswith("name,status,exit_code,time_s,worker")
     assert not (tmp_path / "b" / "bad-face").exists()  # a failed job writes nothing
     # the same figures as direct runs (reff, simulation and check split in 3 over the cluster, direct in one)
-    direct_argv = {k: [a for a in argvs[k] if a not in ("--chunks", "3")] for k in ("sim", "check", "reff")}
-    for name in ("reff", "surface", "sim", "check"):
+    direct_argv = {k: [a for a in argvs[k] if a not in ("--chunks", "3")] for k in ("sim", "check", "reff", "flank")}
+    for name in ("reff", "surface", "sim", "check", "flank"):
         from machsurf_cad.cli import spec_from_argv
 
         d = ms.run_job(spec_from_argv(direct_argv.get(name, argvs[name])), tmp_path / "direct" / name)
@@ -241,7 +257,8 @@ def test_external_scheduler_and_workers_survive_a_killed_worker(tmp_path):
     try:
         time.sleep(2.0)
         for name in ("wa", "wb"):
-            procs.append(_dask("worker", addr, "--nthreads", "1", "--nworkers", "1", "--name", name,
+            # no nanny: the worker keeps this process's BLAS threads (a nanny sets one: last digits differ)
+            procs.append(_dask("worker", addr, "--nthreads", "1", "--no-nanny", "--name", name,
                                "--no-dashboard", "--death-timeout", "60"))  # fmt: skip
         client = distributed.Client(addr, timeout="60s")
         client.wait_for_workers(2, timeout=60)

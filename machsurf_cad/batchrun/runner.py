@@ -21,6 +21,7 @@ from ..results import Result
 from .jobsfile import BatchJob
 
 PATH_FIELDS = ("part", "toolpath", "path", "nominal", "candidate")
+_BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 """Job spec fields that name input files (sent to workers that cannot read them)."""
 
 
@@ -216,9 +217,17 @@ def _client(scheduler: str | None, workers: int | None, timeout_s: float):
     n = int(workers) if workers else (os.cpu_count() or 1)
     if n < 1:
         raise InputError(f"workers must be >= 1, got {workers}")
-    cluster = LocalCluster(
-        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
-    )
+    # Dask starts workers with one BLAS thread; a least-squares fit then rounds differently in the last
+    # digit from the same job run by the CLI: keep the threads a plain process has
+    # (set before the worker processes start: BLAS reads them when it loads)
+    import dask
+
+    key = "distributed.nanny.pre-spawn-environ"
+    blas = {k: os.environ.get(k, str(os.cpu_count() or 1)) for k in _BLAS_THREADS}
+    with dask.config.set({key: {**dask.config.get(key, {}), **blas}}):
+        cluster = LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
+        )
     return Client(cluster), cluster
 
 

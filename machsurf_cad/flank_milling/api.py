@@ -119,6 +119,8 @@ def flank(
     ruled_tolerance: float = 1e-6,
     clearance: float = 5.0,
     progress: Progress | None = None,
+    chunks: int = 1,
+    map_chunks=None,
 ) -> FlankResult:
     """Flank milling of a ruled surface by a cylindrical cutter (Redonnet et al.), as ``machsurf flank``.
 
@@ -145,6 +147,8 @@ def flank(
         Approach and retract distance along the axis of the tool path, mm.
     progress : Progress, optional
         ``progress(done, total, message)`` along the whole surface.
+    chunks, map_chunks : int, callable
+        ``whole``: the rules in spans, run by ``map_chunks`` (see :func:`flank_path`).
 
     Returns
     -------
@@ -193,7 +197,9 @@ def flank(
         from .path import envelope_deviation, envelope_surface, flank_path
 
         t1 = time.perf_counter()
-        path = flank_path(surf, R, setting, side=side, tolerance=tolerance, progress=progress)
+        path = flank_path(
+            surf, R, setting, side=side, tolerance=tolerance, progress=progress, chunks=chunks, map_chunks=map_chunks
+        )
         tp = path.toolpath(FlatEndMill(cutter.D, max(cutter.length, path.length)), clearance=clearance)
         env = envelope_surface(path, tolerance=envelope_tolerance)
         dev = envelope_deviation(path, env.surface)

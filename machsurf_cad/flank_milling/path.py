@@ -11,6 +11,7 @@ envelope paper's eq. (21) with r' = 0); it is fitted by the certified engine.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -104,6 +105,8 @@ def flank_path(
     min_rules: int = 9,
     n_rules: int | None = None,
     progress=None,
+    chunks: int = 1,
+    map_chunks=None,
 ) -> FlankPath:
     """Settings on rules along u and their CL points and axes.
 
@@ -128,6 +131,12 @@ def flank_path(
         Tool length beyond each directrix, mm.
     progress : Progress, optional
         ``progress(done, total, message)``.
+    chunks : int
+        Split the surface into this many spans of the initial rules, refined and checked
+        independently (each span starts from the same settings as a single run: the same figures,
+        unless the rule budget ``max_rules`` is reached, which each span then meets on its own).
+    map_chunks : callable, optional
+        ``map``-like callable running the spans (e.g. :func:`machsurf_cad.batchrun.dask_map`).
 
     Returns
     -------
@@ -149,51 +158,35 @@ def flank_path(
     """
     if not tolerance > 0:
         raise InputError("tolerance must be > 0 mm")
+    if int(chunks) < 1:
+        raise InputError(f"chunks must be >= 1, got {chunks!r}")
     lo, hi = surface.u_range
     eps = 1e-6 * (hi - lo)  # sqrt-type directrices can be singular exactly at the ends
-    cache: dict[float, Setting] = {}
-
-    def setting(u, near=None):
-        key = float(u)
-        if key not in cache:
-            cache[key] = tool_setting(surface, key, R, kind, side=side, start=near)
-        return cache[key]
-
     us = list(np.linspace(lo + eps, hi - eps, n_rules or min_rules))
+    sets0: list[Setting] = []
     prev = None
     for u in us:  # sweep once in order so each rule continues from the previous one
-        prev = setting(u, prev)
-    jumps = []
-    if n_rules is None:
-        min_span = 1e-5 * (hi - lo)
-        i = 0
-        while i < len(us) - 1:
-            a, b = us[i], us[i + 1]
-            m = 0.5 * (a + b)
-            sa, sb = setting(a), setting(b)
-            sm = setting(m, sa)
-            (ta, aa, La), (tb, ab, Lb), (tm, am, Lm) = (x.placement(overhang) for x in (sa, sb, sm))
-            L = max(La, Lb, Lm)
-            ti, ai = 0.5 * (ta + tb), (aa + ab) / np.linalg.norm(aa + ab)
-            err = max(np.linalg.norm((ti + s_ * ai) - (tm + s_ * am)) for s_ in (0.0, 0.5 * L, L))
-            if err > tolerance and len(us) < max_rules and (b - a) > min_span:
-                us.insert(i + 1, m)
-                continue
-            if err > tolerance:
-                jumps.append({"u": float(m), "axis_jump_mm": float(err)})
-            if progress is not None:
-                progress(i, len(us), "settings along the surface")
-            i += 1
-    sets = tuple(setting(u) for u in us)
-    tips, axes, lengths = zip(*(s.placement(overhang) for s in sets))
+        prev = tool_setting(surface, float(u), R, kind, side=side, start=prev)
+        sets0.append(prev)
+    n_chunks = max(1, min(int(chunks), len(us) - 1))
+    cuts = np.linspace(0, len(us) - 1, n_chunks + 1).astype(int)
+    spans = [(us[a : b + 1], sets0[a : b + 1], k > 0) for k, (a, b) in enumerate(zip(cuts[:-1], cuts[1:]))]
+    job = functools.partial(
+        _refine_span, surface, float(R), kind, side, float(tolerance), float(overhang), n_rules is None,
+        max_rules - len(us), 1e-5 * (hi - lo), progress if n_chunks == 1 else None,
+    )  # fmt: skip
+    runner = map_chunks if (map_chunks is not None and n_chunks > 1) else map
+    parts = list(runner(job, spans))
+    us = [u for p in parts for u in p[0]]
+    sets = tuple(x for p in parts for x in p[1])
+    jumps = [j for p in parts for j in p[2]]
+    g = max(p[3] for p in parts)
+    uc = max(p[4] for p in parts)
     worst: dict = {}
-    g, uc = 0.0, 0.0
-    for s in sets:
-        e = interference(surface, s, n_v=101)
-        g = max(g, e.max_gouge)
-        uc = max(uc, e.max_undercut)
-        if not worst or e.max_abs > abs(worst["e_mm"]):
-            worst = {**e.worst(), "rule_u": s.frame.u_p}
+    for p in parts:
+        if p[5] and (not worst or abs(p[5]["e_mm"]) > abs(worst["e_mm"])):
+            worst = p[5]
+    tips, axes, lengths = zip(*(s.placement(overhang) for s in sets))
     return FlankPath(
         surface,
         float(R),
@@ -210,6 +203,56 @@ def flank_path(
         float(tolerance),
         tuple(jumps),
     )
+
+
+def _refine_span(surface, R, kind, side, tolerance, overhang, adaptive, budget, min_span, progress, span):
+    """Rules between consecutive initial rules of one span (``(us, settings, drop_first)``), split
+    until the interpolated axis is within ``tolerance``, and their interference. Module level: spans
+    travel to workers; each span sees exactly what a single run sees there (same starts)."""
+    us0, sets0, drop_first = span
+    us = [float(u) for u in us0]
+    cache: dict[float, Setting] = {u: st for u, st in zip(us, sets0)}
+
+    def setting(u, near=None):
+        key = float(u)
+        if key not in cache:
+            cache[key] = tool_setting(surface, key, R, kind, side=side, start=near)
+        return cache[key]
+
+    jumps = []
+    n_added = 0
+    if adaptive:
+        i = 0
+        while i < len(us) - 1:
+            a, b = us[i], us[i + 1]
+            m = 0.5 * (a + b)
+            sa, sb = setting(a), setting(b)
+            sm = setting(m, sa)
+            (ta, aa, La), (tb, ab, Lb), (tm, am, Lm) = (x.placement(overhang) for x in (sa, sb, sm))
+            L = max(La, Lb, Lm)
+            ti, ai = 0.5 * (ta + tb), (aa + ab) / np.linalg.norm(aa + ab)
+            err = max(np.linalg.norm((ti + s_ * ai) - (tm + s_ * am)) for s_ in (0.0, 0.5 * L, L))
+            if err > tolerance and n_added < budget and (b - a) > min_span:
+                us.insert(i + 1, m)
+                n_added += 1
+                continue
+            if err > tolerance:
+                jumps.append({"u": float(m), "axis_jump_mm": float(err)})
+            if progress is not None:
+                progress(i, len(us), "settings along the surface")
+            i += 1
+    if drop_first:  # the previous span ends on this rule
+        us = us[1:]
+    sets = [setting(u) for u in us]
+    worst: dict = {}
+    g, uc = 0.0, 0.0
+    for st in sets:
+        e = interference(surface, st, n_v=101)
+        g = max(g, e.max_gouge)
+        uc = max(uc, e.max_undercut)
+        if not worst or e.max_abs > abs(worst["e_mm"]):
+            worst = {**e.worst(), "rule_u": st.frame.u_p}
+    return us, sets, jumps, g, uc, worst
 
 
 # ----------------------------------------------------------------------------- envelope

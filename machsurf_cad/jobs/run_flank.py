@@ -25,6 +25,15 @@ def _example_face(name: str):
     return Face(example(name, "surface"), name=name)
 
 
+def _chunk_map(chunks: int):
+    """Spans of rules of a batch job run over its Dask cluster; elsewhere one after the other."""
+    if int(chunks) <= 1:
+        return None
+    from ..batchrun.runner import worker_map
+
+    return worker_map()
+
+
 def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
     from ..flank_milling import flank, mean_normal
 
@@ -42,6 +51,8 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
         radius_range=spec.radius_range,
         clearance=spec.clearance,
         progress=progress,
+        chunks=int(spec.chunks),
+        map_chunks=_chunk_map(spec.chunks),
     )
     st_, e, cutter = res.setting, res.interference, res.cutter
     rep = res.report()

@@ -196,6 +196,7 @@ class FlankJob(_Post, JobSpec):
     envelope_tol: float = 1e-3
     study: bool = False
     radius_range: float | None = None
+    chunks: int = 1
     render: bool = True
     gouge_tol: float | None = None
     allow_gouge: bool = False
@@ -212,6 +213,8 @@ class FlankJob(_Post, JobSpec):
         _positive("envelope_tol (mm)", self.envelope_tol)
         _positive("radius_range (mm)", self.radius_range, allow_none=True)
         _positive("fit_ruled (mm)", self.fit_ruled, allow_none=True)
+        if int(self.chunks) < 1:
+            raise InputError(f"chunks must be >= 1, got {self.chunks}")
         self._check_post()
 
 
