@@ -188,3 +188,35 @@ def test_eq18_side_minus_one_optimum_exists_far_from_the_standard_setting():
     assert abs(st.gamma_deg + 26.6) < 0.05 and abs(st.h0 - 69.6) < 0.05
     assert abs(interference(s, st).max_abs - 17.12) < 0.01
     assert st.contacts["tangency_residual_mm"] < 1e-9
+
+
+def test_error_along_the_rule_is_exported_for_every_setting(tmp_path):
+    """``flank`` writes the error along the rule of every setting (the paper's figures 6 and 7) as CSV
+    (and a plot): the columns equal an independent call of ``interference`` per setting, and the
+    optimum's on Liu's middle rule (R 10) is the pinned 0.03393 mm."""
+    import csv
+
+    from helpers import run
+
+    from machsurf_cad.flank_milling import interference, tool_setting
+
+    r = run("flank", "--example", "liu", "--tool", "cyl:D=20", "--rule", "0.5", "--no-render", "-o", tmp_path / "f")
+    assert r.returncode == 0, r.stdout + r.stderr
+    rows = list(csv.reader((tmp_path / "f" / "error_along_rule.csv").open()))
+    head, data = rows[0], np.array(rows[1:], float)
+    assert head == ["v", "standard-tangent_mm", "standard-distributed_mm", "optimum_mm", "minimax_mm"]
+    assert data.shape == (201, 5) and np.allclose(data[:, 0], np.linspace(0, 1, 201), atol=1e-6)
+    surf = examples.liu_ruled()
+    lo, hi = surf.u_range
+    for j, kind in enumerate(head[1:], 1):
+        e = interference(surf, tool_setting(surf, lo + 0.5 * (hi - lo), 10.0, kind.removesuffix("_mm")))
+        assert np.abs(data[:, j] - e.e).max() < 1e-8, kind
+    assert abs(np.abs(data[:, 3]).max() - 0.03393) < 5e-6
+
+
+def test_error_along_the_rule_plot(tmp_path):
+    pytest.importorskip("matplotlib")
+    from helpers import run
+
+    r = run("flank", "--example", "liu", "--tool", "cyl:D=20", "--rule", "0.5", "-o", tmp_path / "f")
+    assert r.returncode == 0 and (tmp_path / "f" / "error_along_rule.png").stat().st_size > 20_000

@@ -233,7 +233,7 @@ def _client(scheduler: str | None, workers: int | None, timeout_s: float):
 
 def batch(
     jobs,
-    out,
+    out="out/batch",
     *,
     scheduler: str | None = None,
     workers: int | None = None,
@@ -251,7 +251,8 @@ def batch(
     jobs : sequence of BatchJob or of dict
         From :func:`read_jobs`, built in Python, or mappings ``{"name": ..., "argv": [...]}``; names unique.
     out : str or Path
-        Output folder (written whole when the batch ends; an earlier batch there needs ``overwrite``).
+        Output folder (default ``out/batch``; written whole when the batch ends; an earlier batch there
+        needs ``overwrite``).
     scheduler : str, optional
         Address of a running Dask scheduler (``tcp://host:port``); default a ``LocalCluster`` of
         ``workers`` processes (one per core).

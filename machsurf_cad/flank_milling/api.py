@@ -21,15 +21,26 @@ SettingKind = Literal["standard-tangent", "standard-distributed", "optimum", "mi
 tangencies) and minimax (beyond the paper)."""
 
 
-def compare_settings(surface: RuledSurface, u_p: float, R: float, *, side: int = 1) -> dict:
-    """Max gouge / undercut (mm) of every setting on one rule; ``admissible: False`` where one does not exist."""
-    out: dict[str, dict] = {}
+def setting_profiles(surface: RuledSurface, u_p: float, R: float, *, side: int = 1) -> dict:
+    """The error along the rule (:class:`Interference`, the paper's figures 6 and 7) of every setting on
+    one rule, or the reason (str) where a setting does not exist."""
+    out: dict = {}
     for kind in SETTINGS:
         try:
-            e = interference(surface, tool_setting(surface, u_p, R, kind, side=side))
-            out[kind] = {"max_gouge_mm": e.max_gouge, "max_undercut_mm": e.max_undercut, "max_abs_mm": e.max_abs}
+            out[kind] = interference(surface, tool_setting(surface, u_p, R, kind, side=side))
         except NoAdmissibleSetting as exc:
-            out[kind] = {"admissible": False, "reason": str(exc)}
+            out[kind] = str(exc)
+    return out
+
+
+def compare_settings(surface: RuledSurface, u_p: float, R: float, *, side: int = 1, profiles=None) -> dict:
+    """Max gouge / undercut (mm) of every setting on one rule; ``admissible: False`` where one does not exist."""
+    out: dict[str, dict] = {}
+    for kind, e in (profiles or setting_profiles(surface, u_p, R, side=side)).items():
+        if isinstance(e, str):
+            out[kind] = {"admissible": False, "reason": e}
+        else:
+            out[kind] = {"max_gouge_mm": e.max_gouge, "max_undercut_mm": e.max_undercut, "max_abs_mm": e.max_abs}
     return out
 
 
@@ -53,6 +64,7 @@ class FlankResult(Result):
     study: dict | None = None
     radius_range: dict | None = None
     time_s: dict | None = None
+    profiles: dict | None = None
 
     @property
     def R(self) -> float:
@@ -191,7 +203,8 @@ def flank(
     st = tool_setting(surf, u_p, R, setting, side=side)
     times = {"setting_s": time.perf_counter() - t0}
     e = interference(surf, st)
-    comparison = compare_settings(surf, u_p, R, side=side)
+    profiles = setting_profiles(surf, u_p, R, side=side)
+    comparison = compare_settings(surf, u_p, R, side=side, profiles=profiles)
     path = tp = env = dev = None
     if whole:
         from .path import envelope_deviation, envelope_surface, flank_path
@@ -219,7 +232,9 @@ def flank(
         rr = _radius_range(surf, radius_range, kind=setting, side=side)
         times["radius_range_s"] = time.perf_counter() - t1
     times["total_s"] = time.perf_counter() - t0
-    return FlankResult(surf, cutter, float(rule), float(u_p), st, e, comparison, path, tp, env, dev, data, rr, times)
+    return FlankResult(
+        surf, cutter, float(rule), float(u_p), st, e, comparison, path, tp, env, dev, data, rr, times, profiles
+    )
 
 
 def mean_normal(surface: RuledSurface, side: int = 1) -> np.ndarray:
@@ -229,4 +244,4 @@ def mean_normal(surface: RuledSurface, side: int = 1) -> np.ndarray:
     return n / np.linalg.norm(n)
 
 
-__all__ = ["flank", "FlankResult", "compare_settings", "SettingKind", "mean_normal"]
+__all__ = ["flank", "FlankResult", "compare_settings", "setting_profiles", "SettingKind", "mean_normal"]

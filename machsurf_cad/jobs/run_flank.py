@@ -25,6 +25,21 @@ def _example_face(name: str):
     return Face(example(name, "surface"), name=name)
 
 
+def _write_rule_errors(path, profiles: dict) -> str:
+    """CSV: v, then the error (mm) of every admissible setting along the rule."""
+    import csv
+
+    kinds = [k for k, e in profiles.items() if not isinstance(e, str)]
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["v", *[f"{k}_mm" for k in kinds]])
+        if kinds:
+            v = profiles[kinds[0]].v
+            for i in range(v.size):
+                w.writerow([f"{v[i]:.6f}", *[f"{profiles[k].e[i]:.9g}" for k in kinds]])
+    return path.name
+
+
 def _chunk_map(chunks: int):
     """Spans of rules of a batch job run over its Dask cluster; elsewhere one after the other."""
     if int(chunks) <= 1:
@@ -82,6 +97,16 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
     )
     code = EXIT_OK
     with Staging(out) as st:
+        rep["error_along_rule_file"] = _write_rule_errors(st.path("error_along_rule.csv"), res.profiles or {})
+        if spec.render and res.profiles:
+            from ..viz.plots import plot_rule_errors
+
+            plot_rule_errors(
+                res.profiles,
+                st.path("error_along_rule.png"),
+                tolerance=spec.tol,
+                title=f"error along the rule u = {res.u_p:.5g}, {cutter.spec()}, side {spec.side:+d}",
+            )
         if res.path is not None:
             from ..geometry.face import Face
             from ..occ import write_step, write_stl

@@ -80,3 +80,29 @@ def plot_simulation_histogram(value, reached, png_path, *, tolerance: float, hei
     fig.savefig(png_path)
     plt.close(fig)
     return png_path
+
+
+def plot_rule_errors(profiles: dict, png_path, *, tolerance: float | None = None, title: str = "") -> Path:
+    """The error along the rule (mm) of every setting against v (0 at C0, 1 at C1): negative gouge,
+    positive undercut (the flank paper's figures 6 and 7). ``profiles``: setting name -> Interference
+    (settings that do not exist, given as a reason string, are listed in the legend's title)."""
+    fig, ax = plt.subplots(figsize=(7.5, 4.5), dpi=110)
+    missing = []
+    for kind, e in profiles.items():
+        if isinstance(e, str):
+            missing.append(kind)
+            continue
+        ax.plot(e.v, e.e, label=f"{kind} (max |e| {e.max_abs:.3g} mm)")
+    ax.axhline(0.0, color="0.3", lw=0.8)
+    if tolerance is not None:
+        for y in (-tolerance, tolerance):
+            ax.axhline(y, color="0.5", lw=0.8, ls="--")
+    ax.set_xlabel("v along the rule (0: directrix C0, 1: C1)")
+    ax.set_ylabel("error, mm (- gouge, + undercut)")
+    ax.set_title(title)
+    ax.legend(fontsize=8, title=("not admissible: " + ", ".join(missing)) if missing else None, title_fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(png_path)
+    plt.close(fig)
+    return Path(png_path)
