@@ -192,6 +192,12 @@ def worker_map():
     return _map
 
 
+def chunk_map(chunks: int):
+    """The ``map_chunks`` of a job split in ``chunks``: over the Dask cluster when the job runs on a
+    worker (a batch), else ``None`` (the chunks run one after the other)."""
+    return worker_map() if int(chunks) > 1 else None
+
+
 def _worker_name() -> str | None:
     try:
         from distributed import get_worker

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..batchrun.runner import chunk_map
 from .base import EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, finish, step_face
 from .specs import FlankJob
 
@@ -40,15 +41,6 @@ def _write_rule_errors(path, profiles: dict) -> str:
     return path.name
 
 
-def _chunk_map(chunks: int):
-    """Spans of rules of a batch job run over its Dask cluster; elsewhere one after the other."""
-    if int(chunks) <= 1:
-        return None
-    from ..batchrun.runner import worker_map
-
-    return worker_map()
-
-
 def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
     from ..flank_milling import flank, mean_normal
 
@@ -67,7 +59,7 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
         clearance=spec.clearance,
         progress=progress,
         chunks=int(spec.chunks),
-        map_chunks=_chunk_map(spec.chunks),
+        map_chunks=chunk_map(spec.chunks),
     )
     st_, e, cutter = res.setting, res.interference, res.cutter
     rep = res.report()

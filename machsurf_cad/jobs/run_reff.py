@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 
+from ..batchrun.runner import chunk_map
 from .base import JobOutcome, Say, Staging, face_input, finish
 from .specs import ReffJob
 
@@ -13,15 +14,6 @@ from .specs import ReffJob
 def _f(x, fmt: str = ".4g") -> str:
     """A figure, or "n/a" where it does not exist (e.g. R_eff on a horizontal plane: infinite everywhere)."""
     return "n/a" if x is None else format(x, fmt)
-
-
-def _chunk_map(chunks: int):
-    """Direction groups of a batch job run over its Dask cluster; elsewhere one after the other."""
-    if int(chunks) <= 1:
-        return None
-    from ..batchrun.runner import worker_map
-
-    return worker_map()
 
 
 def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
@@ -45,7 +37,7 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
         tilt=spec.tilt,
         max_memory_mb=spec.max_memory,
         chunks=int(spec.chunks),
-        map_chunks=_chunk_map(spec.chunks),
+        map_chunks=chunk_map(spec.chunks),
     )
     rep = maps.report()
     R = cutter.D / 2

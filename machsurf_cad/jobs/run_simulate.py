@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..batchrun.runner import chunk_map
 from .base import EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, finish
 from .run_verify import part_faces, toolpath_and_cutter
 from .specs import SimulateJob
@@ -60,15 +61,6 @@ def simulate_path(
     return res, rep
 
 
-def _chunk_map(chunks: int):
-    """Chunks of a batch job run over its Dask cluster; elsewhere one after the other."""
-    if int(chunks) <= 1:
-        return None
-    from ..batchrun.runner import worker_map
-
-    return worker_map()
-
-
 def run_simulate(spec: SimulateJob, out, say: Say, progress=None) -> JobOutcome:
     path, tp, cutter = toolpath_and_cutter(spec.toolpath, spec.tool, say)
     faces = part_faces(spec.part, spec.faces)
@@ -93,7 +85,7 @@ def run_simulate(spec: SimulateJob, out, say: Say, progress=None) -> JobOutcome:
             heights=spec.height_values(),
             max_samples=int(spec.max_samples),
             chunks=int(spec.chunks),
-            map_chunks=_chunk_map(spec.chunks),
+            map_chunks=chunk_map(spec.chunks),
         )
         code = EXIT_TOLERANCE if res.gouged else EXIT_OK
         say(

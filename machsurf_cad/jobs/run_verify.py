@@ -62,13 +62,10 @@ def check_path(
 ):
     """Verify ``tp`` against ``faces``; say and draw the result; return ``(VerifyResult, report)``.
     ``chunks`` > 1 splits the placements (over the Dask cluster when the job runs in a batch)."""
+    from ..batchrun.runner import chunk_map
     from ..gougecheck import verify
 
-    map_chunks = None
-    if int(chunks) > 1:
-        from ..batchrun.runner import worker_map
-
-        map_chunks = worker_map()
+    map_chunks = chunk_map(chunks)
     res = verify(
         faces,
         tp,

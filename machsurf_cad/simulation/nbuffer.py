@@ -42,9 +42,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
-from .rays import ray_core, ray_entry
+from .rays import ray_core, ray_entry, sphere_trace
 
-_CONVERGED_MM = 1e-7
 GOLDEN_ITERATIONS = 16
 """Golden-section steps over the motion for profiles with a sharp corner (bracket 2 placements x 0.618^16)."""
 REFINE_ROUNDS = 4
@@ -140,27 +139,7 @@ def _sphere_trace(cutter, P, N, T, A, t_start, t_end: float, max_steps: int = 60
     """:func:`march` by sphere tracing on the body's exact signed distance (any profile)."""
     m = P.shape[0]
     t = np.array(t_start, float, copy=True) if np.ndim(t_start) else np.full(m, float(t_start))
-    status = np.full(m, 3, np.int8)
-    g = _distance(cutter, P, N, t, T, A)
-    status[g <= 0] = 1
-    act = np.flatnonzero(g > 0)
-    gi = g[act]
-    for _ in range(max_steps):
-        if act.size == 0:
-            break
-        done = gi < _CONVERGED_MM
-        status[act[done]] = 0
-        t[act[done]] += np.maximum(gi[done], 0.0)
-        act, gi = act[~done], gi[~done]
-        t[act] += gi
-        out = t[act] > t_end
-        status[act[out]] = 2
-        act = act[~out]
-        if act.size == 0:
-            break
-        gi = _distance(cutter, P[act], N[act], t[act], T[act], A[act])
-    t = np.where(status == 2, np.inf, t)
-    return t, status
+    return sphere_trace(lambda i, tt: _distance(cutter, P[i], N[i], tt, T[i], A[i]), t, t_end, max_steps)
 
 
 def candidate_pairs(tree: cKDTree, T, A, heights, radii, reach: float, chunk: int = 4000):

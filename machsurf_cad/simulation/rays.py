@@ -114,14 +114,21 @@ def ray_entry(core, P, N, T, A, t_start, t_end: float, max_steps: int = 60):
 
 
 def _trace_torus(R_t, r, qp, dp, qz, dz, t, stop, max_steps):
-    status = np.full(t.shape, 3, np.int8)
-
     def dist(i, tt):
         x = qp[i] + tt[:, None] * dp[i]
         rho = np.sqrt(np.einsum("ij,ij->i", x, x))
         return np.hypot(rho - R_t, qz[i] + tt * dz[i] - r) - r
 
-    t = t.copy()
+    return sphere_trace(dist, t, stop, max_steps)
+
+
+def sphere_trace(dist, t_start: np.ndarray, t_end, max_steps: int):
+    """March rays by their distance to a body: ``dist(indices, t)`` is a lower bound of the distance of
+    those rays' points at ``t`` (exact for a signed distance), so no step passes through the body.
+    Returns ``(t, status)`` as :func:`ray_entry` (``t_end`` a number or one per ray)."""
+    t = np.array(t_start, float, copy=True)
+    stop = np.broadcast_to(np.asarray(t_end, float), t.shape)
+    status = np.full(t.shape, 3, np.int8)
     act = np.arange(t.size)
     g = dist(act, t)
     status[g <= 0] = 1
