@@ -256,6 +256,9 @@ def test_external_scheduler_and_workers_survive_a_killed_worker(tmp_path):
     procs = [_dask("scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard")]
     try:
         time.sleep(2.0)
+        with pytest.raises(ms.InputError, match="has no worker after 1 s"):  # not waiting for ever
+            ms.batch([BatchJob("r", ("reff", "--example", "bezier5", "--tool", "ball:D=10"))], tmp_path / "none",
+                     scheduler=addr, timeout_s=1)  # fmt: skip
         for name in ("wa", "wb"):
             # no nanny: the worker keeps this process's BLAS threads (a nanny sets one: last digits differ)
             procs.append(_dask("worker", addr, "--nthreads", "1", "--no-nanny", "--name", name,

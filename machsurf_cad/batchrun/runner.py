@@ -215,9 +215,15 @@ def _client(scheduler: str | None, workers: int | None, timeout_s: float):
         raise InputError("batch runs need Dask: pip install 'machsurf_cad[batch]'") from None
     if scheduler:
         try:
-            return Client(scheduler, timeout=f"{float(timeout_s)}s"), None
+            client = Client(scheduler, timeout=f"{float(timeout_s)}s")
         except (OSError, TimeoutError, ValueError) as exc:
             raise InputError(f"cannot reach the Dask scheduler at {scheduler} within {timeout_s:g} s: {exc}") from None
+        try:  # a scheduler without workers would keep the jobs waiting for ever
+            client.wait_for_workers(1, timeout=float(timeout_s))
+        except (OSError, TimeoutError) as exc:
+            client.close()
+            raise InputError(f"the Dask scheduler at {scheduler} has no worker after {timeout_s:g} s: {exc}") from None
+        return client, None
     import logging
 
     n = int(workers) if workers else (os.cpu_count() or 1)
