@@ -220,3 +220,23 @@ def test_error_along_the_rule_plot(tmp_path):
 
     r = run("flank", "--example", "liu", "--tool", "cyl:D=20", "--rule", "0.5", "-o", tmp_path / "f")
     assert r.returncode == 0 and (tmp_path / "f" / "error_along_rule.png").stat().st_size > 20_000
+
+
+def test_pinned_figures_of_the_paper_cases():
+    """Reproducible figures (issue 16): the hyperbolic paraboloid (alpha0 = 30 deg, h_p = 80 mm, R = 40 mm)
+    standard-distributed 5.35898 mm and optimum 0.11852 mm; the optimum exists up to R = h_p / (2 sin alpha0) = 80
+    mm and not beyond; eq. (18) at u = 0.4, R = 40, side -1: the three-tangency optimum of 17.12 mm that
+    a start far from the standard setting finds."""
+    from machsurf_cad.flank_milling import tool_setting
+
+    hp = examples.hypar_ruled(30.0, 80.0)
+    lo, hi = hp.u_range
+    mid = 0.5 * (lo + hi)
+    assert abs(interference(hp, tool_setting(hp, mid, 40.0, "standard-distributed")).max_abs - 5.35898) < 1e-5
+    assert abs(interference(hp, tool_setting(hp, mid, 40.0, "optimum")).max_abs - 0.11852) < 1e-5
+    limit = 80.0 / (2 * math.sin(math.radians(30.0)))
+    assert interference(hp, tool_setting(hp, mid, limit - 0.1, "optimum")).max_abs < 1.0
+    with pytest.raises(NoAdmissibleSetting, match="R = 80.1 mm"):
+        tool_setting(hp, mid, limit + 0.1, "optimum")
+    e18 = examples.eq18_ruled()
+    assert abs(interference(e18, tool_setting(e18, 0.4, 40.0, "optimum", side=-1)).max_abs - 17.1227) < 1e-3
