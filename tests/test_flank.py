@@ -236,7 +236,7 @@ def test_pinned_figures_of_the_paper_cases():
     assert abs(interference(hp, tool_setting(hp, mid, 40.0, "optimum")).max_abs - 0.11852) < 1e-5
     limit = 80.0 / (2 * math.sin(math.radians(30.0)))
     assert interference(hp, tool_setting(hp, mid, limit - 0.1, "optimum")).max_abs < 1.0
-    with pytest.raises(NoAdmissibleSetting, match="R = 80.1 mm"):
+    with pytest.raises(NoAdmissibleSetting, match=r"R = 80.1 mm.*up to R = h_p / \(2 sin alpha0\) = 80 mm"):
         tool_setting(hp, mid, limit + 0.1, "optimum")
     e18 = examples.eq18_ruled()
     assert abs(interference(e18, tool_setting(e18, 0.4, 40.0, "optimum", side=-1)).max_abs - 17.1227) < 1e-3

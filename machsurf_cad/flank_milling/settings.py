@@ -375,7 +375,13 @@ def optimum_setting(
         raise NoAdmissibleSetting(
             f"no admissible optimum setting for R = {R:g} mm on side {side:+d} at u = {u_p:g}: the three-tangency "
             f"system has no solution with M2 on the rule and true tangencies with both directrices (alpha0 = "
-            f"{fr.alpha0_deg:.3g} deg, h_p = {fr.h_p:.4g} mm)"
+            f"{fr.alpha0_deg:.3g} deg, h_p = {fr.h_p:.4g} mm"
+            + (
+                f"; on straight directrices it exists up to R = h_p / (2 sin alpha0) = "
+                f"{fr.h_p / (2 * math.sin(math.radians(fr.alpha0_deg))):.4g} mm)"
+                if fr.alpha0_deg > 1e-9
+                else ")"
+            )
         )
     if len(found) == 1:
         return make(found[0])
