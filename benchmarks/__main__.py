@@ -32,30 +32,24 @@ def main(argv=None) -> int:
     for bench in bench_eval.BENCHMARKS:
         rows.append(bench(quick=args.quick))
         _print_row(rows[-1], header=len(rows) == 1)
-    for row in bench_reff.reff_rows(quick=args.quick):
-        rows.append(row)
-        _print_row(row, header=False)
-    print("* per-point OCCT time measured on a 256^2 sub-grid and scaled to the full grid")
-    for row in bench_envelope.envelope_rows(quick=args.quick):
-        rows.append(row)
-        _print_row(row, header=False)
-    print("* brute force: 10 positions measured (2000 x 400 points each) and scaled to 200")
-    for row in bench_flank.flank_rows(quick=args.quick):
-        rows.append(row)
-        _print_row(row, header=False)
-    for row in bench_verify.verify_rows(quick=args.quick):
-        rows.append(row)
-        _print_row(row, header=False)
-    for row in bench_step.step_rows(quick=args.quick):
-        rows.append(row)
-        _print_row(row, header=False)
-    for row in bench_simulate.simulate_rows(quick=args.quick):
-        rows.append(row)
-        _print_row(row, header=False)
-    print("* brute force on a random subset of the finest samples, scaled to all samples")
-    for row in bench_batch.batch_rows(quick=args.quick):
-        rows.append(row)
-        _print_row(row, header=False)
+    # row producers, each followed by its footnote
+    for produce, note in (
+        (bench_reff.reff_rows, "* per-point OCCT time measured on a 256^2 sub-grid and scaled to the full grid"),
+        (
+            bench_envelope.envelope_rows,
+            "* brute force: 10 positions measured (2000 x 400 points each) and scaled to 200",
+        ),
+        (bench_flank.flank_rows, None),
+        (bench_verify.verify_rows, None),
+        (bench_step.step_rows, None),
+        (bench_simulate.simulate_rows, "* brute force on a random subset of the finest samples, scaled to all samples"),
+        (bench_batch.batch_rows, None),
+    ):
+        for row in produce(quick=args.quick):
+            rows.append(row)
+            _print_row(row, header=False)
+        if note:
+            print(note)
     iso_rows = bench_simulate.isoscallop_rows(quick=args.quick)
     bench_simulate.print_iso(iso_rows)
     offset_rows = bench_offset.offset_fit_rows(quick=args.quick)

@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import cosdg, sindg
 
+from .chunking import split_map
 from .cutters import Cutter, parse_cutter
 from .errors import DegenerateGeometryError, InputError
 from .geometry.bspline import BSplineSurface
@@ -444,14 +445,9 @@ def reff_maps(
     area = np.linalg.norm(np.cross(d.su, d.sv), axis=-1)
     forms = _Forms(d, n, True)
     t = time.perf_counter()
-    if int(chunks) < 1:
-        raise InputError(f"chunks must be >= 1, got {chunks!r}")
-    n_groups = min(int(chunks), len(dirs))
-    groups = [list(g) for g in np.array_split(np.asarray(dirs, float), n_groups)]
     job = functools.partial(_direction_maps, fm=forms, cutter=cutter, comp=comp, scallop=scallop, axes=axes,
                             lead=lead, tilt=tilt, inside=inside)  # fmt: skip
-    runner = map_chunks if (map_chunks is not None and n_groups > 1) else map
-    maps = [m for group in runner(job, groups) for m in group]
+    maps = [m for group in split_map(job, [np.asarray(dirs, float)], chunks, map_chunks) for m in group]
     timings["maps_s"] = time.perf_counter() - t
     best_t = best_v = None
     if len(maps) > 1:

@@ -34,6 +34,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .cam.toolpath import Move, ToolPath
+from .chunking import check_chunks, split_map
 from .errors import InputError
 from .geometry.bspline import BSplineSurface
 from .geometry.face import Face
@@ -358,24 +359,14 @@ def verify(
     L_cut = float(c.length)
     r_cut = float(c.profile_points(16)[:, 0].max())
     t1 = time.perf_counter()
-    n_chunks = int(chunks)
-    if n_chunks < 1:
-        raise InputError(f"chunks must be >= 1, got {chunks!r}")
-    if n_chunks == 1:
-        cut_d, hold_d, seed, d_idx, d_val = _coarse(c, tree, P, h, tolerance, T, A, progress)
-    else:
-        cuts = np.linspace(0, m, n_chunks + 1).astype(int)
-        runner = map_chunks if map_chunks is not None else map
-        parts = list(
-            runner(
-                functools.partial(_coarse, c, tree, P, h, tolerance),
-                [T[a:b] for a, b in zip(cuts[:-1], cuts[1:])],
-                [A[a:b] for a, b in zip(cuts[:-1], cuts[1:])],
-            )
-        )
-        cut_d, hold_d, seed = (np.concatenate([q[k] for q in parts]) for k in range(3))
-        d_idx = np.concatenate([q[3] for q in parts])
-        d_val = np.concatenate([q[4] for q in parts])
+    one = check_chunks(chunks) == 1
+    parts = split_map(
+        functools.partial(_coarse, c, tree, P, h, tolerance, progress=progress if one else None),
+        [T, A],
+        chunks,
+        map_chunks,
+    )
+    cut_d, hold_d, seed, d_idx, d_val = (np.concatenate([q[k] for q in parts]) for k in range(5))
     depth = np.zeros(P.shape[0])
     np.maximum.at(depth, d_idx, d_val)
     t2 = time.perf_counter()

@@ -307,6 +307,8 @@ def test_batch_command_line(tmp_path):
     assert "2 of 2 job(s) ok" in r.stdout
     rep = json.loads((tmp_path / "out" / "batch_report.json").read_text())
     assert [j["status"] for j in rep["jobs"]] == ["ok", "ok"] and rep["n_workers"] == 1
+    ball = json.loads((tmp_path / "out" / "r1" / "report.json").read_text())["directions"][0]
+    assert ball["r_eff_min_mm"] == ball["r_eff_max_mm"] == 5.0  # a ball's effective radius is R everywhere
     jobs.write_text(json.dumps({"jobs": [{"name": "r1", "argv": ["reff"]}, {"name": "r1", "argv": ["reff"]}]}))
     r = run("batch", jobs, "-o", tmp_path / "out2")
     assert r.returncode == 1 and r.stderr.strip().count("\n") == 0 and "job 2 ('r1'): duplicate" in r.stderr

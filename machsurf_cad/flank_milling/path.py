@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..cam.toolpath import ToolPath
+from ..chunking import check_chunks, map_pieces
 from ..errors import InputError
 from ..results import Result
 from .ruled import RuledSurface
@@ -158,8 +159,7 @@ def flank_path(
     """
     if not tolerance > 0:
         raise InputError("tolerance must be > 0 mm")
-    if int(chunks) < 1:
-        raise InputError(f"chunks must be >= 1, got {chunks!r}")
+    check_chunks(chunks)
     lo, hi = surface.u_range
     eps = 1e-6 * (hi - lo)  # sqrt-type directrices can be singular exactly at the ends
     us = list(np.linspace(lo + eps, hi - eps, n_rules or min_rules))
@@ -175,8 +175,7 @@ def flank_path(
         _refine_span, surface, float(R), kind, side, float(tolerance), float(overhang), n_rules is None,
         max_rules - len(us), 1e-5 * (hi - lo), progress if n_chunks == 1 else None,
     )  # fmt: skip
-    runner = map_chunks if (map_chunks is not None and n_chunks > 1) else map
-    parts = list(runner(job, spans))
+    parts = map_pieces(job, spans, map_chunks)
     us = [u for p in parts for u in p[0]]
     sets = tuple(x for p in parts for x in p[1])
     jumps = [j for p in parts for j in p[2]]

@@ -11,12 +11,13 @@ from typing import Any
 import numpy as np
 
 from ..cam.toolpath import ToolPath
+from ..chunking import check_chunks, split_map
 from ..errors import InputError
 from ..geometry.face import Face
 from ..geometry.normals import unit_normals
-from ..gougecheck import _faces, face_size
+from ..gougecheck import _faces, face_size, motion_radius
 from ..results import Progress, Result
-from .nbuffer import motion_poses, nbuffer, smallest_profile_radius
+from .nbuffer import motion_poses, nbuffer
 
 DEFAULT_HEIGHTS_MM = (0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1)
 """Heights (mm) whose exceeded area fraction the report lists."""
@@ -282,28 +283,15 @@ def simulate(
     P, N, F, Q = sample_faces(faces, resolution, max_samples=max_samples)
     t1 = time.perf_counter()
     T, A, _ = motion_poses(toolpath.tip, toolpath.axis, step, float(c.length))
-    rho = smallest_profile_radius(c)
+    rho = motion_radius(c)
     smooth = not _has_sharp_corner(c)
     # how much lower the swept motion can cut than its sampled placements: the sagitta of the smallest
     # profile radius over a step (no sharp corner), else half a step (a corner sweeping across)
     margin = step * step / (8 * rho) if smooth else 0.5 * step
-    kw = {"depth": depth, "stock": stock, "margin": margin, "sharp": not smooth}
-    n_chunks = int(chunks)
-    if n_chunks < 1:
-        raise InputError(f"chunks must be >= 1, got {chunks!r}")
-    if n_chunks == 1:
-        out = nbuffer(c, P, N, T, A, progress=progress, **kw)
-    else:
-        cuts = np.linspace(0, P.shape[0], n_chunks + 1).astype(int)
-        runner = map_chunks if map_chunks is not None else map
-        parts = list(
-            runner(
-                functools.partial(_nbuffer_chunk, c, T, A, kw),
-                [P[a:b] for a, b in zip(cuts[:-1], cuts[1:])],
-                [N[a:b] for a, b in zip(cuts[:-1], cuts[1:])],
-            )
-        )
-        out = _merge_chunks(parts)
+    kw: dict[str, Any] = {"depth": depth, "stock": stock, "margin": margin, "sharp": not smooth}
+    if check_chunks(chunks) == 1:
+        kw["progress"] = progress
+    out = _merge_chunks(split_map(functools.partial(_nbuffer_chunk, c, T, A, kw), [P, N], chunks, map_chunks))
     value, clamped = out["t"], out["clamped"]
     t2 = time.perf_counter()
     if not out["reached"].any():
@@ -345,6 +333,8 @@ def _nbuffer_chunk(cutter, T, A, kw, P, N) -> dict:
 
 
 def _merge_chunks(parts: list) -> dict:
+    if len(parts) == 1:
+        return parts[0]
     out: dict[str, Any] = {k: np.concatenate([p[k] for p in parts]) for k in ("t", "reached", "clamped", "pose")}
     for k in ("n_pairs", "n_marched", "n_refined", "n_unconverged"):
         out[k] = int(sum(p[k] for p in parts))

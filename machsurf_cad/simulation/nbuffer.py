@@ -77,14 +77,6 @@ def cover_spheres(cutter, n_profile: int = 400) -> tuple[np.ndarray, np.ndarray]
     return np.array(heights), np.array(radii)
 
 
-def smallest_profile_radius(cutter) -> float:
-    """Smallest radius of curvature of the cutting profile (mm): arc radii, else the largest radius."""
-    from ..cutter_profiles import ArcSegment
-
-    rs = [seg.radius for seg in cutter.profile() if isinstance(seg, ArcSegment) and seg.convex]
-    return float(min(rs)) if rs else float(cutter.max_radius())
-
-
 def motion_poses(tip, axis, step_mm: float, cut_length: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Placements along a path, no point of the cutting part moving more than ``step_mm`` between two.
 
@@ -222,7 +214,7 @@ def nbuffer(
         rs = np.concatenate([r[0] for r in records])
         rp = np.concatenate([r[1] for r in records])
         rt = np.concatenate([r[2] for r in records])
-        known = _Known(rs, rp, rt, n_poses)
+        known = None if sharp else _Known(rs, rp, rt, n_poses)
         keep = (rt <= best[rs] + margin) & ~clamped[rs]
         rs, rp, rt = rs[keep], rp[keep], rt[keep]
         # one per local minimum along the path: drop a placement whose neighbour on the path cuts deeper
@@ -236,7 +228,6 @@ def nbuffer(
         lower_prev[1:] = same_next[:-1] & (rt[:-1] < rt[1:])
         loc = ~(lower_next | lower_prev)
         rs, rp, rt = rs[loc], rp[loc], rt[loc]
-        refine = _refine_golden if sharp else _refine_motion
         # the lowest sampled candidate of each sample first; the others only where they can still beat it
         o = np.lexsort((rt, rs))
         rs, rp, rt = rs[o], rp[o], rt[o]
@@ -251,8 +242,12 @@ def nbuffer(
                 continue
             s_s, s_p, s_t = rs[stage], rp[stage], rt[stage]
             n_refined += int(s_s.size)
-            nb = known.neighbours(s_s, s_p)
-            t_ref, x_ref, res_ = refine(cutter, P[s_s], N[s_s], T, A, s_p, s_t, depth, stock, nb)
+            if sharp:  # the search probes inside the bracket only
+                t_ref, x_ref, res_ = _refine_golden(cutter, P[s_s], N[s_s], T, A, s_p, s_t, depth, stock)
+            else:  # the bracket's ends are the neighbouring placements, mostly marched already
+                assert known is not None
+                nb = known.neighbours(s_s, s_p)
+                t_ref, x_ref, res_ = _refine_motion(cutter, P[s_s], N[s_s], T, A, s_p, s_t, depth, stock, nb)
             residual = max(residual, res_)
             o2 = np.lexsort((t_ref, s_s))
             s_s, t_ref, x_ref = s_s[o2], t_ref[o2], x_ref[o2]
@@ -382,7 +377,7 @@ def _entry_or_known(cutter, P, N, T, A, x, t_hint, depth, stock, known):
     return out
 
 
-def _refine_golden(cutter, P, N, T, A, k, t_k, depth, stock, neighbours=None, iterations: int = GOLDEN_ITERATIONS):
+def _refine_golden(cutter, P, N, T, A, k, t_k, depth, stock, iterations: int = GOLDEN_ITERATIONS):
     """Golden-section search of the entry over the placement index in ``[k - 1, k + 1]``: for profiles with
     a sharp corner, whose entry jumps where the corner passes (no parabola fits there; a search that
     keeps the lower side of every comparison still closes on the lowest value). The residual reported
