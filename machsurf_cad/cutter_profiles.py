@@ -226,3 +226,38 @@ def _family_of(seg) -> list[SphereFamilySegment]:
         ends.append(seg.z_c - seg.rho_c * math.tan(t))
     a0, a1 = min(ends), max(ends)
     return [SphereFamilySegment("arc", a0, a1, rho_c=seg.rho_c, z_c=seg.z_c, radius=seg.radius, convex=seg.convex)]
+
+
+def lower_height(segs, rho) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The profile's lower surface ``h(rho)`` and its derivatives ``h'``, ``h''`` (mm, 1, 1/mm).
+
+    ``h`` is the lowest profile height at radius ``rho`` (``inf`` where no segment reaches it), as
+    :meth:`Cutter.height`; the derivatives are exact for the segment giving that height (lines: slope
+    and 0; arcs: ``-+(rho - rho_c) / sqrt(r^2 - (rho - rho_c)^2)`` and ``r^2 / (...)^(3/2)``). They are
+    clipped to ``+-1e8`` where an arc turns vertical (a ball's equator)."""
+    rho = np.abs(np.asarray(rho, float))
+    h = np.full(rho.shape, np.inf)
+    h1 = np.zeros(rho.shape)
+    h2 = np.zeros(rho.shape)
+    for seg in segs:
+        if isinstance(seg, LineSegment):
+            if abs(seg.rho1 - seg.rho0) < 1e-15:
+                continue  # a vertical side: the rim, not a height
+            z = _segment_z_at(seg, rho, lowest=True)
+            better = z < h
+            h = np.where(better, z, h)
+            h1 = np.where(better, (seg.z1 - seg.z0) / (seg.rho1 - seg.rho0), h1)
+            h2 = np.where(better, 0.0, h2)
+            continue
+        dx = rho - seg.rho_c
+        inside = np.abs(dx) <= seg.radius + 1e-12
+        root = np.sqrt(np.clip(seg.radius**2 - dx * dx, 0, None))
+        for sgn in (-1.0, 1.0):
+            z = seg.z_c + sgn * root
+            ang = np.degrees(np.arctan2(z - seg.z_c, dx))
+            better = inside & _angle_in(ang, seg.start_deg, seg.end_deg) & (z < h)
+            safe = np.maximum(root, 1e-8 * seg.radius)
+            h = np.where(better, z, h)
+            h1 = np.where(better, np.clip(-sgn * dx / safe, -1e8, 1e8), h1)
+            h2 = np.where(better, np.clip(-sgn * seg.radius**2 / safe**3, -1e8, 1e8), h2)
+    return h, h1, h2

@@ -21,7 +21,7 @@ from .convert import (
     to_cq_face,
     to_geom_surface,
 )
-from .mesh import read_stl, triangulate_face, write_stl
+from .mesh import read_stl, triangulate_face, triangulate_step, write_stl
 from .step import read_step_face, read_step_faces, step_face_summaries, write_step
 
 __all__ = [
@@ -39,4 +39,5 @@ __all__ = [
     "write_stl",
     "read_stl",
     "triangulate_face",
+    "triangulate_step",
 ]

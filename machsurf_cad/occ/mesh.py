@@ -88,3 +88,35 @@ def read_stl(path):
     pts = np.array([[tri.Node(i).X(), tri.Node(i).Y(), tri.Node(i).Z()] for i in range(1, n + 1)])
     tris = np.array([tri.Triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)], dtype=np.int64) - 1
     return pts, tris
+
+
+def triangulate_step(path, *, linear_deflection: float = 0.01, angular_deflection: float = 5.0):
+    """Mesh every face of a STEP part as read (no conversion): ``(points (n,3) mm, triangles (m,3) int)``.
+
+    The mesh of the original B-rep, for references such as OpenCAMLib that work on triangles."""
+    from OCP.TopAbs import TopAbs_REVERSED
+    from .step import iter_faces, read_step_shape
+
+    if not linear_deflection > 0:
+        raise InputError("linear deflection must be > 0 mm")
+    shape, _ = read_step_shape(path)
+    BRepMesh_IncrementalMesh(shape, linear_deflection, False, math.radians(angular_deflection), True)
+    P, T, base = [], [], 0
+    for f in iter_faces(shape):
+        loc = TopLoc_Location()
+        tri = BRep_Tool.Triangulation_s(f, loc)
+        if tri is None:
+            raise InputError("OCCT could not triangulate a face of the part")
+        trsf = loc.Transformation()
+        n = tri.NbNodes()
+        pts = []
+        for i in range(1, n + 1):
+            p = tri.Node(i).Transformed(trsf)
+            pts.append((p.X(), p.Y(), p.Z()))
+        t = np.array([tri.Triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)], dtype=np.int64) - 1
+        if f.Orientation() == TopAbs_REVERSED:
+            t = t[:, ::-1]
+        P.append(np.array(pts))
+        T.append(t + base)
+        base += n
+    return np.concatenate(P), np.concatenate(T)

@@ -1,0 +1,230 @@
+"""The faces a 3-axis job drops the tool on, in the tool-axis frame, with seed samples and edges.
+
+A :class:`FaceSet` holds the part's faces rotated so that the tool axis is +z (the rotation is exact:
+B-spline poles rotate), a trim-aware grid of samples on each face and samples along every trimming
+edge (the parameter box's sides for an untrimmed face). The samples only seed the exact contact
+search of :mod:`machsurf_cad.threeaxis.dropcutter`; no result is read off them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..errors import InputError
+from ..geometry.bspline import BSplineCurve, BSplineSurface
+from ..geometry.builders import line_segment
+from ..geometry.face import Face
+
+
+def axis_frame(axis) -> np.ndarray:
+    """Rotation matrix whose rows are ``(e1, e2, axis)``: world -> tool frame (tool axis = +z).
+
+    For ``axis = +z`` it is the identity; otherwise ``e1`` is the world x (or y) made orthogonal to
+    the axis, so that 3+2 results keep a predictable in-plane orientation."""
+    a = np.asarray(axis, float).reshape(3)
+    n = float(np.linalg.norm(a))
+    if not np.isfinite(n) or n < 1e-12:
+        raise InputError("the tool axis must be a non-zero vector")
+    a = a / n
+    ref = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = ref - (ref @ a) * a
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a, e1)
+    return np.stack([e1, e2, a])
+
+
+def rotated_surface(s: BSplineSurface, frame: np.ndarray) -> BSplineSurface:
+    """The surface with its poles mapped by ``frame`` (exact for a rotation)."""
+    if np.allclose(frame, np.eye(3), atol=0, rtol=0):
+        return s
+    return s.with_poles(np.asarray(s.poles) @ frame.T, s.weights)
+
+
+def _box_edges(face: Face) -> list[BSplineCurve]:
+    u0, u1, v0, v1 = face.uv_bounds
+    return [
+        line_segment([u0, v0], [u1, v0]),
+        line_segment([u1, v0], [u1, v1]),
+        line_segment([u1, v1], [u0, v1]),
+        line_segment([u0, v1], [u0, v0]),
+    ]
+
+
+def _length_3d(s: BSplineSurface, c: BSplineCurve) -> float:
+    t = np.linspace(*c.bounds, 33)
+    uv = c.evaluate(t)
+    p = s.evaluate(uv[:, 0], uv[:, 1])
+    return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
+
+
+def _face_extent(s: BSplineSurface, bounds) -> tuple[float, float]:
+    u0, u1, v0, v1 = bounds
+    g = s.evaluate_grid(np.linspace(u0, u1, 9), np.linspace(v0, v1, 9))
+    lu = float(np.linalg.norm(np.diff(g, axis=0), axis=-1).sum(axis=0).max())
+    lv = float(np.linalg.norm(np.diff(g, axis=1), axis=-1).sum(axis=1).max())
+    return max(lu, 1e-9), max(lv, 1e-9)
+
+
+def _slope(su, sv) -> np.ndarray:
+    """``|n_xy|``: the largest rise of z per mm along the surface (1 where the normal is undefined)."""
+    n = np.cross(su, sv)
+    ln = np.linalg.norm(n, axis=-1)
+    with np.errstate(all="ignore"):
+        out = np.hypot(n[..., 0], n[..., 1]) / ln
+    return np.where(np.isfinite(out), out, 1.0).reshape(-1)
+
+
+def _slopes(d, nu: int, nv: int):
+    """Per grid sample ``|n_xy|``; the grid's cover radius (mm: the longest cell diagonal, so every face
+    point lies within it of a sample or of an edge sample); a bound on the normal's turning per mm."""
+    P = d.point
+    du = np.linalg.norm(np.diff(P, axis=0), axis=-1)
+    dv = np.linalg.norm(np.diff(P, axis=1), axis=-1)
+    delta = float(math.hypot(du.max(), dv.max()))
+    n = np.cross(d.su, d.sv)
+    with np.errstate(all="ignore"):
+        n = n / np.linalg.norm(n, axis=-1, keepdims=True)
+        tu = np.arccos(np.clip(np.einsum("ijk,ijk->ij", n[1:], n[:-1]), -1, 1)) / np.maximum(du, 1e-12)
+        tv = np.arccos(np.clip(np.einsum("ijk,ijk->ij", n[:, 1:], n[:, :-1]), -1, 1)) / np.maximum(dv, 1e-12)
+    turns = np.concatenate([tu[np.isfinite(tu)].ravel(), tv[np.isfinite(tv)].ravel(), [0.0]])
+    kappa = 1.5 * float(turns.max()) if np.all(np.isfinite(n)) else 1.0 / max(delta, 1e-9)
+    return _slope(d.su, d.sv), delta, kappa
+
+
+@dataclass(frozen=True, eq=False)
+class FaceSet:
+    """Faces in the tool frame with seed samples (see module docstring).
+
+    Attributes
+    ----------
+    faces : tuple of Face
+        The faces, surfaces rotated into the tool frame (trimming unchanged: same parameters).
+    frame : ndarray (3, 3)
+        World -> tool frame rotation (rows e1, e2, axis).
+    spacing : float
+        Seed sample spacing on the faces and edges (mm).
+    cover, rise : ndarray
+        Per sample (face samples, then edge samples): a radius (mm) within which of some sample every
+        face point lies, and a bound on how much higher z gets within it (mm), from the sample's slope
+        and the face's largest normal turning between samples. They bound what a local solve can gain
+        over a sample, so seeds that cannot beat a known contact are skipped.
+    names : tuple of str
+        The faces' names, as given.
+    """
+
+    faces: tuple
+    frame: np.ndarray
+    spacing: float
+    names: tuple
+    sample_xyz: np.ndarray = field(repr=False)
+    sample_uv: np.ndarray = field(repr=False)
+    sample_face: np.ndarray = field(repr=False)
+    edges: tuple = field(repr=False)
+    edge_face: np.ndarray = field(repr=False)
+    edge_xyz: np.ndarray = field(repr=False)
+    edge_t: np.ndarray = field(repr=False)
+    edge_uv: np.ndarray = field(repr=False)
+    edge_id: np.ndarray = field(repr=False)
+    edge_dt: np.ndarray = field(repr=False)
+    tree: cKDTree = field(repr=False)
+    cover: np.ndarray = field(repr=False)
+    rise: np.ndarray = field(repr=False)
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.sample_xyz.shape[0] + self.edge_xyz.shape[0])
+
+    def to_world(self, p) -> np.ndarray:
+        """Tool-frame points back to world coordinates."""
+        return np.asarray(p, float) @ self.frame
+
+    def to_frame(self, p) -> np.ndarray:
+        """World points in the tool frame."""
+        return np.asarray(p, float) @ self.frame.T
+
+
+def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 5_000_000) -> FaceSet:
+    """Rotate ``faces`` into the frame of ``axis`` and sample them ``spacing`` mm apart (at least 5 x 5
+    per face and 4 per edge, so small faces and short edges are seeded too)."""
+    spacing = float(spacing)
+    if not (spacing > 0 and math.isfinite(spacing)):
+        raise InputError(f"seed spacing must be > 0 mm, got {spacing}")
+    frame = axis_frame(axis)
+    out_faces, names = [], []
+    P, UV, F = [], [], []
+    edges, EF, EP, ET, EI, EDT, EUV = [], [], [], [], [], [], []
+    COV, RISE, ECOV, ERISE = [], [], [], []
+    total = 0
+    for i, f in enumerate(faces):
+        if isinstance(f, BSplineSurface):
+            f = Face(f, name=f.name or f"face_{i}")
+        if not isinstance(f, Face):
+            raise InputError("the 3-axis job needs the part's faces (Face or BSplineSurface objects)")
+        s = rotated_surface(f.surface, frame)
+        face = Face(s, f.loops, f.name, f.index, f.reversed, f.source_type, f.uv_bounds, f.area)
+        out_faces.append(face)
+        names.append(f.name or f"face_{i}")
+        u0, u1, v0, v1 = face.uv_bounds
+        lu, lv = _face_extent(s, face.uv_bounds)
+        nu = int(max(5, math.ceil(lu / spacing) + 1))
+        nv = int(max(5, math.ceil(lv / spacing) + 1))
+        total += nu * nv
+        if total > max_samples:
+            raise InputError(
+                f"seed spacing {spacing:g} mm needs more than {max_samples:,} samples: use a larger spacing"
+            )
+        us, vs = np.linspace(u0, u1, nu), np.linspace(v0, v1, nv)
+        U, V = np.meshgrid(us, vs, indexing="ij")
+        d = s.derivatives_grid(us, vs, 1)
+        pts = d.point.reshape(-1, 3)
+        slope, delta, kappa = _slopes(d, nu, nv)
+        keep = face.contains_uv(U.ravel(), V.ravel()) if face.is_trimmed else np.ones(U.size, bool)
+        P.append(pts[keep])
+        UV.append(np.stack([U.ravel()[keep], V.ravel()[keep]], axis=1))
+        F.append(np.full(int(keep.sum()), i))
+        COV.append(np.full(int(keep.sum()), delta))
+        RISE.append(delta * np.minimum(1.0, slope[keep] + kappa * delta))
+        curves = [c for loop in face.loops for c in loop] if face.is_trimmed else _box_edges(face)
+        for c in curves:
+            n = int(max(4, math.ceil(_length_3d(s, c) / spacing) + 1))
+            t = np.linspace(*c.bounds, n)
+            uv = c.evaluate(t)
+            de = s.derivatives(uv[:, 0], uv[:, 1], 1)
+            EP.append(de.point)
+            e_slope = _slope(de.su, de.sv)
+            ECOV.append(np.full(n, delta))
+            ERISE.append(delta * np.minimum(1.0, e_slope + kappa * delta))
+            ET.append(t)
+            EUV.append(uv)
+            EI.append(np.full(n, len(edges)))
+            EDT.append(np.full(n, (t[-1] - t[0]) / (n - 1)))
+            EF.append(i)
+            edges.append(c)
+    if not out_faces:
+        raise InputError("the 3-axis job needs at least one face")
+    sample_xyz = np.concatenate(P)
+    edge_xyz = np.concatenate(EP)
+    tree = cKDTree(np.concatenate([sample_xyz[:, :2], edge_xyz[:, :2]]))
+    return FaceSet(
+        tuple(out_faces),
+        frame,
+        spacing,
+        tuple(names),
+        sample_xyz,
+        np.concatenate(UV),
+        np.concatenate(F),
+        tuple(edges),
+        np.asarray(EF, int),
+        edge_xyz,
+        np.concatenate(ET),
+        np.concatenate(EUV),
+        np.concatenate(EI),
+        np.concatenate(EDT),
+        tree,
+        np.concatenate(COV + ECOV),
+        np.concatenate(RISE + ERISE),
+    )
