@@ -49,6 +49,11 @@ def _power_rows(x: np.ndarray, degree: int, order: int, h: np.ndarray) -> np.nda
     return rows
 
 
+def _wrap_period(x: np.ndarray, x0: float, x1: float) -> np.ndarray:
+    w = np.mod(x - x0, x1 - x0)
+    return x0 + np.where(w >= x1 - x0, 0.0, w)
+
+
 def _frozen(a, dtype=float) -> np.ndarray:
     arr = np.array(a, dtype=dtype)  # copy: callers keep their arrays
     arr.setflags(write=False)
@@ -393,13 +398,13 @@ class BSplineSurface:
         return h.reshape(m, order + 1, order + 1, dim)
 
     def _wrap(self, u: np.ndarray, v: np.ndarray):
-        """Bring parameters of periodic directions into the base period."""
+        """Bring parameters of periodic directions into the base period ``[start, end)`` (a parameter a
+        rounding below the start, such as -1e-30 from a STEP face's bounds, maps to the start, not to
+        ``end``)."""
         if self.periodic_u:
-            u0, u1 = self.knots_u[0], self.knots_u[-1]
-            u = u0 + np.mod(u - u0, u1 - u0)
+            u = _wrap_period(u, self.knots_u[0], self.knots_u[-1])
         if self.periodic_v:
-            v0, v1 = self.knots_v[0], self.knots_v[-1]
-            v = v0 + np.mod(v - v0, v1 - v0)
+            v = _wrap_period(v, self.knots_v[0], self.knots_v[-1])
         return u, v
 
     @cached_property

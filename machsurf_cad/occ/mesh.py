@@ -95,6 +95,7 @@ def triangulate_step(path, *, linear_deflection: float = 0.01, angular_deflectio
 
     The mesh of the original B-rep, for references such as OpenCAMLib that work on triangles."""
     from OCP.TopAbs import TopAbs_REVERSED
+
     from .step import iter_faces, read_step_shape
 
     if not linear_deflection > 0:

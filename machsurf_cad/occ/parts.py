@@ -1,4 +1,5 @@
-"""Example parts that need the kernel (booleans): a block with a trimmed free-form top face."""
+"""Example parts that need the kernel (booleans): a block with a trimmed free-form top face, and a
+mould insert of 51 faces for 3-axis machining."""
 
 from __future__ import annotations
 
@@ -61,4 +62,30 @@ def write_freeform_block(path) -> list[Face]:
     """Write the block to STEP and return its faces as numpy :class:`Face` records."""
     solid, names = freeform_block()
     write_step_shape(path, solid.wrapped, names)
+    return [face_record(f, i, "") for i, f in enumerate(iter_faces(solid.wrapped))]
+
+
+def mould_insert():
+    """A 100 x 80 x 25 mm mould insert of 51 faces for 3-axis work (cadquery solid).
+
+    Rounded block (R 8 corners); a 60 x 44 x 10 mm pocket with R 5 corners and an R 3 floor fillet;
+    four bosses D 10 x 7 mm with R 2 top fillets in the pocket; a slot 6 mm wide and 6 mm deep (narrower
+    than a D 10 tool); a spherical dome (R 40) on one corner of the top (a flat spot at its crest)."""
+    base = cq.Workplane("XY").box(100, 80, 25, centered=(True, True, False)).edges("|Z").fillet(8)
+    base = base.faces(">Z").workplane().rect(60, 44).cutBlind(-10)
+    part = base.edges(cq.selectors.BoxSelector((-31, -23, 14), (31, 23, 26))).edges("|Z").fillet(5)
+    part = part.edges(cq.selectors.BoxSelector((-31, -23, 14.5), (31, 23, 15.5))).fillet(3)
+    for x, y in [(-18, -10), (18, 10), (-18, 10), (18, -10)]:
+        boss = cq.Workplane("XY").workplane(offset=15).center(x, y).circle(5).extrude(7).faces(">Z").edges().fillet(2)
+        part = part.union(boss)
+    part = part.cut(cq.Workplane("XY").workplane(offset=19).center(0, -33).rect(70, 6).extrude(10))
+    dome = cq.Workplane("XY").sphere(40).translate((38, 30, 25 - 36))
+    cap = dome.intersect(cq.Workplane("XY").box(30, 18, 20, centered=(True, True, False)).translate((38, 30, 25)))
+    return part.union(cap).clean().val()
+
+
+def write_mould_insert(path) -> list[Face]:
+    """Write the mould insert to STEP and return its faces."""
+    solid = mould_insert()
+    write_step_shape(path, solid.wrapped, [])
     return [face_record(f, i, "") for i, f in enumerate(iter_faces(solid.wrapped))]

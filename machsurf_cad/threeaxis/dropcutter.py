@@ -131,8 +131,15 @@ def _surface_eval(fs: FaceSet, fid, u, v, order: int):
 
 
 def _clamp_uv(fs: FaceSet, fid, u, v):
-    b = np.array([fs.faces[f].uv_bounds for f in range(len(fs.faces))])[fid]
-    return np.clip(u, b[:, 0], b[:, 1]), np.clip(v, b[:, 2], b[:, 3])
+    """Parameters kept in each face's box: wrapped across a seam where the face closes on itself,
+    clamped elsewhere."""
+    b = fs.bounds[fid]
+    cl = fs.closed[fid]
+    pu = b[:, 1] - b[:, 0]
+    pv = b[:, 3] - b[:, 2]
+    u = np.where(cl[:, 0], b[:, 0] + np.mod(u - b[:, 0], np.where(cl[:, 0], pu, 1.0)), np.clip(u, b[:, 0], b[:, 1]))
+    v = np.where(cl[:, 1], b[:, 2] + np.mod(v - b[:, 2], np.where(cl[:, 1], pv, 1.0)), np.clip(v, b[:, 2], b[:, 3]))
+    return u, v
 
 
 def _inside(fs: FaceSet, fid, u, v) -> np.ndarray:
@@ -203,10 +210,40 @@ def _g_and_derivs(prof: _Profile, c, P, Su, Sv, Suu=None, Suv=None, Svv=None):
 
 
 # ----------------------------------------------------------------------------- local solves
+def _off_poles(fs, prof, c, fid, u, v, n: int = 16):
+    """Starts at a pole (a box side collapsed to a point, where one tangent vanishes) moved just off it,
+    at the best of ``n`` directions around it: at the pole the parameter of the collapsed side says
+    nothing about the direction, and ascent may need to cross the pole."""
+    _, Su, Sv = _surface_eval(fs, fid, u, v, 1)
+    E = np.einsum("ij,ij->i", Su, Su)
+    G = np.einsum("ij,ij->i", Sv, Sv)
+    pole = np.nonzero(np.minimum(E, G) <= 1e-14 * np.maximum(E, G))[0]
+    if pole.size == 0:
+        return u, v
+    b = fs.bounds[fid[pole]]
+    along_v = G[pole] <= E[pole]  # Sv vanishes: the side u = const is the pole, v runs around it
+    mid_u = 0.5 * (b[:, 0] + b[:, 1])
+    mid_v = 0.5 * (b[:, 2] + b[:, 3])
+    off_u = u[pole] + 1e-4 * (b[:, 1] - b[:, 0]) * np.sign(mid_u - u[pole])
+    off_v = v[pole] + 1e-4 * (b[:, 3] - b[:, 2]) * np.sign(mid_v - v[pole])
+    k = (np.arange(n) + 0.5) / n
+    cu = np.where(along_v[:, None], off_u[:, None], b[:, 0:1] + k * (b[:, 1:2] - b[:, 0:1]))
+    cv = np.where(along_v[:, None], b[:, 2:3] + k * (b[:, 3:4] - b[:, 2:3]), off_v[:, None])
+    f = np.repeat(fid[pole], n)
+    P = _surface_eval(fs, f, cu.ravel(), cv.ravel(), 0)[0]
+    rho = np.hypot(*(P[:, :2] - np.repeat(c[pole], n, axis=0)).T)
+    g = (P[:, 2] - prof(rho)[0]).reshape(-1, n)
+    g = np.where(np.isfinite(g), g, -np.inf)
+    j = np.argmax(g, axis=1)
+    r = np.arange(pole.size)
+    u[pole], v[pole] = cu[r, j], cv[r, j]
+    return u, v
+
+
 def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
     """Maximise ``g`` from ``(u, v)``: damped Newton (Hessian shifted to negative definite) with a trust
     region in mm; steps that do not increase ``g`` or leave the tool's disc are refused."""
-    u, v = u.copy(), v.copy()
+    u, v = _off_poles(fs, prof, c, fid, u.copy(), v.copy())
     D = _surface_eval(fs, fid, u, v, 2)
     g, gu, gv, H = _g_and_derivs(prof, c, *D)
     radius = np.full(u.shape, 0.5 * fs.spacing)
@@ -256,56 +293,77 @@ def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
     return u, v, g, D[0]
 
 
-def _rim_newton(fs, prof, c, fid, u, v, iters: int = 30):
-    """Stationary points of ``S_z`` on the circle ``|S_xy - c| = R`` (Newton on the Lagrange system)."""
+def _rim_newton(fs, prof, c, fid, u, v, iters: int = 40):
+    """The highest point of a face on the circle ``|S_xy - c| = R``, near ``(u, v)``: projected Newton
+    ascent along the circle (steps along the constraint's tangent, Newton where the Lagrangian's second
+    derivative along it is negative, else a trust-radius step uphill, each followed by a projection
+    onto the circle; steps that do not rise are refused and the radius shrinks)."""
     with np.errstate(all="ignore"):
-        return _rim_newton_raw(fs, prof, c, fid, u, v, iters)
+        return _rim_ascent(fs, prof, c, fid, u, v, iters)
 
 
-def _rim_newton_raw(fs, prof, c, fid, u, v, iters):
+def _project_circle(fs, R, c, fid, u, v, n: int = 4):
+    """Minimum-norm Newton steps onto ``rho = R``; returns (u, v)."""
+    for _ in range(n):
+        P, Su, Sv = _surface_eval(fs, fid, u, v, 1)
+        d = P[:, :2] - c
+        rho = np.hypot(d[:, 0], d[:, 1])
+        ru = np.einsum("ij,ij->i", d, Su[:, :2]) / np.maximum(rho, 1e-300)
+        rv = np.einsum("ij,ij->i", d, Sv[:, :2]) / np.maximum(rho, 1e-300)
+        n2 = ru * ru + rv * rv
+        t = np.where(n2 > 1e-300, (R - rho) / np.where(n2 > 1e-300, n2, 1.0), 0.0)
+        step = np.linalg.norm(Su * (t * ru)[:, None] + Sv * (t * rv)[:, None], axis=1)
+        shrink = np.minimum(1.0, fs.spacing / np.maximum(step, 1e-300))
+        shrink = np.where(np.isfinite(shrink), shrink, 0.0)
+        u, v = _clamp_uv(fs, fid, u + t * ru * shrink, v + t * rv * shrink)
+    return u, v
+
+
+def _rim_ascent(fs, prof, c, fid, u, v, iters):
     R = prof.R
-    u, v = u.copy(), v.copy()
-    lam = np.zeros(u.shape)
-    fresh = True
+    u, v = _project_circle(fs, R, c, fid, u.copy(), v.copy(), 6)
+    P = _surface_eval(fs, fid, u, v, 0)[0]
+    z = np.where(np.abs(np.hypot(*(P[:, :2] - c).T) - R) <= 1e-9 * max(R, 1.0), P[:, 2], -np.inf)
+    radius = np.full(u.shape, 0.5 * fs.spacing)
     active = np.ones(u.shape, bool)
     for _ in range(iters):
         a_ = np.nonzero(active)[0]
         if a_.size == 0:
             break
-        P, Su, Sv, Suu, Suv, Svv = _surface_eval(fs, fid[a_], u[a_], v[a_], 2)
-        d = P[:, :2] - c[a_]
-        phi = (np.einsum("ij,ij->i", d, d) - R * R) / (2 * R)
-        pu = np.einsum("ij,ij->i", d, Su[:, :2]) / R
+        Pa, Su, Sv, Suu, Suv, Svv = _surface_eval(fs, fid[a_], u[a_], v[a_], 2)
+        d = Pa[:, :2] - c[a_]
+        pu = np.einsum("ij,ij->i", d, Su[:, :2]) / R  # gradient of phi = (|d|^2 - R^2) / (2R)
         pv = np.einsum("ij,ij->i", d, Sv[:, :2]) / R
-        if fresh:
-            lam = (Su[:, 2] * pu + Sv[:, 2] * pv) / (pu * pu + pv * pv + 1e-300)
-            fresh = False
-        la = lam[a_]
-        Luu = Suu[:, 2] - la * (np.einsum("ij,ij->i", Su[:, :2], Su[:, :2]) + np.einsum("ij,ij->i", d, Suu[:, :2])) / R
-        Luv = Suv[:, 2] - la * (np.einsum("ij,ij->i", Su[:, :2], Sv[:, :2]) + np.einsum("ij,ij->i", d, Suv[:, :2])) / R
-        Lvv = Svv[:, 2] - la * (np.einsum("ij,ij->i", Sv[:, :2], Sv[:, :2]) + np.einsum("ij,ij->i", d, Svv[:, :2])) / R
-        K = np.zeros((a_.size, 3, 3))
-        K[:, 0, 0], K[:, 0, 1], K[:, 1, 0], K[:, 1, 1] = Luu, Luv, Luv, Lvv
-        K[:, 0, 2] = K[:, 2, 0] = -pu
-        K[:, 1, 2] = K[:, 2, 1] = -pv
-        rhs = np.stack([-(Su[:, 2] - la * pu), -(Sv[:, 2] - la * pv), phi], axis=1)
-        bad = ~np.all(np.isfinite(K.reshape(-1, 9)), axis=1) | ~np.all(np.isfinite(rhs), axis=1)
-        K[bad] = np.eye(3)
-        rhs[bad] = 0.0
-        bad = np.abs(np.linalg.det(K)) < 1e-300
-        K[bad] = np.eye(3)
-        rhs[bad] = 0.0
-        x = np.linalg.solve(K, rhs[:, :, None])[:, :, 0]
-        step = np.linalg.norm(Su * x[:, :1] + Sv * x[:, 1:2], axis=1)
-        shrink = np.minimum(1.0, 0.5 * fs.spacing / np.maximum(step, 1e-300))
-        u[a_], v[a_] = _clamp_uv(fs, fid[a_], u[a_] + x[:, 0] * shrink, v[a_] + x[:, 1] * shrink)
-        lam[a_] = la + x[:, 2] * shrink
-        active[a_[(step * shrink < 1e-11) | ~np.isfinite(step)]] = False
+        n2 = pu * pu + pv * pv
+        ok_n = n2 > 1e-300
+        lam = np.where(ok_n, (Su[:, 2] * pu + Sv[:, 2] * pv) / np.where(ok_n, n2, 1.0), 0.0)
+        tu, tv = -pv, pu  # tangent of the circle on the face
+        zt = Su[:, 2] * tu + Sv[:, 2] * tv
+        hz = Suu[:, 2] * tu * tu + 2 * Suv[:, 2] * tu * tv + Svv[:, 2] * tv * tv
+        xt = Su[:, :2] * tu[:, None] + Sv[:, :2] * tv[:, None]
+        xtt = Suu[:, :2] * (tu * tu)[:, None] + 2 * Suv[:, :2] * (tu * tv)[:, None] + Svv[:, :2] * (tv * tv)[:, None]
+        hphi = (np.einsum("ij,ij->i", xt, xt) + np.einsum("ij,ij->i", d, xtt)) / R
+        Ltt = hz - lam * hphi
+        tlen = np.linalg.norm(Su * tu[:, None] + Sv * tv[:, None], axis=1)
+        newton = Ltt < -1e-300
+        s = np.where(newton, -zt / np.where(newton, Ltt, -1.0), np.sign(zt) * radius[a_] / np.maximum(tlen, 1e-300))
+        step = np.abs(s) * tlen
+        s = s * np.minimum(1.0, radius[a_] / np.maximum(step, 1e-300))
+        s = np.where(np.isfinite(s), s, 0.0)
+        nu, nv = _clamp_uv(fs, fid[a_], u[a_] + s * tu, v[a_] + s * tv)
+        nu, nv = _project_circle(fs, R, c[a_], fid[a_], nu, nv, 3)
+        Pn = _surface_eval(fs, fid[a_], nu, nv, 0)[0]
+        on = np.abs(np.hypot(*(Pn[:, :2] - c[a_]).T) - R) <= 1e-9 * max(R, 1.0)
+        zn = np.where(on, Pn[:, 2], -np.inf)
+        acc = np.isfinite(zn) & (zn >= z[a_] - 1e-13 * (1 + np.abs(z[a_])))
+        moved = np.linalg.norm(Pn - Pa, axis=1)
+        ia = a_[acc]
+        u[ia], v[ia], z[ia] = nu[acc], nv[acc], zn[acc]
+        radius[a_] = np.where(acc, np.maximum(radius[a_], 2 * moved), 0.25 * radius[a_])
+        done = (acc & (moved < 1e-11)) | (~acc & (radius[a_] < 1e-12))
+        active[a_[done]] = False
     P = _surface_eval(fs, fid, u, v, 0)[0]
-    d = P[:, :2] - c
-    rho = np.hypot(d[:, 0], d[:, 1])
-    ok = np.isfinite(rho) & (np.abs(rho - R) <= 1e-9 * max(R, 1.0))
-    return u, v, np.where(ok, P[:, 2] - prof.h_R, -np.inf), P
+    return u, v, np.where(np.isfinite(z), z - prof.h_R, -np.inf), P
 
 
 def _edge_points(fs, eid, t):
@@ -388,14 +446,20 @@ def _seeds(fs: FaceSet, prof: _Profile, C: np.ndarray):
     qi = sdm["i"].astype(np.int64)
     sj = sdm["j"].astype(np.int64)
     rho = sdm["v"]
-    xyz = np.where((sj < n_int)[:, None], fs.sample_xyz[np.minimum(sj, n_int - 1)], fs.edge_xyz[np.maximum(sj - n_int, 0)])
+    xyz = np.where(
+        (sj < n_int)[:, None], fs.sample_xyz[np.minimum(sj, n_int - 1)], fs.edge_xyz[np.maximum(sj - n_int, 0)]
+    )
     h = prof(np.minimum(rho, prof.R))[0]
     val = xyz[:, 2] - h
     feasible = rho <= prof.R
     d = xyz[:, :2] - C[qi]
-    sector = np.where(rho < 0.5 * prof.R, 0, 1 + ((np.arctan2(d[:, 1], d[:, 0]) + math.pi) // (math.pi / 2)).astype(int).clip(0, 3))
+    sector = np.where(
+        rho < 0.5 * prof.R, 0, 1 + ((np.arctan2(d[:, 1], d[:, 0]) + math.pi) // (math.pi / 2)).astype(int).clip(0, 3)
+    )
     is_edge = sj >= n_int
-    group = np.where(is_edge, len(fs.faces) + fs.edge_id[np.maximum(sj - n_int, 0)], fs.sample_face[np.minimum(sj, n_int - 1)])
+    group = np.where(
+        is_edge, len(fs.faces) + fs.edge_id[np.maximum(sj - n_int, 0)], fs.sample_face[np.minimum(sj, n_int - 1)]
+    )
     return qi, sj, rho, xyz, val, feasible, sector, is_edge, group
 
 
@@ -423,7 +487,9 @@ class _Candidates:
 
     def best(self, m: int):
         q, v, k, f, p = (np.concatenate([pt[i] for pt in self.parts]) for i in range(5))
-        win = _best_per(q, v)
+        # the highest value; among equal values a solved contact before a bare sample
+        v_rank = v - np.where(k == Contact.SAMPLE, 1e-12 * (1 + np.abs(v)), 0.0)
+        win = _best_per(q, v_rank)
         height = np.full(m, np.nan)
         kind = np.zeros(m, np.int8)
         face = np.full(m, -1)
@@ -432,77 +498,115 @@ class _Candidates:
         return height, kind, face, point
 
 
-def _solve_seeds(fs, prof, C, cand: _Candidates, q, sj, rho0, is_edge):
-    """Local solves from seed samples: face and rim solves from face samples, and from edge samples of
-    a face with no face sample among the seeds of that query (a sliver between its last grid row and
-    its boundary); edge searches from edge samples."""
+def _start(fs, sj):
+    """Face index and (u, v) of pool samples (face samples, then edge samples)."""
     n_int = fs.sample_xyz.shape[0]
+    is_edge = sj >= n_int
     ke = np.where(is_edge, sj - n_int, 0)
     ks = np.where(is_edge, 0, sj)
     fid = np.where(is_edge, fs.edge_face[fs.edge_id[ke]], fs.sample_face[ks])
     u0 = np.where(is_edge, fs.edge_uv[ke, 0], fs.sample_uv[ks, 0])
     v0 = np.where(is_edge, fs.edge_uv[ke, 1], fs.sample_uv[ks, 1])
-    inside_face = ~is_edge & (rho0 <= prof.R)
-    has_face_seed = np.isin(q * len(fs.faces) + fid, (q * len(fs.faces) + fid)[inside_face])
-    solve = ~is_edge | ~has_face_seed
-    e = np.nonzero(is_edge)[0]
-    if e.size:
-        k = ke[e]
-        eid = fs.edge_id[k]
-        g, P = _edge_search(fs, prof, C[q[e]], eid, fs.edge_t[k], fs.edge_dt[k])
-        cand.add(q[e], g, Contact.EDGE, fs.edge_face[eid], P)
-    q, fid, u0, v0, rho0 = q[solve], fid[solve], u0[solve], v0[solve], rho0[solve]
+    return fid, u0, v0, is_edge, ke
+
+
+def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str):
+    """Local solves of one kind from seed samples ``sj`` for queries ``q``."""
     if q.size == 0:
         return
+    fid, u0, v0, is_edge, ke = _start(fs, sj)
     c = C[q]
-    u, v, g, P = _face_newton(fs, prof, c, fid, u0, v0)
-    cand.add(q, g, Contact.FACE, fid, P, np.isfinite(g) & _inside(fs, fid, u, v))
-    near_rim = np.nonzero(rho0 > min(0.5 * prof.R, prof.R - 2 * fs.spacing))[0]
-    if near_rim.size:
-        r_ = near_rim
-        u, v, g, P = _rim_newton(fs, prof, c[r_], fid[r_], u0[r_], v0[r_])
-        cand.add(q[r_], g, Contact.RIM, fid[r_], P, np.isfinite(g) & _inside(fs, fid[r_], u, v))
-    if prof.pointed:
-        u, v, ok, P = _tip_solve(fs, c, fid, u0.copy(), v0.copy())
-        g = P[:, 2] - prof(np.zeros(P.shape[0]))[0]
-        cand.add(q, g, Contact.TIP, fid, P, ok & _inside(fs, fid, u, v))
+    if kind == "face":
+        u, v, g, P = _face_newton(fs, prof, c, fid, u0, v0)
+        cand.add(q, g, Contact.FACE, fid, P, np.isfinite(g) & _inside(fs, fid, u, v))
+        if prof.pointed:
+            u, v, ok, P = _tip_solve(fs, c, fid, u0.copy(), v0.copy())
+            g = P[:, 2] - prof(np.zeros(P.shape[0]))[0]
+            cand.add(q, g, Contact.TIP, fid, P, ok & _inside(fs, fid, u, v))
+    elif kind == "rim":
+        u, v, g, P = _rim_newton(fs, prof, c, fid, u0, v0)
+        cand.add(q, g, Contact.RIM, fid, P, np.isfinite(g) & _inside(fs, fid, u, v))
+    else:
+        eid = fs.edge_id[ke]
+        g, P = _edge_search(fs, prof, c, eid, fs.edge_t[ke], fs.edge_dt[ke])
+        cand.add(q, g, Contact.EDGE, fs.edge_face[eid], P)
+
 
 def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
-    """Branch and bound over seed groups: the best sample is a lower bound of the tip height; each
-    sample bounds from above what its neighbourhood can reach (``z + rise - h(rho - cover)``); the best
-    group is solved first, then every group whose bound still beats the best solved contact."""
+    """Branch and bound over seed groups (per query, face or edge, and sector of the disc).
+
+    The best sample is a lower bound of the tip height; each sample bounds from above what its
+    neighbourhood can reach (``z + rise - h(rho - cover)``). Three kinds of seeds: per group the best
+    sample inside the disc starts a face solve (from an edge sample only where the face has no inside
+    sample: a sliver between its last grid row and its boundary), the highest sample near the rim a rim
+    solve, the best edge sample an edge search. Each query's best face and rim seeds are solved first,
+    then every seed whose group bound still beats the best contact found, except face seeds of the
+    found contact's face within two cover radii of it (its own basin)."""
     m = C.shape[0]
     qi, sj, rho, xyz, val, feasible, sector, is_edge, group = _seeds(fs, prof, C)
-    n_int = fs.sample_xyz.shape[0]
     cand = _Candidates()
+    fid_all = _start(fs, sj)[0]
     fe = np.nonzero(feasible)[0]
     best = fe[_best_per(qi[fe], val[fe])]
-    face_of = np.where(is_edge, fs.edge_face[fs.edge_id[np.maximum(sj - n_int, 0)]], fs.sample_face[np.minimum(sj, n_int - 1)])
-    cand.add(qi[best], val[best], Contact.SAMPLE, face_of[best], xyz[best])
+    cand.add(qi[best], val[best], Contact.SAMPLE, fid_all[best], xyz[best])
     if best.size == 0:
         return cand.best(m)
-    low = np.full(m, -np.inf)
-    low[qi[best]] = val[best]
     cover = fs.cover[sj]
     reach = rho - cover
     ub = np.where(reach <= prof.R, xyz[:, 2] + fs.rise[sj] - prof.floor(reach), -np.inf)
-    n_groups = len(fs.faces) + len(fs.edges)
-    key = (qi * n_groups + group) * 5 + sector
-    seed = _best_per(key, val)
-    # phase 1: the group of each query's best sample value
-    first = seed[_best_per(qi[seed], val[seed])]
-    _solve_seeds(fs, prof, C, cand, qi[first], sj[first], rho[first], is_edge[first])
-    h1, k1, f1, p1 = cand.best(m)
-    solved = (k1 == Contact.FACE) | (k1 == Contact.RIM)
-    # phase 2: samples whose bound still beats the contact found, except on the contact's own face
-    # within two cover radii of it (the contact's own neighbourhood), seed their groups' best samples
-    pq = p1[qi]
-    near = solved[qi] & ~is_edge & (face_of == f1[qi]) & (np.linalg.norm(xyz - pq, axis=1) <= 2 * cover)
-    open_ = (ub >= np.nan_to_num(h1[qi], nan=-np.inf) - 1e-9) & ~near
-    if open_.any():
-        o = np.nonzero(open_)[0]
-        rest = o[_best_per(key[o], val[o])]
-        _solve_seeds(fs, prof, C, cand, qi[rest], sj[rest], rho[rest], is_edge[rest])
+    n_f = len(fs.faces)
+    n_g = n_f + len(fs.edges)
+    # group bounds: per (query, face, sector) and per (query, edge, sector)
+    fkey = (qi * n_f + fid_all) * 5 + sector
+    ekey = (qi * n_g + group) * 5 + sector
+
+    def group_max(key, x, sel):
+        k = key[sel]
+        top = sel[_best_per(k, x[sel])]
+        order = np.argsort(key[top])
+        return key[top][order], x[top][order]
+
+    fb_keys, fb = group_max(fkey, ub, np.arange(qi.size))
+
+    def bound_of(idx):
+        return fb[np.searchsorted(fb_keys, fkey[idx])]
+
+    # face seeds: best feasible per face group (interior samples; edge samples where none)
+    interior = np.nonzero(feasible & ~is_edge)[0]
+    f_seed = interior[_best_per(fkey[interior], val[interior])]
+    edge_in = np.nonzero(feasible & is_edge)[0]
+    e_only = edge_in[~np.isin(fkey[edge_in], fkey[f_seed])]
+    f_seed = np.concatenate([f_seed, e_only[_best_per(fkey[e_only], val[e_only])]])
+    # rim seeds: the highest sample within a cover radius inside the rim per face group, and the one
+    # nearest the rim outside it
+    near = np.nonzero(feasible & (rho >= prof.R - cover))[0]
+    out = np.nonzero(~feasible & (rho <= prof.R + cover))[0]
+    r_seed = np.concatenate([near[_best_per(fkey[near], xyz[near, 2])], out[_best_per(fkey[out], -rho[out])]])
+    # edge seeds: best edge sample per edge group, inside and just outside the disc apart
+    ed = np.nonzero(is_edge)[0]
+    ekey = ekey * 2 + feasible
+    e_seed = ed[_best_per(ekey[ed], val[ed])]
+    eb_keys, eb = group_max(ekey, ub, ed)
+    # phase 1: each query's best face seed and best rim seed
+    f1 = f_seed[_best_per(qi[f_seed], val[f_seed])]
+    r1 = r_seed[_best_per(qi[r_seed], xyz[r_seed, 2])]
+    _solve(fs, prof, C, cand, qi[f1], sj[f1], "face")
+    _solve(fs, prof, C, cand, qi[r1], sj[r1], "rim")
+    h1, k1, c_face, p1 = cand.best(m)
+    low = np.nan_to_num(h1, nan=-np.inf) - 1e-9
+    solved = k1 == Contact.FACE
+    # phase 2: the seeds whose group can still beat the contact found
+    f2 = f_seed[~np.isin(f_seed, f1)]
+    f2 = f2[bound_of(f2) >= low[qi[f2]]]
+    own = solved[qi[f2]] & (fid_all[f2] == c_face[qi[f2]])
+    own &= np.linalg.norm(xyz[f2] - p1[qi[f2]], axis=1) <= 2 * cover[f2]
+    f2 = f2[~own]
+    r2 = r_seed[~np.isin(r_seed, r1)]
+    r2 = r2[bound_of(r2) >= low[qi[r2]]]
+    e2 = e_seed[eb[np.searchsorted(eb_keys, ekey[e_seed])] >= low[qi[e_seed]]]
+    _solve(fs, prof, C, cand, qi[f2], sj[f2], "face")
+    _solve(fs, prof, C, cand, qi[r2], sj[r2], "rim")
+    _solve(fs, prof, C, cand, qi[e2], sj[e2], "edge")
     return cand.best(m)
 
 

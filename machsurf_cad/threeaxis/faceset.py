@@ -69,6 +69,15 @@ def _face_extent(s: BSplineSurface, bounds) -> tuple[float, float]:
     return max(lu, 1e-9), max(lv, 1e-9)
 
 
+def _closed(P) -> tuple[bool, bool]:
+    """Whether the face's parameter box closes on itself along u and along v (a full revolution: a
+    cylinder, torus or revolved face whose seam is inside the face), from its sample grid."""
+    tol = 1e-7 * max(float(np.ptp(P.reshape(-1, 3), axis=0).max()), 1.0)
+    cu = bool(np.abs(P[0] - P[-1]).max() <= tol)
+    cv = bool(np.abs(P[:, 0] - P[:, -1]).max() <= tol)
+    return cu, cv
+
+
 def _slope(su, sv) -> np.ndarray:
     """``|n_xy|``: the largest rise of z per mm along the surface (1 where the normal is undefined)."""
     n = np.cross(su, sv)
@@ -107,6 +116,10 @@ class FaceSet:
         World -> tool frame rotation (rows e1, e2, axis).
     spacing : float
         Seed sample spacing on the faces and edges (mm).
+    closed : ndarray (n_faces, 2)
+        Whether each face closes on itself along u, v (local solves wrap across its seam).
+    bounds : ndarray (n_faces, 4)
+        Each face's parameter box.
     cover, rise : ndarray
         Per sample (face samples, then edge samples): a radius (mm) within which of some sample every
         face point lies, and a bound on how much higher z gets within it (mm), from the sample's slope
@@ -133,6 +146,8 @@ class FaceSet:
     tree: cKDTree = field(repr=False)
     cover: np.ndarray = field(repr=False)
     rise: np.ndarray = field(repr=False)
+    closed: np.ndarray = field(repr=False)
+    bounds: np.ndarray = field(repr=False)
 
     @property
     def n_samples(self) -> int:
@@ -156,8 +171,9 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
     frame = axis_frame(axis)
     out_faces, names = [], []
     P, UV, F = [], [], []
-    edges, EF, EP, ET, EI, EDT, EUV = [], [], [], [], [], [], []
-    COV, RISE, ECOV, ERISE = [], [], [], []
+    edges: list[BSplineCurve] = []
+    EF, EP, ET, EI, EDT, EUV = [], [], [], [], [], []
+    COV, RISE, ECOV, ERISE, CLOSED = [], [], [], [], []
     total = 0
     for i, f in enumerate(faces):
         if isinstance(f, BSplineSurface):
@@ -180,6 +196,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         us, vs = np.linspace(u0, u1, nu), np.linspace(v0, v1, nv)
         U, V = np.meshgrid(us, vs, indexing="ij")
         d = s.derivatives_grid(us, vs, 1)
+        CLOSED.append(_closed(d.point))
         pts = d.point.reshape(-1, 3)
         slope, delta, kappa = _slopes(d, nu, nv)
         keep = face.contains_uv(U.ravel(), V.ravel()) if face.is_trimmed else np.ones(U.size, bool)
@@ -227,4 +244,6 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         tree,
         np.concatenate(COV + ECOV),
         np.concatenate(RISE + ERISE),
+        np.array(CLOSED, bool).reshape(-1, 2),
+        np.array([f.uv_bounds for f in out_faces], float),
     )
