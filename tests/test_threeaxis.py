@@ -168,6 +168,8 @@ def test_against_brute_force_on_the_mould_insert(spec):
         [
             rng.uniform([-52, -42], [52, 42], (14, 2)),
             [[0.0, -33.0], [10.0, -31.5], [-18.0, -4.0], [-12.5, 10.0], [30.5, 0.0], [38.0, 30.0], [-29.0, 21.0]],
+            # the foot of a boss's fillet reached by the tool's corner, the pocket's floor fillet
+            [[10.082, -16.0], [-8.245, -8.0], [-24.25, 0.0], [17.72, 1.04]],
         ]
     )
     res = drop_cutter(faces, cutter, xy)

@@ -210,6 +210,21 @@ def _g_and_derivs(prof: _Profile, c, P, Su, Sv, Suu=None, Suv=None, Svv=None):
 
 
 # ----------------------------------------------------------------------------- local solves
+def _up_curvature(Huu, Huv, Hvv, Su, Sv, radius):
+    """Unit-length (``radius`` mm on the surface) parameter step along the eigenvector of the largest
+    eigenvalue of the (u, v) Hessian, and the second-order gain ``e^T H e / 2`` along it (mm)."""
+    tr = Huu + Hvv
+    disc = np.sqrt(np.maximum(0.25 * (Huu - Hvv) ** 2 + Huv * Huv, 0.0))
+    lam = 0.5 * tr + disc
+    eu = np.where(np.abs(Huv) > 1e-300, Huv, np.where(Huu >= Hvv, 1.0, 0.0))
+    ev = np.where(np.abs(Huv) > 1e-300, lam - Huu, np.where(Huu >= Hvv, 0.0, 1.0))
+    ln = np.linalg.norm(Su * eu[:, None] + Sv * ev[:, None], axis=1)
+    k = radius / np.maximum(ln, 1e-300)
+    eu, ev = eu * k, ev * k
+    quad = 0.5 * (Huu * eu * eu + 2 * Huv * eu * ev + Hvv * ev * ev)
+    return eu, ev, np.where(np.isfinite(quad), quad, 0.0)
+
+
 def _off_poles(fs, prof, c, fid, u, v, n: int = 16):
     """Starts at a pole (a box side collapsed to a point, where one tangent vanishes) moved just off it,
     at the best of ``n`` directions around it: at the pole the parameter of the collapsed side says
@@ -274,21 +289,41 @@ def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
         k = radius[idx] / np.maximum(alen, 1e-300)
         du = np.where(newton, du, au * k)
         dv = np.where(newton, dv, av * k)
+        # at a minimum or saddle of g (a fillet's foot, a valley) the gradient step crawls: step along
+        # the direction of largest upward curvature instead, to whichever side rises more
+        eu, ev, quad = _up_curvature(Huu, Huv, Hvv, Su, Sv, radius[idx])
+        lin = np.abs(gu[idx] * au + gv[idx] * av) * k
+        escape = ~newton & (quad > lin)
+        du = np.where(escape, eu, du)
+        dv = np.where(escape, ev, dv)
         step = np.linalg.norm(Su * du[:, None] + Sv * dv[:, None], axis=1)
         shrink = np.minimum(1.0, radius[idx] / np.maximum(step, 1e-300))
         nu, nv = _clamp_uv(fs, fid[idx], u[idx] + du * shrink, v[idx] + dv * shrink)
         Dn = _surface_eval(fs, fid[idx], nu, nv, 2)
         gn, gun, gvn, Hn = _g_and_derivs(prof, c[idx], *Dn)
-        ok = np.isfinite(gn) & (gn >= g[idx] - 1e-13 * (1 + np.abs(g[idx])))
+        e_ = np.nonzero(escape)[0]
+        if e_.size:  # the other side
+            mu_, mv_ = _clamp_uv(fs, fid[idx[e_]], u[idx[e_]] - du[e_] * shrink[e_], v[idx[e_]] - dv[e_] * shrink[e_])
+            Dm = _surface_eval(fs, fid[idx[e_]], mu_, mv_, 2)
+            gm, gum, gvm, Hm = _g_and_derivs(prof, c[idx[e_]], *Dm)
+            better = np.nan_to_num(gm, nan=-np.inf) > np.nan_to_num(gn[e_], nan=-np.inf)
+            b_ = e_[better]
+            nu[b_], nv[b_], gn[b_], gun[b_], gvn[b_] = mu_[better], mv_[better], gm[better], gum[better], gvm[better]
+            for j in range(6):
+                Dn[j][b_] = Dm[j][better]
+            for j in range(3):
+                Hn[j][b_] = Hm[j][better]
+        moved = np.linalg.norm(Dn[0] - D[0][idx], axis=1)  # a step clamped at the box may not move
+        rises = np.isfinite(gn) & (gn >= g[idx] - 1e-13 * (1 + np.abs(g[idx])))
+        ok = rises & (moved > 0)
         acc = idx[ok]
         u[acc], v[acc], g[acc], gu[acc], gv[acc] = nu[ok], nv[ok], gn[ok], gun[ok], gvn[ok]
         for k in range(6):
             D[k][acc] = Dn[k][ok]
         for k in range(3):
             H[k][acc] = Hn[k][ok]
-        moved = step * shrink
         radius[idx] = np.where(ok, np.maximum(radius[idx], 2 * moved), 0.25 * radius[idx])
-        done = (ok & (moved < 1e-11)) | (~ok & (radius[idx] < 1e-12))
+        done = (ok & (moved < 1e-11)) | (rises & newton & (moved == 0)) | (~ok & (radius[idx] < 1e-12))
         active[idx[done]] = False
     return u, v, g, D[0]
 
@@ -517,6 +552,11 @@ def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str):
     fid, u0, v0, is_edge, ke = _start(fs, sj)
     c = C[q]
     if kind == "face":
+        P0 = _surface_eval(fs, fid, u0, v0, 0)[0]
+        out = np.nonzero(np.hypot(*(P0[:, :2] - c).T) > prof.R)[0]
+        if out.size:  # starts outside the disc: onto a circle just inside it first
+            u0, v0 = u0.copy(), v0.copy()
+            u0[out], v0[out] = _project_circle(fs, prof.R * (1 - 1e-7), c[out], fid[out], u0[out], v0[out], 6)
         u, v, g, P = _face_newton(fs, prof, c, fid, u0, v0)
         cand.add(q, g, Contact.FACE, fid, P, np.isfinite(g) & _inside(fs, fid, u, v))
         if prof.pointed:
@@ -577,6 +617,11 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     edge_in = np.nonzero(feasible & is_edge)[0]
     e_only = edge_in[~np.isin(fkey[edge_in], fkey[f_seed])]
     f_seed = np.concatenate([f_seed, e_only[_best_per(fkey[e_only], val[e_only])]])
+    # and where a face group has no sample inside the disc but one within a cover radius outside it
+    # (a sliver of the face under the tool), its sample nearest the disc, moved onto the circle
+    outside = np.nonzero(~feasible & (rho - cover <= prof.R))[0]
+    outside = outside[~np.isin(fkey[outside], fkey[f_seed])]
+    f_seed = np.concatenate([f_seed, outside[_best_per(fkey[outside], -rho[outside])]])
     # rim seeds: the highest sample within a cover radius inside the rim per face group, and the one
     # nearest the rim outside it
     near = np.nonzero(feasible & (rho >= prof.R - cover))[0]

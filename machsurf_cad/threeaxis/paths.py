@@ -1,0 +1,333 @@
+"""3-axis tool paths on whole parts from the exact drop-cutter: raster (zig-zag or one-way, any angle)
+and waterline (constant-z contours), linked with plunges, retracts and rapids at a clearance height,
+staying down between adjacent raster lines where the tool can follow the part.
+
+Every position is an exact drop-cutter height on every face given (machined and checked faces); the
+chordal error between positions is measured on the exact drop-cutter at points the path never used.
+"""
+
+from __future__ import annotations
+
+import math
+from enum import Enum
+
+import numpy as np
+
+from ..cam.chordal import douglas_peucker
+from ..cam.toolpath import Move, ToolPath
+from ..errors import InputError
+from ..results import Progress
+from .dropcutter import DropCutterResult, default_seed_spacing, drop_cutter
+from .faceset import FaceSet, face_set
+
+
+class Pattern(str, Enum):
+    """3-axis path patterns."""
+
+    RASTER = "raster"
+    """Parallel lines at an angle, the tool on the part along each."""
+    WATERLINE = "waterline"
+    """Constant-height contours of the tool's lowest positions."""
+
+
+class Direction(str, Enum):
+    """How raster lines follow each other."""
+
+    ZIGZAG = "zigzag"
+    """Every other line reversed; adjacent lines linked on the part where possible."""
+    ONE_WAY = "one-way"
+    """Every line in the same direction; a retract and a rapid between lines."""
+
+
+def scallop_stepover(cutter, scallop: float) -> float:
+    """Step-over (mm) leaving a cusp of ``scallop`` mm between two passes of the cutter's smallest
+    corner arc on a flat floor, ``2 sqrt(2 r H - H^2)`` (ball: ``r = D/2``). The flat bottom of a
+    bull-nose adds ``2 R_t``; a flat end mill has no arc and is refused (its scallop on slopes depends on
+    the slope, not on a radius)."""
+    if not scallop > 0:
+        raise InputError(f"scallop must be > 0 mm, got {scallop}")
+    r = float(cutter.corner_radius)
+    if r <= 0:
+        raise InputError(f"a scallop height needs a cutter with a corner radius, not {cutter.spec()}: give --stepover")
+    h = min(scallop, r)
+    return 2 * math.sqrt(2 * r * h - h * h) + 2 * float(cutter.torus_radius if r < cutter.radius else 0.0)
+
+
+def _lines(extent, angle_deg: float, stepover: float):
+    """Raster lines over the plan box ``extent = (x0, x1, y0, y1)`` at ``angle_deg``: unit direction,
+    normal and per-line offsets; the s-range covering the box."""
+    a = math.radians(angle_deg)
+    d = np.array([math.cos(a), math.sin(a)])
+    n = np.array([-math.sin(a), math.cos(a)])
+    x0, x1, y0, y1 = extent
+    corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    s, t = corners @ d, corners @ n
+    k = max(1, math.ceil((t.max() - t.min()) / stepover - 1e-9))
+    offsets = np.linspace(t.min(), t.max(), k + 1)
+    return d, n, offsets, (float(s.min()), float(s.max()))
+
+
+def _drop(fs, cutter, xy, progress=None) -> DropCutterResult:
+    return drop_cutter(None, cutter, xy, face_set_=fs, progress=progress)
+
+
+def raster(
+    faces,
+    cutter,
+    *,
+    check_faces=(),
+    stepover_mm: float | None = None,
+    scallop_mm: float | None = None,
+    angle_deg: float = 0.0,
+    direction: Direction | str = Direction.ZIGZAG,
+    chordal_tolerance_mm: float = 0.01,
+    clearance_mm: float = 5.0,
+    axis=(0.0, 0.0, 1.0),
+    extent=None,
+    sample_step_mm: float | None = None,
+    seed_spacing_mm: float | None = None,
+    progress: Progress | None = None,
+) -> ToolPath:
+    """Raster tool path over ``faces``, avoiding ``faces`` and ``check_faces``.
+
+    Parameters
+    ----------
+    faces : sequence of Face
+        Faces to machine: the raster covers their plan extent (tool frame).
+    cutter : Cutter
+        Any profile cutter.
+    check_faces : sequence of Face
+        Further faces the tool must not cut into (not machined: they only lift the tool).
+    stepover_mm, scallop_mm : float
+        Distance between lines, or the cusp height it is computed from (:func:`scallop_stepover`).
+    angle_deg : float
+        Line direction in the tool frame's plane (0: along x).
+    direction : Direction
+        ``zigzag`` or ``one-way``.
+    chordal_tolerance_mm : float
+        Largest height of the exact drop-cutter above the straight move between two positions,
+        measured at every move's middle (never used as a position).
+    clearance_mm : float
+        Rapids run this far above the highest point of the part (along the axis).
+    axis : 3-vector
+        Fixed tool axis (3+2).
+    extent : (x0, x1, y0, y1), optional
+        Plan box in the tool frame (default: the machined faces' extent).
+    sample_step_mm : float, optional
+        Dense sampling along lines before chordal reduction (default ``min(0.25, D/20)``).
+
+    Returns
+    -------
+    ToolPath
+        ``info`` holds the step-over, the chordal error measured, the numbers of lines and links.
+    """
+    for name, val in (("chordal tolerance", chordal_tolerance_mm), ("clearance", clearance_mm)):
+        if not (val > 0 and math.isfinite(val)):
+            raise InputError(f"{name} must be > 0 mm, got {val}")
+    if (stepover_mm is None) == (scallop_mm is None):
+        raise InputError("give a step-over or a scallop height (one of them)")
+    step = scallop_stepover(cutter, scallop_mm) if scallop_mm is not None else float(stepover_mm)
+    if not (step > 0 and math.isfinite(step)):
+        raise InputError(f"step-over must be > 0 mm, got {step}")
+    direction = Direction(direction)
+    machined = list(faces)
+    if not machined:
+        raise InputError("a raster path needs at least one face to machine")
+    spacing = default_seed_spacing(cutter) if seed_spacing_mm is None else float(seed_spacing_mm)
+    fs = face_set(machined + list(check_faces), axis=axis, spacing=spacing)
+    own = np.isin(fs.sample_face, np.arange(len(machined)))
+    if extent is None:
+        xy = fs.sample_xyz[own, :2]
+        extent = (xy[:, 0].min(), xy[:, 0].max(), xy[:, 1].min(), xy[:, 1].max())
+    d, nrm, offsets, (s0, s1) = _lines(extent, angle_deg, step)
+    ds = float(sample_step_mm) if sample_step_mm is not None else min(0.25, cutter.D / 20)
+    if not ds > 0:
+        raise InputError(f"sample step must be > 0 mm, got {ds}")
+    s = np.linspace(s0, s1, max(2, math.ceil((s1 - s0) / ds) + 1))
+    S, T = np.meshgrid(s, offsets, indexing="ij")
+    pts = S.T.reshape(-1, 1) * d + T.T.reshape(-1, 1) * nrm
+    res = _drop(fs, cutter, pts, progress)
+    H = res.height.reshape(len(offsets), len(s))
+    CC = res.contact.reshape(len(offsets), len(s), 3)
+    z_top = float(max(fs.sample_xyz[:, 2].max(), fs.edge_xyz[:, 2].max()))
+    passes = []  # per pass: (s values, heights, contacts, line index)
+    for i in range(len(offsets)):
+        ok = np.isfinite(H[i])
+        runs = _runs(ok)
+        for a, b in runs:
+            if b - a < 1:
+                continue
+            passes.append([s[a : b + 1], H[i, a : b + 1], CC[i, a : b + 1], i])
+    if not passes:
+        raise InputError("no face lies under the tool anywhere in the raster's extent")
+    passes = _reduce_chordal(fs, cutter, passes, d, nrm, offsets, chordal_tolerance_mm)
+    if direction is Direction.ZIGZAG:
+        for p in passes:
+            if p[3] % 2 == 1:
+                p[0], p[1], p[2] = p[0][::-1], p[1][::-1], p[2][::-1]
+    return _link(fs, cutter, passes, d, nrm, offsets, step, z_top + clearance_mm, chordal_tolerance_mm, direction,
+                 info={"pattern": "raster", "direction": direction.value, "angle_deg": float(angle_deg),
+                       "stepover_mm": step, "scallop_target_mm": scallop_mm, "n_lines": int(len(offsets)),
+                       "sample_step_mm": ds, "extent_mm": [float(e) for e in extent]})  # fmt: skip
+
+
+def _runs(ok: np.ndarray) -> list[tuple[int, int]]:
+    """Index ranges [a, b] of consecutive True values."""
+    idx = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(np.int8), [0]])))
+    return [(int(a), int(b) - 1) for a, b in zip(idx[::2], idx[1::2])]
+
+
+def _reduce_chordal(fs, cutter, passes, d, nrm, offsets, tol, jump_mm: float = 1e-3, max_rounds: int = 16):
+    """Keep the fewest positions per pass whose chords stay within ``tol`` of the dense heights, then
+    check every kept move's middle on the exact drop-cutter: a move off by more than ``tol`` gets its
+    middle inserted; a move shorter than ``jump_mm`` that is still off crosses a jump of the heights (a
+    wall's edge): it becomes a move straight up or down plus a level move at the higher height (the
+    tool is never below the drop-cutter height there). Each pass gets the measured figures: the largest
+    height of the exact drop-cutter above a move (a gouge if positive) and below it."""
+    kept = []
+    for s_, h_, c_, i in passes:
+        idx = douglas_peucker(np.column_stack([s_, h_]), tol)
+        kept.append([s_[idx], h_[idx], c_[idx], i])
+    above = below = 0.0
+    fr = np.array([0.25, 0.5, 0.75])  # each move is checked at its quarter points
+    for _ in range(max_rounds):
+        pts = []
+        for s_, _, _, i in kept:
+            m = (s_[:-1, None] * (1 - fr) + s_[1:, None] * fr).ravel()
+            pts.append(np.column_stack([m, np.full(m.size, offsets[i])]))
+        Q = np.concatenate(pts)
+        res = _drop(fs, cutter, Q[:, :1] * d + Q[:, 1:] * nrm)
+        j = 0
+        bad_any = False
+        above = below = 0.0
+        for k, (s_, h_, c_, i) in enumerate(kept):
+            n = s_.size - 1
+            hq = res.height[j : j + 3 * n].reshape(n, 3)
+            cq = res.contact[j : j + 3 * n].reshape(n, 3, 3)
+            j += 3 * n
+            chq = h_[:-1, None] * (1 - fr) + h_[1:, None] * fr
+            eq = np.where(np.isfinite(hq), hq - chq, 0.0)
+            w = np.argmax(np.abs(eq), axis=1)  # the worst quarter point of each move
+            r_ = np.arange(n)
+            hm, cm, err = hq[r_, w], cq[r_, w], eq[r_, w]
+            sm = s_[:-1] * (1 - fr[w]) + s_[1:] * fr[w]
+            level = np.maximum(h_[1:], h_[:-1])
+            vertical = s_[1:] == s_[:-1]
+            flat_jump = (h_[1:] == h_[:-1]) & (np.abs(s_[1:] - s_[:-1]) < jump_mm)
+            err = np.where(vertical, 0.0, err)
+            above = max(above, float(err.max(initial=0.0)))
+            below = max(below, float(np.where(flat_jump, 0.0, -err).max(initial=0.0)))
+            bad = np.nonzero((err > tol) | ((-err > tol) & ~flat_jump))[0]
+            if bad.size == 0:
+                continue
+            bad_any = True
+            short = np.abs(s_[bad + 1] - s_[bad]) < jump_mm
+            mid = bad[~short]
+            jmp = bad[short]
+            # middles of long moves; upper corners of short ones (at the lower end's s, the higher height)
+            ins_s = np.concatenate([sm[mid], np.where(h_[jmp] < h_[jmp + 1], s_[jmp], s_[jmp + 1])])
+            ins_h = np.concatenate([hm[mid], level[jmp]])
+            ins_c = np.concatenate([cm[mid], np.where((h_[jmp] < h_[jmp + 1])[:, None], c_[jmp + 1], c_[jmp])])
+            ins_at = np.concatenate([mid + 1, jmp + 1])
+            keep = np.isfinite(ins_h)
+            order = np.argsort(ins_at[keep], kind="stable")
+            kept[k] = [
+                np.insert(s_, ins_at[keep][order], ins_s[keep][order]),
+                np.insert(h_, ins_at[keep][order], ins_h[keep][order]),
+                np.insert(c_, ins_at[keep][order], ins_c[keep][order], axis=0),
+                i,
+            ]
+        if not bad_any:
+            break
+    for p in kept:
+        p.append((above, below))
+    return kept
+
+
+def _link(fs: FaceSet, cutter, passes, d, nrm, offsets, step, z_safe, tol, direction, info) -> ToolPath:
+    """Join passes: stay down (cutting along the part's exact drop-cutter heights) between the ends of
+    adjacent zig-zag lines no more than 1.5 step-overs apart where a face is under the tool all the
+    way; elsewhere retract to ``z_safe``, rapid, and plunge."""
+    frame = fs.frame
+    T, M, P, C = [], [], [], []
+    n_links_down = 0
+    n_retracts = 0
+
+    def world(s_, t_, z_):
+        q = np.column_stack([s_[:, None] * d + np.asarray(t_).reshape(-1, 1) * nrm, z_])
+        return q @ frame
+
+    def up(p):
+        return world(np.array([p[0]]), [p[1]], [z_safe])
+
+    prev_end = None
+    for k, (s_, h_, c_, i, _) in enumerate(passes):
+        start = (s_[0], offsets[i])
+        link_ok = False
+        if prev_end is not None and direction is Direction.ZIGZAG:
+            (ps, pt, ph, pi) = prev_end
+            gap = math.hypot(s_[0] - ps, offsets[i] - pt)
+            if abs(i - pi) == 1 and gap <= 1.5 * step + 1e-9:
+                n = max(2, math.ceil(gap / min(step, 0.25)) + 1)
+                w = np.linspace(0, 1, n)[1:-1]
+                ls = ps + w * (s_[0] - ps)
+                lt = pt + w * (offsets[i] - pt)
+                lr = _drop(fs, cutter, ls[:, None] * d + lt[:, None] * nrm) if w.size else None
+                if lr is None or np.all(np.isfinite(lr.height)):
+                    link_ok = True
+                    if lr is not None:
+                        T.append(world(ls, lt, lr.height))
+                        M.append(np.full(w.size, Move.CUT))
+                        P.append(np.full(w.size, k))
+                        C.append(lr.contact)
+                    n_links_down += 1
+        if not link_ok:
+            if prev_end is not None:
+                T.append(up((prev_end[0], prev_end[1])))
+                M.append([Move.RETRACT])
+                P.append([k - 1])
+                C.append(np.full((1, 3), np.nan))
+                n_retracts += 1
+            T.append(up(start))
+            M.append([Move.RAPID])
+            P.append([k])
+            C.append(np.full((1, 3), np.nan))
+            T.append(world(s_[:1], [offsets[i]], h_[:1]))
+            M.append([Move.APPROACH])
+            P.append([k])
+            C.append(c_[:1])
+            s_, h_, c_ = s_[1:], h_[1:], c_[1:]
+        T.append(world(s_, np.full(s_.size, offsets[i]), h_))
+        M.append(np.full(s_.size, Move.CUT))
+        P.append(np.full(s_.size, k))
+        C.append(c_)
+        prev_end = (
+            float(s_[-1]) if s_.size else float(start[0]),
+            float(offsets[i]),
+            float(h_[-1]) if h_.size else 0.0,
+            i,
+        )
+    T.append(up((prev_end[0], prev_end[1])))
+    M.append([Move.RETRACT])
+    P.append([len(passes) - 1])
+    C.append(np.full((1, 3), np.nan))
+    tip = np.concatenate(T)
+    n = tip.shape[0]
+    cc = np.concatenate(C)  # contacts are world points already
+    above = max((p[4][0] for p in passes), default=0.0)
+    below = max((p[4][1] for p in passes), default=0.0)
+    info = dict(info, chordal_tolerance_mm=tol, chordal_error_measured_mm=float(max(above, below)),
+                chord_below_drop_height_mm=float(above), chord_above_drop_height_mm=float(below), clearance_height_mm=z_safe,
+                n_passes=len(passes), n_links_on_part=n_links_down, n_retracts=n_retracts)  # fmt: skip
+    return ToolPath(
+        tip,
+        np.repeat(frame[2][None, :], n, axis=0),
+        np.concatenate([np.asarray(m, np.int8) for m in M]),
+        np.concatenate([np.asarray(p, np.int64) for p in P]),
+        cc,
+        None,
+        cutter,
+        "raster",
+        {},
+        info,
+    )
