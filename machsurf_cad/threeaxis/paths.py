@@ -9,7 +9,7 @@ chordal error between positions is measured on the exact drop-cutter at points t
 from __future__ import annotations
 
 import math
-from enum import Enum
+from enum import StrEnum
 
 import numpy as np
 
@@ -21,7 +21,7 @@ from .dropcutter import DropCutterResult, default_seed_spacing, drop_cutter
 from .faceset import FaceSet, face_set
 
 
-class Pattern(str, Enum):
+class Pattern(StrEnum):
     """3-axis path patterns."""
 
     RASTER = "raster"
@@ -30,7 +30,7 @@ class Pattern(str, Enum):
     """Constant-height contours of the tool's lowest positions."""
 
 
-class Direction(str, Enum):
+class Direction(StrEnum):
     """How raster lines follow each other."""
 
     ZIGZAG = "zigzag"
@@ -316,9 +316,17 @@ def _link(fs: FaceSet, cutter, passes, d, nrm, offsets, step, z_safe, tol, direc
     cc = np.concatenate(C)  # contacts are world points already
     above = max((p[4][0] for p in passes), default=0.0)
     below = max((p[4][1] for p in passes), default=0.0)
-    info = dict(info, chordal_tolerance_mm=tol, chordal_error_measured_mm=float(max(above, below)),
-                chord_below_drop_height_mm=float(above), chord_above_drop_height_mm=float(below), clearance_height_mm=z_safe,
-                n_passes=len(passes), n_links_on_part=n_links_down, n_retracts=n_retracts)  # fmt: skip
+    info = dict(
+        info,
+        chordal_tolerance_mm=tol,
+        chordal_error_measured_mm=float(max(above, below)),
+        chord_below_drop_height_mm=float(above),
+        chord_above_drop_height_mm=float(below),
+        clearance_height_mm=z_safe,
+        n_passes=len(passes),
+        n_links_on_part=n_links_down,
+        n_retracts=n_retracts,
+    )
     return ToolPath(
         tip,
         np.repeat(frame[2][None, :], n, axis=0),
