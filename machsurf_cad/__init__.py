@@ -81,6 +81,18 @@ from .measure import DeviationResult, deviation, project_points
 from .results import Progress
 from .simulation import SimulationResult, simulate
 from .sweep import Envelope, EnvelopeResult, Motion, PassChain, envelope
+from .threeaxis import (
+    Contact,
+    Direction,
+    DropCutterResult,
+    Pattern,
+    cl_surface,
+    drop_cutter,
+    raster,
+    scallop_stepover,
+    top_faces,
+    waterline,
+)
 
 reff = reff_maps
 """Effective cutter radius and step-over maps over a face (the ``reff`` command); same as :func:`reff_maps`."""
@@ -88,6 +100,16 @@ reff = reff_maps
 __all__ = [
     # entry points
     "machining_surface",
+    "drop_cutter",
+    "raster",
+    "waterline",
+    "cl_surface",
+    "top_faces",
+    "scallop_stepover",
+    "Contact",
+    "Direction",
+    "Pattern",
+    "DropCutterResult",
     "tool_paths",
     "reff",
     "reff_maps",

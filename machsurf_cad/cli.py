@@ -185,6 +185,21 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     m.add_argument(
         "--chordal", type=float, default=0.005, help="chordal tolerance of the positions, mm (default 0.005)"
     )
+    t = m.add_argument_group("3 axes on whole parts: exact drop-cutter on several faces (with --axes 3)")
+    t.add_argument(
+        "--faces", default=None, help="faces to machine: all | top (seen along the axis) | 0,3,5 (instead of --face)"
+    )
+    t.add_argument(
+        "--check-faces", default="rest", help="faces the tool must not cut into: rest (default) | all | none | 1,2"
+    )
+    t.add_argument("--pattern", choices=["raster", "waterline"], default="raster", help="tool-path pattern")
+    t.add_argument("--angle", type=float, default=0.0, help="raster direction in the plane, degrees (default 0)")
+    t.add_argument("--direction", choices=["zigzag", "one-way"], default="zigzag", help="raster line order")
+    t.add_argument("--stepdown", type=float, default=None, help="waterline: distance between levels, mm")
+    t.add_argument("--grid", type=float, default=None, help="waterline / CL surface: plan grid of heights, mm")
+    t.add_argument(
+        "--cl-surface", action="store_true", help="also fit the certified height-field B-spline of the tool positions"
+    )
     _gouge(m, "0.01")
     _post(m)
     m.add_argument("-o", "--out", default="out/machining_surface", help="output folder")

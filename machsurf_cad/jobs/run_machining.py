@@ -13,6 +13,10 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
     from ..machining import machining_surface
     from ..machining.surfaces import fit_deviation
 
+    if spec.faces is not None:
+        from .run_threeaxis import run_three_axis
+
+        return run_three_axis(spec, out, say, progress)
     t0 = time.perf_counter()
     cutter = parse_cutter(spec.tool)
     face, desc = face_input(spec.part, spec.example, spec.face)

@@ -135,11 +135,25 @@ class MachiningSurfaceJob(_Post, JobSpec):
     gouge_tol: float = 0.01
     allow_gouge: bool = False
     trim_gouges: bool = False
+    faces: str | None = None
+    check_faces: str = "rest"
+    pattern: str = "raster"
+    angle: float = 0.0
+    direction: str = "zigzag"
+    stepdown: float | None = None
+    grid: float | None = None
+    cl_surface: bool = False
     command = "machining-surface"
 
     def __post_init__(self) -> None:
         _one_input(self.part, self.example)
         _choice("axes", self.axes, (3, 5))
+        if self.faces is not None and self.axes != 3:
+            raise InputError("--faces (exact drop-cutter on several faces) needs --axes 3")
+        _choice("pattern", self.pattern, ("raster", "waterline"))
+        _choice("direction", self.direction, ("zigzag", "one-way"))
+        _positive("stepdown (mm)", self.stepdown, allow_none=True)
+        _positive("grid (mm)", self.grid, allow_none=True)
         _choice("loops", self.loops, ("error", "flag", "trim"))
         _positive("scallop (mm)", self.scallop, allow_none=True)
         if self.overrun is not None and not self.overrun >= 0:

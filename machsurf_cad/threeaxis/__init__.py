@@ -1,7 +1,26 @@
-"""3-axis (and 3+2) machining of whole parts: exact drop-cutter on the B-rep, height fields, raster
-and waterline tool paths."""
+"""3-axis (and 3+2) machining of whole parts: exact drop-cutter on the B-rep, the certified
+height-field CL surface, raster and waterline tool paths."""
 
 from .dropcutter import Contact, DropCutterResult, default_seed_spacing, drop_cutter
 from .faceset import FaceSet, axis_frame, face_set
+from .heightfield import cl_surface
+from .paths import Direction, Pattern, raster, scallop_stepover, waterline
+from .select import select_faces, top_faces
 
-__all__ = ["Contact", "DropCutterResult", "FaceSet", "axis_frame", "default_seed_spacing", "drop_cutter", "face_set"]
+__all__ = [
+    "Contact",
+    "Direction",
+    "DropCutterResult",
+    "FaceSet",
+    "Pattern",
+    "axis_frame",
+    "cl_surface",
+    "default_seed_spacing",
+    "drop_cutter",
+    "face_set",
+    "raster",
+    "scallop_stepover",
+    "select_faces",
+    "top_faces",
+    "waterline",
+]

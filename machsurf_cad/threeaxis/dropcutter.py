@@ -631,7 +631,11 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     ed = np.nonzero(is_edge)[0]
     ekey = ekey * 2 + feasible
     e_seed = ed[_best_per(ekey[ed], val[ed])]
-    eb_keys, eb = group_max(ekey, ub, ed)
+    n_int = fs.sample_xyz.shape[0]
+    e_cov = fs.edge_cover[np.maximum(sj - n_int, 0)]
+    e_reach = rho - e_cov
+    e_ub = np.where(e_reach <= prof.R, xyz[:, 2] + e_cov - prof.floor(e_reach), -np.inf)
+    eb_keys, eb = group_max(ekey, e_ub, ed)
     # phase 1: each query's best face seed and best rim seed
     f1 = f_seed[_best_per(qi[f_seed], val[f_seed])]
     r1 = r_seed[_best_per(qi[r_seed], xyz[r_seed, 2])]
@@ -646,8 +650,11 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     own = solved[qi[f2]] & (fid_all[f2] == c_face[qi[f2]])
     own &= np.linalg.norm(xyz[f2] - p1[qi[f2]], axis=1) <= 2 * cover[f2]
     f2 = f2[~own]
+    # a rim contact is within a cover radius of a sample near the rim: bound z + rise - h(R)
+    rim_ub = np.where(np.abs(rho - prof.R) <= cover, xyz[:, 2] + fs.rise[sj] - prof.h_R, -np.inf)
+    rb_keys, rb = group_max(fkey, rim_ub, np.arange(qi.size))
     r2 = r_seed[~np.isin(r_seed, r1)]
-    r2 = r2[bound_of(r2) >= low[qi[r2]]]
+    r2 = r2[rb[np.searchsorted(rb_keys, fkey[r2])] >= low[qi[r2]]]
     e2 = e_seed[eb[np.searchsorted(eb_keys, ekey[e_seed])] >= low[qi[e_seed]]]
     _solve(fs, prof, C, cand, qi[f2], sj[f2], "face")
     _solve(fs, prof, C, cand, qi[r2], sj[r2], "rim")
@@ -668,7 +675,7 @@ def drop_cutter(
     axis=(0.0, 0.0, 1.0),
     seed_spacing_mm: float | None = None,
     face_set_: FaceSet | None = None,
-    chunk: int = 2048,
+    chunk: int = 8192,
     progress: Progress | None = None,
 ) -> DropCutterResult:
     """Exact drop-cutter heights of ``cutter`` on ``faces`` at the points ``xy`` (module docstring).

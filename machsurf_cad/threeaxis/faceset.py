@@ -120,6 +120,9 @@ class FaceSet:
         Whether each face closes on itself along u, v (local solves wrap across its seam).
     bounds : ndarray (n_faces, 4)
         Each face's parameter box.
+    edge_cover : ndarray
+        Per edge sample: half the largest distance between neighbouring samples of its edge (every
+        point of the edge lies within it of a sample; z rises by at most as much along it).
     cover, rise : ndarray
         Per sample (face samples, then edge samples): a radius (mm) within which of some sample every
         face point lies, and a bound on how much higher z gets within it (mm), from the sample's slope
@@ -148,6 +151,7 @@ class FaceSet:
     rise: np.ndarray = field(repr=False)
     closed: np.ndarray = field(repr=False)
     bounds: np.ndarray = field(repr=False)
+    edge_cover: np.ndarray = field(repr=False)
 
     @property
     def n_samples(self) -> int:
@@ -173,7 +177,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
     P, UV, F = [], [], []
     edges: list[BSplineCurve] = []
     EF, EP, ET, EI, EDT, EUV = [], [], [], [], [], []
-    COV, RISE, ECOV, ERISE, CLOSED = [], [], [], [], []
+    COV, RISE, ECOV, ERISE, CLOSED, EALONG = [], [], [], [], [], []
     total = 0
     for i, f in enumerate(faces):
         if isinstance(f, BSplineSurface):
@@ -215,6 +219,8 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
             e_slope = _slope(de.su, de.sv)
             ECOV.append(np.full(n, delta))
             ERISE.append(delta * np.minimum(1.0, e_slope + kappa * delta))
+            half = 0.5 * float(np.linalg.norm(np.diff(de.point, axis=0), axis=1).max())
+            EALONG.append(np.full(n, half))
             ET.append(t)
             EUV.append(uv)
             EI.append(np.full(n, len(edges)))
@@ -246,4 +252,5 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         np.concatenate(RISE + ERISE),
         np.array(CLOSED, bool).reshape(-1, 2),
         np.array([f.uv_bounds for f in out_faces], float),
+        np.concatenate(EALONG),
     )

@@ -339,3 +339,240 @@ def _link(fs: FaceSet, cutter, passes, d, nrm, offsets, step, z_safe, tol, direc
         {},
         info,
     )
+
+
+def _crossing(fs, cutter, a, b, fa, fb, level, iters: int = 10):
+    """Points between ``a`` and ``b`` (rows, tool-frame plan) where the drop-cutter height equals
+    ``level`` (per row; Illinois regula falsi on the exact heights; ``fa``, ``fb`` the heights minus
+    ``level`` at the ends, of opposite signs). Returns, per row, the bracket's end at or below the level
+    (where a wall's edge makes the heights jump, the foot of the jump) and its contact."""
+    a, b = a.copy(), b.copy()
+    fa, fb = fa.copy(), fb.copy()
+    side = np.zeros(a.shape[0])
+    ca = np.full((a.shape[0], 3), np.nan)
+    cb = np.full((a.shape[0], 3), np.nan)
+    for _ in range(iters):
+        w = fa / (fa - fb)
+        w = np.clip(np.where(np.isfinite(w), w, 0.5), 0.0, 1.0)
+        x = a + w[:, None] * (b - a)
+        r = _drop(fs, cutter, x)
+        fx = r.height - level
+        fx = np.where(np.isfinite(fx), fx, -1.0)  # no face under the tool: below the level
+        left = np.sign(fx) == np.sign(fa)
+        # Illinois: halve the kept end's value when the same end is kept twice
+        fb = np.where(left & (side == 1), 0.5 * fb, fb)
+        fa = np.where(~left & (side == -1), 0.5 * fa, fa)
+        a = np.where(left[:, None], x, a)
+        ca = np.where(left[:, None], r.contact, ca)
+        fa = np.where(left, fx, fa)
+        b = np.where(left[:, None], b, x)
+        cb = np.where(left[:, None], cb, r.contact)
+        fb = np.where(left, fb, fx)
+        side = np.where(left, 1, -1)
+    # the end of the bracket at or below the level: the tool there touches nothing above it
+    a_safe = fa <= fb
+    return np.where(a_safe[:, None], a, b), np.where(a_safe[:, None], ca, cb)
+
+
+def waterline(
+    faces,
+    cutter,
+    *,
+    check_faces=(),
+    stepdown_mm: float,
+    chordal_tolerance_mm: float = 0.01,
+    clearance_mm: float = 5.0,
+    axis=(0.0, 0.0, 1.0),
+    extent=None,
+    grid_mm: float | None = None,
+    z_min_mm: float | None = None,
+    seed_spacing_mm: float | None = None,
+    progress: Progress | None = None,
+) -> ToolPath:
+    """Waterline (constant-z) tool path: at each level, the closed contours where the exact drop-cutter
+    height equals the level (found on a plan grid of exact heights with contourpy, each vertex then
+    moved onto the exact crossing by regula falsi); moves whose quarter points rise above the level by
+    more than ``chordal_tolerance_mm`` get the exact crossing next to their middle inserted.
+
+    Parameters
+    ----------
+    stepdown_mm : float
+        Distance between levels, from the part's top down to ``z_min_mm`` (default: the lowest tool
+        height over the machined faces).
+    grid_mm : float, optional
+        Plan grid of exact heights the contours are found on (default ``min(1, D/10)``).
+
+    Other parameters as :func:`raster`.
+    """
+    import contourpy
+
+    for name, val in (
+        ("chordal tolerance", chordal_tolerance_mm),
+        ("clearance", clearance_mm),
+        ("step-down", stepdown_mm),
+    ):
+        if not (val > 0 and math.isfinite(val)):
+            raise InputError(f"{name} must be > 0 mm, got {val}")
+    machined = list(faces)
+    if not machined:
+        raise InputError("a waterline path needs at least one face to machine")
+    spacing = default_seed_spacing(cutter) if seed_spacing_mm is None else float(seed_spacing_mm)
+    fs = face_set(machined + list(check_faces), axis=axis, spacing=spacing)
+    own = np.isin(fs.sample_face, np.arange(len(machined)))
+    R = float(cutter.profile_points(16)[:, 0].max())
+    if extent is None:
+        xy = fs.sample_xyz[own, :2]
+        extent = (xy[:, 0].min() - R, xy[:, 0].max() + R, xy[:, 1].min() - R, xy[:, 1].max() + R)
+    g = float(grid_mm) if grid_mm is not None else min(1.0, cutter.D / 10)
+    if not g > 0:
+        raise InputError(f"grid must be > 0 mm, got {g}")
+    xs = np.linspace(extent[0], extent[1], max(3, math.ceil((extent[1] - extent[0]) / g) + 1))
+    ys = np.linspace(extent[2], extent[3], max(3, math.ceil((extent[3] - extent[2]) / g) + 1))
+    X, Y = np.meshgrid(xs, ys, indexing="xy")
+    res = _drop(fs, cutter, np.column_stack([X.ravel(), Y.ravel()]), progress)
+    Z = res.height.reshape(X.shape)
+    fin = np.isfinite(Z)
+    if not fin.any():
+        raise InputError("no face lies under the tool anywhere in the waterline's extent")
+    z_low = float(np.nanmin(Z)) - 1.0
+    Zf = np.where(fin, Z, z_low)
+    z_top = float(max(fs.sample_xyz[:, 2].max(), fs.edge_xyz[:, 2].max()))
+    z_bottom = float(np.nanmin(Z[fin])) if z_min_mm is None else float(z_min_mm)
+    levels = np.arange(float(np.nanmax(Z)) - stepdown_mm, z_bottom - 1e-9, -stepdown_mm)
+    if levels.size == 0:
+        raise InputError(f"step-down {stepdown_mm:g} mm leaves no level between the top and {z_bottom:g} mm")
+    gen = contourpy.contour_generator(xs, ys, Zf, line_type=contourpy.LineType.Separate)
+    lines, lv = [], []
+    for level in levels:
+        for line in gen.lines(level):
+            if line.shape[0] >= 3:
+                lines.append(line)
+                lv.append(float(level))
+    if not lines:
+        raise InputError("no waterline contour: the part is flat under every level")
+    pts, ccs, above, lv = _refine_contours(fs, cutter, xs, ys, Zf, lines, np.array(lv), chordal_tolerance_mm, g)
+    passes = list(zip(pts, lv, ccs))
+    return _link_levels(fs, cutter, passes, z_top + clearance_mm, chordal_tolerance_mm, above,
+                        info={"pattern": "waterline", "stepdown_mm": float(stepdown_mm), "grid_mm": g,
+                              "n_levels": int(levels.size), "extent_mm": [float(e) for e in extent]})  # fmt: skip
+
+
+def _grid_values(xs, ys, Zf, pts, levels):
+    """The grid edge each contour vertex lies on (a horizontal or a vertical one, whichever straddles
+    the vertex's level): its two end nodes and their heights. Vertices on no straddling edge get the
+    nearest horizontal edge (their bracket is checked by the caller)."""
+    dx, dy = xs[1] - xs[0], ys[1] - ys[0]
+    fx = np.clip((pts[:, 0] - xs[0]) / dx, 0, xs.size - 1)
+    fy = np.clip((pts[:, 1] - ys[0]) / dy, 0, ys.size - 1)
+    ix0 = np.clip(np.floor(fx).astype(int), 0, xs.size - 2)
+    iy0 = np.clip(np.floor(fy).astype(int), 0, ys.size - 2)
+    ixr = np.clip(np.round(fx).astype(int), 0, xs.size - 1)
+    iyr = np.clip(np.round(fy).astype(int), 0, ys.size - 1)
+    # horizontal edge (iyr; ix0 .. ix0 + 1) and vertical edge (ixr; iy0 .. iy0 + 1)
+    h_a, h_b = Zf[iyr, ix0], Zf[iyr, ix0 + 1]
+    v_a, v_b = Zf[iy0, ixr], Zf[iy0 + 1, ixr]
+    h_ok = (h_a - levels) * (h_b - levels) <= 0
+    v_ok = (v_a - levels) * (v_b - levels) <= 0
+    use_h = h_ok & (~v_ok | (np.abs(fy - iyr) <= np.abs(fx - ixr)))
+    a = np.where(use_h[:, None], np.column_stack([xs[ix0], ys[iyr]]), np.column_stack([xs[ixr], ys[iy0]]))
+    b = np.where(use_h[:, None], np.column_stack([xs[ix0 + 1], ys[iyr]]), np.column_stack([xs[ixr], ys[iy0 + 1]]))
+    return a, b, np.where(use_h, h_a, v_a), np.where(use_h, h_b, v_b), h_ok | v_ok
+
+
+def _refine_contours(fs, cutter, xs, ys, Zf, lines, levels, tol, g, rounds: int = 6):
+    """All contours' vertices on their exact crossings (one batched solve), then, round by round, the
+    middles of moves whose quarter points rise above their level by more than ``tol`` replaced by exact
+    crossings across the move. Returns per contour the points and contacts, and the largest measured
+    rise of the exact heights above the level between positions (mm)."""
+    sizes = [ln.shape[0] for ln in lines]
+    allv = np.concatenate(lines)
+    lev = np.repeat(levels, sizes)
+    a, b, za, zb, straddles = _grid_values(xs, ys, Zf, allv, lev)
+    x, c = _crossing(fs, cutter, a, b, za - lev, zb - lev, lev)
+    x = np.where(straddles[:, None], x, np.nan)  # a vertex with no bracket is dropped
+    cut = np.cumsum(sizes)[:-1]
+    pts, ccs = np.split(x, cut), np.split(c, cut)
+    keep = [np.isfinite(p[:, 0]) for p in pts]
+    pts = [p[k] for p, k in zip(pts, keep)]
+    ccs = [cc[k] for cc, k in zip(ccs, keep)]
+    good = [p.shape[0] >= 2 for p in pts]
+    pts = [p for p, g_ in zip(pts, good) if g_]
+    ccs = [cc for cc, g_ in zip(ccs, good) if g_]
+    levels = levels[np.array(good)]
+    lines = [ln for ln, g_ in zip(lines, good) if g_]
+    closed = [bool(np.allclose(ln[0], ln[-1])) for ln in lines]
+    fr = np.array([0.25, 0.5, 0.75])
+    above = 0.0
+    for _ in range(rounds):
+        q = np.concatenate(
+            [(p[:-1, None, :] * (1 - fr)[:, None] + p[1:, None, :] * fr[:, None]).reshape(-1, 2) for p in pts]
+        )
+        qlev = np.concatenate([np.full(3 * (p.shape[0] - 1), lv) for p, lv in zip(pts, levels)])
+        h = _drop(fs, cutter, q).height - qlev
+        h = np.where(np.isfinite(h), h, -np.inf).reshape(-1, 3)
+        rise = h.max(axis=1)
+        above = max(0.0, float(rise.max(initial=0.0)))
+        bad = np.nonzero(rise > tol)[0]
+        if bad.size == 0:
+            break
+        starts = np.concatenate([[0], np.cumsum([p.shape[0] - 1 for p in pts])])
+        owner = np.searchsorted(starts, bad, side="right") - 1
+        local = bad - starts[owner]
+        P0 = np.array([pts[o][i] for o, i in zip(owner, local)])
+        P1 = np.array([pts[o][i + 1] for o, i in zip(owner, local)])
+        lvb = levels[owner]
+        mid = 0.5 * (P0 + P1)
+        t = P1 - P0
+        n = np.column_stack([t[:, 1], -t[:, 0]]) / np.maximum(np.linalg.norm(t, axis=1), 1e-300)[:, None]
+        hm = h[bad, 1]
+        o1 = mid + n * g
+        o2 = mid - n * g
+        h1 = _drop(fs, cutter, o1).height - lvb
+        h2 = _drop(fs, cutter, o2).height - lvb
+        h1 = np.where(np.isfinite(h1), h1, -1.0)
+        h2 = np.where(np.isfinite(h2), h2, -1.0)
+        use1 = h1 < h2
+        out_pt = np.where(use1[:, None], o1, o2)
+        ho = np.where(use1, h1, h2)
+        ok = (ho < 0) & np.isfinite(hm) & (hm > 0)
+        if not ok.any():
+            break
+        xk, ck = _crossing(fs, cutter, mid[ok], out_pt[ok], hm[ok], ho[ok], lvb[ok])
+        for o in np.unique(owner[ok]):
+            sel = owner[ok] == o
+            at = local[ok][sel] + 1
+            pts[o] = np.insert(pts[o], at, xk[sel], axis=0)
+            ccs[o] = np.insert(ccs[o], at, ck[sel], axis=0)
+    for k, cl in enumerate(closed):
+        if cl and not np.allclose(pts[k][0], pts[k][-1]):
+            pts[k] = np.vstack([pts[k], pts[k][:1]])
+            ccs[k] = np.vstack([ccs[k], ccs[k][:1]])
+    return pts, ccs, above, levels
+
+
+def _link_levels(fs, cutter, passes, z_safe, tol, above, info) -> ToolPath:
+    """Each contour: rapid above its start at ``z_safe``, plunge, cut around it, retract."""
+    frame = fs.frame
+    T, M, P, C = [], [], [], []
+    for k, (pts, level, cc) in enumerate(passes):
+        n = pts.shape[0]
+        T += [np.column_stack([pts[:1], [z_safe]]), np.column_stack([pts, np.full(n, level)]),
+              np.column_stack([pts[-1:], [z_safe]])]  # fmt: skip
+        M += [[Move.RAPID], [Move.APPROACH] + [Move.CUT] * (n - 1), [Move.RETRACT]]
+        P += [np.full(n + 2, k)]
+        C += [np.full((1, 3), np.nan), cc, np.full((1, 3), np.nan)]
+    tip = np.concatenate(T) @ frame
+    info = dict(info, chordal_tolerance_mm=tol, chordal_error_measured_mm=float(above),
+                chord_below_drop_height_mm=float(above), clearance_height_mm=z_safe, n_passes=len(passes))  # fmt: skip
+    return ToolPath(
+        tip,
+        np.repeat(frame[2][None, :], tip.shape[0], axis=0),
+        np.concatenate([np.asarray(m, np.int8) for m in M]),
+        np.concatenate(P),
+        np.concatenate(C),
+        None,
+        cutter,
+        "waterline",
+        {},
+        info,
+    )
