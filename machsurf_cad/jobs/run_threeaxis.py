@@ -124,7 +124,8 @@ def _cl_surface(st: Staging, say: Say, spec, cutter, mf, cf, axis, rep, progress
     rep["cl_surface"] = dict(r, **info, written=True)
     say(
         f"CL surface (tool tips, height field): {r['poles'][0]}x{r['poles'][1]} poles, max error "
-        f"{r['max_error_mm']:.3g} mm (tol {spec.tol:g}) against the exact drop-cutter on {r['n_check_points']} unseen points; "
+        f"{r['max_error_mm']:.3g} mm (tol {spec.tol:g}) against the exact drop-cutter on "
+        f"{r['n_check_points']} unseen points; "
         f"{100 * info['share_without_face']:.1f} % of the plan box has no face under the tool"
     )
     return EXIT_OK
