@@ -445,7 +445,8 @@ def waterline(
     lines, lv = [], []
     for level in levels:
         for line in gen.lines(level):
-            if line.shape[0] >= 3:
+            line = np.asarray(line, float)
+            if line.ndim == 2 and line.shape[0] >= 3:
                 lines.append(line)
                 lv.append(float(level))
     if not lines:
