@@ -229,3 +229,143 @@ def test_every_cl_touches_and_none_gouges():
         if idx:
             worst = min(worst, float(cutter.signed_distance(P[idx], tip=res.tip[i]).min()))
     assert worst > -1e-6
+
+
+# ----------------------------------------------------------------------------- tool paths
+def test_scallop_stepover_closed_form():
+    from machsurf_cad.threeaxis import scallop_stepover
+
+    assert abs(scallop_stepover(ms.BallEndMill(10), 0.01) - 2 * math.sqrt(2 * 5 * 0.01 - 1e-4)) < 1e-12
+    assert abs(scallop_stepover(BULL, 0.01) - (2 * math.sqrt(2 * 2 * 0.01 - 1e-4) + 2 * R_T)) < 1e-12
+    with pytest.raises(ms.InputError, match="corner radius"):
+        scallop_stepover(ms.FlatEndMill(10), 0.01)
+
+
+@pytest.fixture(scope="module")
+def mould():
+    pytest.importorskip("OCP")
+    from machsurf_cad.occ import read_step_faces
+
+    return read_step_faces(ROOT / "example_parts" / "mould_insert.step")
+
+
+def test_raster_zigzag_on_the_mould_insert_is_exact_and_clean(mould):
+    """A zig-zag raster over a boss, its fillet, the pocket floor and wall: every cutting position is the
+    exact drop-cutter height, the chordal error measured on unused points is within the tolerance, the
+    adjacent lines are linked on the part, and the tool body check finds no gouge."""
+    tol = 0.01
+    tp = ms.raster(mould, BULL, stepover_mm=2.5, chordal_tolerance_mm=tol, extent=(-32.0, -8.0, -16.0, -2.0))
+    i = tp.info
+    assert i["chordal_error_measured_mm"] <= tol
+    assert i["n_links_on_part"] == i["n_passes"] - 1 and i["n_retracts"] == 0
+    cut = tp.move == ms.Move.CUT
+    res = drop_cutter(mould, BULL, tp.tip[cut, :2])
+    # positions are drop-cutter heights, or above them where a jump (a wall's edge) is stepped over
+    assert np.all(tp.tip[cut, 2] >= res.height - 1e-9)
+    on_part = np.abs(tp.tip[cut, 2] - res.height) < 1e-9
+    assert on_part.mean() > 0.95
+    v = ms.verify(mould, tp, tolerance=tol)
+    assert v.clean and v.max_gouge <= tol
+    # zig-zag: consecutive lines run in opposite directions
+    p0 = tp.tip[(tp.pass_index == 0) & cut]
+    p1 = tp.tip[(tp.pass_index == 1) & cut]
+    assert (p0[-1, 0] - p0[0, 0]) * (p1[-1, 0] - p1[0, 0]) < 0
+
+
+def test_raster_one_way_at_an_angle_retracts_between_lines(mould):
+    tp = ms.raster(
+        mould, ms.BallEndMill(6), stepover_mm=3.0, angle_deg=30.0, direction="one-way", chordal_tolerance_mm=0.01,
+        extent=(20.0, 40.0, -20.0, -5.0), clearance_mm=3.0,
+    )  # fmt: skip
+    i = tp.info
+    assert i["n_links_on_part"] == 0 and i["n_retracts"] == i["n_passes"] - 1
+    top = float(
+        max(
+            f.surface.evaluate_grid(np.linspace(*f.uv_bounds[:2], 5), np.linspace(*f.uv_bounds[2:], 5))[..., 2].max()
+            for f in mould
+        )
+    )
+    assert np.allclose(tp.tip[tp.move == ms.Move.RAPID, 2], top + 3.0)
+    cut = tp.tip[tp.move == ms.Move.CUT]
+    d = np.diff(cut[:, :2], axis=0)
+    step = np.linalg.norm(d, axis=1) > 1e-9
+    ang = np.degrees(np.arctan2(d[step, 1], d[step, 0]))
+    assert np.mean(np.abs(((ang - 30.0) + 90) % 180 - 90) < 1e-6) > 0.9  # moves along 30 deg
+    assert ms.verify(mould, tp, tolerance=0.01).clean
+
+
+def test_waterline_on_the_dome_touches_at_its_levels():
+    """Waterline on a spherical dome with a ball: each contour point is where the exact drop-cutter
+    height equals its level (the tool touches, never cuts in), and the contour is the closed-form
+    circle rho = sqrt((Rs + r)^2 - (z + r)^2)."""
+    Rs, r = 30.0, 4.0
+    dome = builders.sphere_patch(Rs, (0.0, 90.0), 360.0)
+    tp = ms.waterline([dome], ms.BallEndMill(2 * r), stepdown_mm=7.0, chordal_tolerance_mm=0.005, grid_mm=1.0)
+    cut = tp.move == ms.Move.CUT
+    z = tp.tip[cut, 2]
+    rho = np.hypot(*tp.tip[cut, :2].T)
+    assert np.abs(rho - np.sqrt((Rs + r) ** 2 - (z + r) ** 2)).max() < 1e-6
+    assert tp.info["chordal_error_measured_mm"] <= 0.005
+    assert tp.info["n_levels"] == len(np.unique(np.round(z, 9)))
+
+
+def test_cl_surface_of_a_flat_end_mill_with_flat_spots():
+    """The case refused before: a flat end mill on the bezier5 face (horizontal spots). The height field
+    is certified on unseen points; checked again here at random points against the exact drop-cutter."""
+    face = ms.example("bezier5")
+    cutter = ms.FlatEndMill(10)
+    fit, info = ms.cl_surface([face], cutter, tolerance_mm=0.02, max_poles=4000)
+    assert fit.max_error <= 0.02 and info["share_without_face"] == 0.0
+    xy = np.random.default_rng(3).uniform([5, 5], [95, 95], (300, 2))
+    exact = drop_cutter([face], cutter, xy).height
+    p = fit.surface.evaluate(xy[:, 0], xy[:, 1])
+    # the fit maps (x, y) to about (x, y, z): compare heights where the plan point lands
+    assert np.abs(p[:, :2] - xy).max() < 0.02
+    assert np.abs(p[:, 2] - exact).max() < 0.02 + 0.02  # plan offset times the slope, bounded
+
+
+# ----------------------------------------------------------------------------- the job, bad input
+@needs_kernel
+def test_cli_raster_on_the_mould_insert_writes_a_checked_path(tmp_path):
+    import json
+
+    from helpers import run
+
+    step = ROOT / "example_parts" / "mould_insert.step"
+    out = tmp_path / "o"
+    r = run(
+        "machining-surface", step, "--faces", "top", "--axes", "3", "--tool", "bull:D=10,r=2", "--toolpath",
+        "--stepover", "8", "--chordal", "0.01", "-o", out,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stdout + r.stderr
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["faces_machined"] == [2, 3, 5, 7, 8, 14, 29, 30, 31, 32, 33, 42, 43, 44, 45, 46, 47, 48, 49, 50]
+    assert len(rep["faces_checked"]) == 31
+    assert rep["verify"]["clean"] and rep["verify"]["n_faces"] == 51
+    assert rep["toolpath"]["chordal_error_measured_mm"] <= 0.01
+    tp = ms.read_csv(out / "toolpath.csv")
+    assert tp.n_cut == rep["toolpath"]["n_cut"]
+
+
+@needs_kernel
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--faces", "60"], "face 60 does not exist (the part has 51 faces"),
+        (["--faces", "top", "--axis", "0,0,-1"], "no face of the part is visible along the axis"),
+        (["--faces", "all", "--axes", "5"], "--faces (exact drop-cutter on several faces) needs --axes 3"),
+        (["--faces", "1,x"], "--faces must be all, top, none or face indices"),
+        (["--faces", "top", "--check-faces", "99"], "--check-faces: face 99 does not exist"),
+    ],
+)
+def test_cli_bad_faces_one_line_exit_1(tmp_path, args, message):
+    from helpers import run
+
+    step = ROOT / "example_parts" / "mould_insert.step"
+    base = ["machining-surface", step, "--tool", "ball:D=10", "-o", tmp_path / "o"]
+    if "--axes" not in args:
+        base += ["--axes", "3"]
+    r = run(*base, *args)
+    assert r.returncode == 1
+    assert message in r.stderr and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()

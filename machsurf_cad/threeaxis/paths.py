@@ -341,7 +341,7 @@ def _link(fs: FaceSet, cutter, passes, d, nrm, offsets, step, z_safe, tol, direc
     )
 
 
-def _crossing(fs, cutter, a, b, fa, fb, level, iters: int = 10):
+def _crossing(fs, cutter, a, b, fa, fb, level, iters: int = 40, tol: float = 1e-10):
     """Points between ``a`` and ``b`` (rows, tool-frame plan) where the drop-cutter height equals
     ``level`` (per row; Illinois regula falsi on the exact heights; ``fa``, ``fb`` the heights minus
     ``level`` at the ends, of opposite signs). Returns, per row, the bracket's end at or below the level
@@ -351,27 +351,39 @@ def _crossing(fs, cutter, a, b, fa, fb, level, iters: int = 10):
     side = np.zeros(a.shape[0])
     ca = np.full((a.shape[0], 3), np.nan)
     cb = np.full((a.shape[0], 3), np.nan)
+    level = np.broadcast_to(np.asarray(level, float), fa.shape)
+    live = np.ones(fa.shape, bool)
+    x_last, c_last = a.copy(), ca.copy()
+    f_last = np.full(fa.shape, np.inf)
     for _ in range(iters):
-        w = fa / (fa - fb)
+        i = np.nonzero(live)[0]
+        if i.size == 0:
+            break
+        w = fa[i] / (fa[i] - fb[i])
         w = np.clip(np.where(np.isfinite(w), w, 0.5), 0.0, 1.0)
-        x = a + w[:, None] * (b - a)
+        x = a[i] + w[:, None] * (b[i] - a[i])
         r = _drop(fs, cutter, x)
-        fx = r.height - level
+        fx = r.height - level[i]
         fx = np.where(np.isfinite(fx), fx, -1.0)  # no face under the tool: below the level
-        left = np.sign(fx) == np.sign(fa)
+        left = np.sign(fx) == np.sign(fa[i])
         # Illinois: halve the kept end's value when the same end is kept twice
-        fb = np.where(left & (side == 1), 0.5 * fb, fb)
-        fa = np.where(~left & (side == -1), 0.5 * fa, fa)
-        a = np.where(left[:, None], x, a)
-        ca = np.where(left[:, None], r.contact, ca)
-        fa = np.where(left, fx, fa)
-        b = np.where(left[:, None], b, x)
-        cb = np.where(left[:, None], cb, r.contact)
-        fb = np.where(left, fb, fx)
-        side = np.where(left, 1, -1)
-    # the end of the bracket at or below the level: the tool there touches nothing above it
+        fb[i] = np.where(left & (side[i] == 1), 0.5 * fb[i], fb[i])
+        fa[i] = np.where(~left & (side[i] == -1), 0.5 * fa[i], fa[i])
+        a[i] = np.where(left[:, None], x, a[i])
+        ca[i] = np.where(left[:, None], r.contact, ca[i])
+        fa[i] = np.where(left, fx, fa[i])
+        b[i] = np.where(left[:, None], b[i], x)
+        cb[i] = np.where(left[:, None], cb[i], r.contact)
+        fb[i] = np.where(left, fb[i], fx)
+        side[i] = np.where(left, 1, -1)
+        x_last[i], c_last[i], f_last[i] = x, r.contact, fx
+        live[i] = (np.abs(fx) > tol) & (np.linalg.norm(b[i] - a[i], axis=1) > 1e-12)
+    # converged: the last iterate; else (a jump at a wall's edge) the end of the bracket below the
+    # level, where the tool touches nothing above it
     a_safe = fa <= fb
-    return np.where(a_safe[:, None], a, b), np.where(a_safe[:, None], ca, cb)
+    done = np.abs(f_last) <= tol
+    x_out = np.where(done[:, None], x_last, np.where(a_safe[:, None], a, b))
+    return x_out, np.where(done[:, None], c_last, np.where(a_safe[:, None], ca, cb))
 
 
 def waterline(
