@@ -12,6 +12,7 @@ import sys
 
 from . import (
     bench_batch,
+    bench_dropcutter,
     bench_envelope,
     bench_eval,
     bench_flank,
@@ -44,6 +45,12 @@ def main(argv=None) -> int:
         (bench_step.step_rows, None),
         (bench_simulate.simulate_rows, "* brute force on a random subset of the finest samples, scaled to all samples"),
         (bench_batch.batch_rows, None),
+        (
+            bench_dropcutter.dropcutter_rows,
+            "* drop-cutter: OpenCAMLib on an OCCT mesh of the same STEP (deflection 0.001 mm); max diff = |ours - "
+            "OpenCAMLib|, within the mesh's sag; the raster row compares with the verify of the path it wrote "
+            "(max diff = its max gouge)",
+        ),
     ):
         for row in produce(quick=args.quick):
             rows.append(row)

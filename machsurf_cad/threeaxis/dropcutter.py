@@ -168,6 +168,10 @@ class _Profile:
         _, h1, _ = lower_height(self.segs, np.array([0.0]))
         self.pointed = bool(abs(h1[0]) > 1e-9)
         table = self(np.linspace(0.0, self.R, 2049))[0]
+        slopes = lower_height(self.segs, np.linspace(0.0, self.R * (1 - 1e-6), 2049))[1]
+        # sine of the steepest profile slope inside the rim: the face is tangent to the profile
+        # there only where it is at most this steep (0 for a flat end mill: flat spots only)
+        self.max_tilt = float(np.sin(np.arctan(np.abs(slopes).max())))
         self.monotone = bool(np.all(np.diff(table) >= -1e-12))
         self.h_min = float(table.min())
 
@@ -622,6 +626,8 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     outside = np.nonzero(~feasible & (rho - cover <= prof.R))[0]
     outside = outside[~np.isin(fkey[outside], fkey[f_seed])]
     f_seed = np.concatenate([f_seed, outside[_best_per(fkey[outside], -rho[outside])]])
+    # no interior contact near a sample steeper than any slope of the profile (within its cover)
+    f_seed = f_seed[fs.min_tilt[sj[f_seed]] <= prof.max_tilt + 1e-9]
     # rim seeds: the highest sample within a cover radius inside the rim per face group, and the one
     # nearest the rim outside it
     near = np.nonzero(feasible & (rho >= prof.R - cover))[0]

@@ -120,6 +120,8 @@ class FaceSet:
         Whether each face closes on itself along u, v (local solves wrap across its seam).
     bounds : ndarray (n_faces, 4)
         Each face's parameter box.
+    min_tilt : ndarray
+        Per sample: a lower bound of ``|n_xy|`` (the sine of the surface's slope) within its cover radius.
     edge_cover : ndarray
         Per edge sample: half the largest distance between neighbouring samples of its edge (every
         point of the edge lies within it of a sample; z rises by at most as much along it).
@@ -152,6 +154,7 @@ class FaceSet:
     closed: np.ndarray = field(repr=False)
     bounds: np.ndarray = field(repr=False)
     edge_cover: np.ndarray = field(repr=False)
+    min_tilt: np.ndarray = field(repr=False)
 
     @property
     def n_samples(self) -> int:
@@ -177,7 +180,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
     P, UV, F = [], [], []
     edges: list[BSplineCurve] = []
     EF, EP, ET, EI, EDT, EUV = [], [], [], [], [], []
-    COV, RISE, ECOV, ERISE, CLOSED, EALONG = [], [], [], [], [], []
+    COV, RISE, ECOV, ERISE, CLOSED, EALONG, FLAT, EFLAT = [], [], [], [], [], [], [], []
     total = 0
     for i, f in enumerate(faces):
         if isinstance(f, BSplineSurface):
@@ -209,6 +212,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         F.append(np.full(int(keep.sum()), i))
         COV.append(np.full(int(keep.sum()), delta))
         RISE.append(delta * np.minimum(1.0, slope[keep] + kappa * delta))
+        FLAT.append(np.maximum(slope[keep] - kappa * delta, 0.0))
         curves = [c for loop in face.loops for c in loop] if face.is_trimmed else _box_edges(face)
         for c in curves:
             n = int(max(4, math.ceil(_length_3d(s, c) / spacing) + 1))
@@ -219,6 +223,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
             e_slope = _slope(de.su, de.sv)
             ECOV.append(np.full(n, delta))
             ERISE.append(delta * np.minimum(1.0, e_slope + kappa * delta))
+            EFLAT.append(np.maximum(e_slope - kappa * delta, 0.0))
             half = 0.5 * float(np.linalg.norm(np.diff(de.point, axis=0), axis=1).max())
             EALONG.append(np.full(n, half))
             ET.append(t)
@@ -253,4 +258,5 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         np.array(CLOSED, bool).reshape(-1, 2),
         np.array([f.uv_bounds for f in out_faces], float),
         np.concatenate(EALONG),
+        np.concatenate(FLAT + EFLAT),
     )
