@@ -173,6 +173,14 @@ class _Profile:
         # there only where it is at most this steep (0 for a flat end mill: flat spots only)
         self.max_tilt = float(np.sin(np.arctan(np.abs(slopes).max())))
         self.monotone = bool(np.all(np.diff(table) >= -1e-12))
+        # radii inside the rim where the slope of h jumps: (radius, h) of each such circle
+        self.kinks = []
+        ends = sorted({round(float(x), 12) for seg in self.segs for x in seg.points(2)[:, 0]})
+        for rk in ends:
+            if 1e-9 < rk < self.R * (1 - 1e-9):
+                _, sl, _ = lower_height(self.segs, np.array([rk - 1e-7, rk + 1e-7]))
+                if abs(sl[1] - sl[0]) > 1e-6:
+                    self.kinks.append((rk, float(self(np.array([rk]))[0][0])))
         self.h_min = float(table.min())
 
     def floor(self, rho) -> np.ndarray:
@@ -332,13 +340,15 @@ def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
     return u, v, g, D[0]
 
 
-def _rim_newton(fs, prof, c, fid, u, v, iters: int = 40):
+def _rim_newton(fs, prof, c, fid, u, v, iters: int = 40, radius: float | None = None, h_at: float | None = None):
     """The highest point of a face on the circle ``|S_xy - c| = R``, near ``(u, v)``: projected Newton
     ascent along the circle (steps along the constraint's tangent, Newton where the Lagrangian's second
     derivative along it is negative, else a trust-radius step uphill, each followed by a projection
     onto the circle; steps that do not rise are refused and the radius shrinks)."""
+    R = prof.R if radius is None else float(radius)
+    h_R = prof.h_R if h_at is None else float(h_at)
     with np.errstate(all="ignore"):
-        return _rim_ascent(fs, prof, c, fid, u, v, iters)
+        return _rim_ascent(fs, R, h_R, c, fid, u, v, iters)
 
 
 def _project_circle(fs, R, c, fid, u, v, n: int = 4):
@@ -358,8 +368,7 @@ def _project_circle(fs, R, c, fid, u, v, n: int = 4):
     return u, v
 
 
-def _rim_ascent(fs, prof, c, fid, u, v, iters):
-    R = prof.R
+def _rim_ascent(fs, R, h_R, c, fid, u, v, iters):
     u, v = _project_circle(fs, R, c, fid, u.copy(), v.copy(), 6)
     P = _surface_eval(fs, fid, u, v, 0)[0]
     z = np.where(np.abs(np.hypot(*(P[:, :2] - c).T) - R) <= 1e-9 * max(R, 1.0), P[:, 2], -np.inf)
@@ -402,7 +411,7 @@ def _rim_ascent(fs, prof, c, fid, u, v, iters):
         done = (acc & (moved < 1e-11)) | (~acc & (radius[a_] < 1e-12))
         active[a_[done]] = False
     P = _surface_eval(fs, fid, u, v, 0)[0]
-    return u, v, np.where(np.isfinite(z), z - prof.h_R, -np.inf), P
+    return u, v, np.where(np.isfinite(z), z - h_R, -np.inf), P
 
 
 def _edge_points(fs, eid, t):
@@ -549,7 +558,7 @@ def _start(fs, sj):
     return fid, u0, v0, is_edge, ke
 
 
-def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str):
+def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str, kink: int | None = None):
     """Local solves of one kind from seed samples ``sj`` for queries ``q``."""
     if q.size == 0:
         return
@@ -568,7 +577,8 @@ def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str):
             g = P[:, 2] - prof(np.zeros(P.shape[0]))[0]
             cand.add(q, g, Contact.TIP, fid, P, ok & _inside(fs, fid, u, v))
     elif kind == "rim":
-        u, v, g, P = _rim_newton(fs, prof, c, fid, u0, v0)
+        rk, hk = (None, None) if kink is None else prof.kinks[kink]
+        u, v, g, P = _rim_newton(fs, prof, c, fid, u0, v0, radius=rk, h_at=hk)
         cand.add(q, g, Contact.RIM, fid, P, np.isfinite(g) & _inside(fs, fid, u, v))
     else:
         eid = fs.edge_id[ke]
@@ -665,6 +675,13 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     _solve(fs, prof, C, cand, qi[f2], sj[f2], "face")
     _solve(fs, prof, C, cand, qi[r2], sj[r2], "rim")
     _solve(fs, prof, C, cand, qi[e2], sj[e2], "edge")
+    # circles inside the rim where the profile's slope jumps (a cone's or APT tool's bottom edge): the
+    # highest sample near each, where its bound can still win
+    for k, (rk, hk) in enumerate(prof.kinks):
+        near_k = np.nonzero(np.abs(rho - rk) <= cover)[0]
+        near_k = near_k[xyz[near_k, 2] + fs.rise[sj[near_k]] - hk >= low[qi[near_k]]]
+        seeds_k = near_k[_best_per(fkey[near_k], xyz[near_k, 2])]
+        _solve(fs, prof, C, cand, qi[seeds_k], sj[seeds_k], "rim", kink=k)
     return cand.best(m)
 
 

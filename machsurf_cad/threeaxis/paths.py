@@ -187,61 +187,66 @@ def _reduce_chordal(fs, cutter, passes, d, nrm, offsets, tol, jump_mm: float = 1
     kept = []
     for s_, h_, c_, i in passes:
         idx = douglas_peucker(np.column_stack([s_, h_]), tol)
-        kept.append([s_[idx], h_[idx], c_[idx], i])
-    above = below = 0.0
+        # per move: its measured error once checked (NaN: not checked yet)
+        kept.append([s_[idx], h_[idx], c_[idx], i, np.full(idx.size - 1, np.nan)])
     fr = np.array([0.25, 0.5, 0.75])  # each move is checked at its quarter points
     for _ in range(max_rounds):
+        todo = [np.nonzero(np.isnan(p[4]))[0] for p in kept]
+        if not any(t.size for t in todo):
+            break
         pts = []
-        for s_, _, _, i in kept:
-            m = (s_[:-1, None] * (1 - fr) + s_[1:, None] * fr).ravel()
+        for (s_, _, _, i, _), t in zip(kept, todo):
+            m = (s_[t, None] * (1 - fr) + s_[t + 1, None] * fr).ravel()
             pts.append(np.column_stack([m, np.full(m.size, offsets[i])]))
         Q = np.concatenate(pts)
         res = _drop(fs, cutter, Q[:, :1] * d + Q[:, 1:] * nrm)
         j = 0
-        bad_any = False
-        above = below = 0.0
-        for k, (s_, h_, c_, i) in enumerate(kept):
-            n = s_.size - 1
+        for k, ((s_, h_, c_, i, e_), t) in enumerate(zip(kept, todo)):
+            n = t.size
+            if n == 0:
+                continue
             hq = res.height[j : j + 3 * n].reshape(n, 3)
             cq = res.contact[j : j + 3 * n].reshape(n, 3, 3)
             j += 3 * n
-            chq = h_[:-1, None] * (1 - fr) + h_[1:, None] * fr
+            chq = h_[t, None] * (1 - fr) + h_[t + 1, None] * fr
             eq = np.where(np.isfinite(hq), hq - chq, 0.0)
             w = np.argmax(np.abs(eq), axis=1)  # the worst quarter point of each move
             r_ = np.arange(n)
             hm, cm, err = hq[r_, w], cq[r_, w], eq[r_, w]
-            sm = s_[:-1] * (1 - fr[w]) + s_[1:] * fr[w]
-            level = np.maximum(h_[1:], h_[:-1])
-            vertical = s_[1:] == s_[:-1]
-            flat_jump = (h_[1:] == h_[:-1]) & (np.abs(s_[1:] - s_[:-1]) < jump_mm)
+            sm = s_[t] * (1 - fr[w]) + s_[t + 1] * fr[w]
+            vertical = s_[t + 1] == s_[t]
+            flat_jump = (h_[t + 1] == h_[t]) & (np.abs(s_[t + 1] - s_[t]) < jump_mm)
             err = np.where(vertical, 0.0, err)
-            above = max(above, float(err.max(initial=0.0)))
-            below = max(below, float(np.where(flat_jump, 0.0, -err).max(initial=0.0)))
-            bad = np.nonzero((err > tol) | ((-err > tol) & ~flat_jump))[0]
+            e_[t] = np.where(flat_jump, np.maximum(err, 0.0), err)  # a level move over a jump: only a gouge counts
+            bad_l = (err > tol) | ((-err > tol) & ~flat_jump)
+            bad = t[bad_l]
             if bad.size == 0:
                 continue
-            bad_any = True
             short = np.abs(s_[bad + 1] - s_[bad]) < jump_mm
-            mid = bad[~short]
-            jmp = bad[short]
+            mid, jmp = bad[~short], bad[short]
+            lm = np.nonzero(bad_l)[0][~short]  # positions of the long bad moves in this round's arrays
             # middles of long moves; upper corners of short ones (at the lower end's s, the higher height)
-            ins_s = np.concatenate([sm[mid], np.where(h_[jmp] < h_[jmp + 1], s_[jmp], s_[jmp + 1])])
-            ins_h = np.concatenate([hm[mid], level[jmp]])
-            ins_c = np.concatenate([cm[mid], np.where((h_[jmp] < h_[jmp + 1])[:, None], c_[jmp + 1], c_[jmp])])
+            ins_s = np.concatenate([sm[lm], np.where(h_[jmp] < h_[jmp + 1], s_[jmp], s_[jmp + 1])])
+            ins_h = np.concatenate([hm[lm], np.maximum(h_[jmp], h_[jmp + 1])])
+            ins_c = np.concatenate([cm[lm], np.where((h_[jmp] < h_[jmp + 1])[:, None], c_[jmp + 1], c_[jmp])])
             ins_at = np.concatenate([mid + 1, jmp + 1])
             keep = np.isfinite(ins_h)
             order = np.argsort(ins_at[keep], kind="stable")
+            at = ins_at[keep][order]
+            e_ = e_.copy()
+            e_[ins_at[keep] - 1] = np.nan  # a split move becomes two unchecked moves
             kept[k] = [
-                np.insert(s_, ins_at[keep][order], ins_s[keep][order]),
-                np.insert(h_, ins_at[keep][order], ins_h[keep][order]),
-                np.insert(c_, ins_at[keep][order], ins_c[keep][order], axis=0),
+                np.insert(s_, at, ins_s[keep][order]),
+                np.insert(h_, at, ins_h[keep][order]),
+                np.insert(c_, at, ins_c[keep][order], axis=0),
                 i,
+                np.insert(e_, at, np.nan),
             ]
-        if not bad_any:
-            break
-    for p in kept:
-        p.append((above, below))
-    return kept
+    errs = np.concatenate([p[4] for p in kept])
+    errs = np.where(np.isnan(errs), 0.0, errs)
+    above = float(errs.max(initial=0.0))
+    below = float((-errs).max(initial=0.0))
+    return [[s_, h_, c_, i, (above, below)] for s_, h_, c_, i, _ in kept]
 
 
 def _link(fs: FaceSet, cutter, passes, d, nrm, offsets, step, z_safe, tol, direction, info) -> ToolPath:
