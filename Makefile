@@ -43,7 +43,7 @@ bench: $(STAMP)
 CORE_TESTS := tests/test_basis.py tests/test_geometry.py tests/test_builders.py tests/test_deviation.py \
 	tests/test_cutters.py tests/test_machining.py tests/test_reff.py tests/test_flank.py tests/test_envelope.py \
 	tests/test_layout.py tests/test_core_np124.py tests/test_api.py tests/test_toolpath.py tests/test_verify.py \
-	tests/test_simulate.py tests/test_isoscallop.py
+	tests/test_simulate.py tests/test_isoscallop.py tests/test_threeaxis.py
 np124:
 	test -x .venv-np124/bin/python || $(PY) -m venv .venv-np124
 	.venv-np124/bin/python -m pip install --quiet "numpy==1.24.4" "scipy==1.10.1" "contourpy<1.4" mpmath pytest
