@@ -9,7 +9,7 @@ chordal error between positions is measured on the exact drop-cutter at points t
 from __future__ import annotations
 
 import math
-from enum import StrEnum
+from enum import Enum
 
 import numpy as np
 
@@ -21,7 +21,7 @@ from .dropcutter import DropCutterResult, default_seed_spacing, drop_cutter
 from .faceset import FaceSet, face_set
 
 
-class Pattern(StrEnum):
+class Pattern(Enum):
     """3-axis path patterns."""
 
     RASTER = "raster"
@@ -30,7 +30,7 @@ class Pattern(StrEnum):
     """Constant-height contours of the tool's lowest positions."""
 
 
-class Direction(StrEnum):
+class Direction(Enum):
     """How raster lines follow each other."""
 
     ZIGZAG = "zigzag"
