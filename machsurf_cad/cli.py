@@ -200,6 +200,10 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     t.add_argument(
         "--cl-surface", action="store_true", help="also fit the certified height-field B-spline of the tool positions"
     )
+    t.add_argument(
+        "--shank", default=None, help="shank above the cutting length, D=..,L=.. (mm): checked for collisions"
+    )
+    t.add_argument("--holder", default=None, help="holder above the shank, D=..,L=.. (mm): checked for collisions")
     _gouge(m, "0.01")
     _post(m)
     m.add_argument("-o", "--out", default="out/machining_surface", help="output folder")

@@ -208,6 +208,7 @@ def _coarse(c, tree, P, h, tolerance, T, A, progress=None):
     cut_d = np.full(m, np.inf)
     hold_d = np.full(m, np.inf)
     seed = np.full(m, -1)
+    hold_seed = np.full(m, -1)
     d_idx: list = []
     d_val: list = []
     chunk = 256
@@ -240,14 +241,19 @@ def _coarse(c, tree, P, h, tolerance, T, A, progress=None):
         better = mins < cut_d[owners]
         cut_d[owners[better]] = mins[better]
         seed[owners[better]] = pi[first[take]][better]
-        if has_holder:
+        if has_holder:  # the smallest distance to shank and holder, and its sample
             hd = c.holder_distance_rz(rho, z)
-            np.minimum.at(hold_d, pl, hd)
+            hmins = np.minimum.reduceat(hd, starts)
+            hfirst = np.flatnonzero(hd == np.repeat(hmins, counts[nz]))
+            _, htake = np.unique(np.searchsorted(starts, hfirst, side="right") - 1, return_index=True)
+            hbetter = hmins < hold_d[owners]
+            hold_d[owners[hbetter]] = hmins[hbetter]
+            hold_seed[owners[hbetter]] = pi[hfirst[htake]][hbetter]
         if progress is not None:
             progress(sl.stop, m, "tool placements")
     idx = np.concatenate(d_idx) if d_idx else np.empty(0, int)
     val = np.concatenate(d_val) if d_val else np.empty(0)
-    return cut_d, hold_d, seed, idx, val
+    return cut_d, hold_d, seed, idx, val, hold_seed
 
 
 def verify(
@@ -366,7 +372,7 @@ def verify(
         chunks,
         map_chunks,
     )
-    cut_d, hold_d, seed, d_idx, d_val = (np.concatenate([q[k] for q in parts]) for k in range(5))
+    cut_d, hold_d, seed, d_idx, d_val, hold_seed = (np.concatenate([q[k] for q in parts]) for k in range(6))
     depth = np.zeros(P.shape[0])
     np.maximum.at(depth, d_idx, d_val)
     t2 = time.perf_counter()
@@ -419,6 +425,17 @@ def verify(
     status[(~rapid) & (pos_cut < -tolerance)] = GOUGE
     status[rapid & (pos_cut < tolerance)] = COLLISION
     status[pos_hold < tolerance] = COLLISION
+    # where shank or holder collide and the cutting part does not gouge: their part point
+    hold_pos = np.nonzero((pos_hold < tolerance) & (pos_cut >= -tolerance))[0]
+    if hold_pos.size:
+        order_h = np.lexsort((hold_d, owner))
+        wh = order_h[np.r_[True, owner[order_h][1:] != owner[order_h][:-1]]]
+        by_pos = np.full(n, -1)
+        by_pos[owner[wh]] = hold_seed[wh]
+        hs = by_pos[hold_pos]
+        ok = hs >= 0
+        pos_face[hold_pos[ok]] = F[hs[ok]]
+        pos_xyz[hold_pos[ok]] = P[hs[ok]]
     warns = []
     if np.all(~np.isfinite(pos_cut)) or (np.isfinite(pos_cut).any() and np.nanmin(pos_cut) > c.D):
         warns.append(f"the tool never comes within {c.D:g} mm of the part: is this the part the path was made for?")

@@ -369,3 +369,62 @@ def test_cli_bad_faces_one_line_exit_1(tmp_path, args, message):
     assert r.returncode == 1
     assert message in r.stderr and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "o").exists()
+
+
+@needs_kernel
+@pytest.mark.parametrize("unit, scale", [("INCH", 25.4), ("CM", 10.0)])
+def test_part_in_inches_or_centimetres_gives_mm(tmp_path, unit, scale):
+    """A STEP whose length unit is the inch or the centimetre: faces and heights come out in mm."""
+    import cadquery as cq
+
+    from machsurf_cad.occ import read_step_faces
+
+    box = cq.Workplane("XY").box(2.0, 1.0, 0.5, centered=(True, True, False))  # in the file's unit
+    mm = tmp_path / "box_mm.step"
+    cq.exporters.export(box, str(mm))
+    text = mm.read_text()
+    si = "( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) )"
+    assert si in text
+    if unit == "CM":
+        text = text.replace(si, "( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.CENTI.,.METRE.) )")
+    else:
+        text = text.replace(si, "( CONVERSION_BASED_UNIT('INCH',#99901) LENGTH_UNIT() NAMED_UNIT(#99902) )")
+        extra = (
+            "#99901 = LENGTH_MEASURE_WITH_UNIT(LENGTH_MEASURE(25.4),#99903);\n"
+            "#99902 = DIMENSIONAL_EXPONENTS(1.,0.,0.,0.,0.,0.,0.);\n"
+            "#99903 = ( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );\n"
+        )
+        head, tail = text.rsplit("ENDSEC;", 1)
+        text = head + extra + "ENDSEC;" + tail
+    path = tmp_path / f"box_{unit.lower()}.step"
+    path.write_text(text)
+    faces = read_step_faces(path)
+    top = 0.5 * scale
+    res = drop_cutter(faces, ms.BallEndMill(6), [[0.0, 0.0], [0.9 * scale, 0.0], [scale + 2.0, 0.0]])
+    assert np.allclose(res.height[:2], top, atol=1e-9)
+    # the ball (R 3) 2 mm past the edge x = scale rests on it: top + 3 - sqrt(9 - 2^2) - 3 + 3
+    assert abs(res.height[2] - (top - 3 + math.sqrt(9 - 4.0))) < 1e-9
+
+
+@needs_kernel
+def test_cli_holder_too_low_for_the_pocket_exit_2_with_the_region(tmp_path):
+    """A 6 mm cutting length and a 2 mm shank put a D30 holder 8 mm above the tip: it cannot reach the
+    10 mm deep pocket's floor without the holder hitting the block: the path is not written, the
+    collisions are listed with the holder 2 mm into the block's top."""
+    import json
+
+    from helpers import run
+
+    step = ROOT / "example_parts" / "mould_insert.step"
+    out = tmp_path / "o"
+    r = run(
+        "machining-surface", step, "--faces", "top", "--axes", "3", "--tool", "flat:D=8,L=6", "--shank", "D=8,L=2",
+        "--holder", "D=30,L=40", "--toolpath", "--stepover", "15", "--chordal", "0.005", "-o", out,
+    )  # fmt: skip
+    assert r.returncode == 2
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["verify"]["n_collisions"] > 0 and not rep["verify"]["clean"]
+    hits = [w for w in rep["verify"]["worst"] if w["status"] == "collision"]
+    assert any(w["part_point_mm"][2] >= w["tip_mm"][2] + 8 and w["depth_mm"] > 1.9 for w in hits)  # the holder
+    assert rep["verify"]["n_gouging_positions"] == 0
+    assert not (out / "toolpath.csv").exists()

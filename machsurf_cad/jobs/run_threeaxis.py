@@ -34,6 +34,12 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
 
     t0 = time.perf_counter()
     cutter = parse_cutter(spec.tool)
+    if spec.shank or spec.holder:
+        import dataclasses
+
+        from .run_verify import _shank
+
+        cutter = dataclasses.replace(cutter, shank=_shank(spec.shank, "shank"), holder=_shank(spec.holder, "holder"))
     faces, desc = _part(spec)
     axis = spec.axis if spec.axis is not None else (0.0, 0.0, 1.0)
     machined = select_faces(faces, spec.faces or "all", axis=axis, what="--faces")

@@ -143,6 +143,8 @@ class MachiningSurfaceJob(_Post, JobSpec):
     stepdown: float | None = None
     grid: float | None = None
     cl_surface: bool = False
+    shank: str | None = None
+    holder: str | None = None
     command = "machining-surface"
 
     def __post_init__(self) -> None:
