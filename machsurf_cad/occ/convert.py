@@ -142,7 +142,7 @@ def face_from_surface(surface: BSplineSurface, loops: list[list[BSplineCurve]] |
         u0, u1, v0, v1 = surface.bounds
         face = BRepBuilderAPI_MakeFace(geom, u0, u1, v0, v1, Precision.Confusion_s()).Face()
     else:
-        wires = [_wire_on_surface(close_loop(loop)[0], geom, size) for loop in loops]
+        wires = [_wire_on_surface(close_loop(loop)[0], geom, size) for loop in oriented_loops(loops)]
         mk = BRepBuilderAPI_MakeFace(geom, wires[0], True)
         for w in wires[1:]:
             mk.Add(w)
@@ -155,6 +155,36 @@ def face_from_surface(surface: BSplineSurface, loops: list[list[BSplineCurve]] |
         settle_tolerances(face)
     check_valid(face, what=f"face '{surface.name}'")
     return face
+
+
+def reversed_curve(c: BSplineCurve) -> BSplineCurve:
+    """The same curve run backwards over the same parameter range."""
+    a, b = c.bounds
+    w = None if c.weights is None else np.asarray(c.weights)[::-1]
+    return BSplineCurve(c.degree, (a + b) - np.asarray(c.knots)[::-1], np.asarray(c.mults)[::-1],
+                        np.asarray(c.poles)[::-1], w, c.periodic)  # fmt: skip
+
+
+def _signed_area(loop) -> float:
+    pts = np.concatenate([c.evaluate(np.linspace(*c.bounds, 65))[:-1] for c in loop])
+    x, y = pts[:, 0], pts[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def oriented_loops(loops) -> list[list[BSplineCurve]]:
+    """Loops turned the way OCCT wants them on the surface's own orientation: the outer loop (the
+    first) counter-clockwise in (u, v), holes clockwise. Loops read from a reversed face (its normal
+    against ``su x sv``) run the other way; rebuilt as they were, the face is invalid
+    (``BRepCheck_BadOrientationOfSubshape``, e.g. a block's bottom face with a hole)."""
+    out = []
+    for k, loop in enumerate(loops):
+        loop = list(loop)
+        area = _signed_area(loop)
+        want_ccw = k == 0
+        if (area > 0) != want_ccw and area != 0.0:
+            loop = [reversed_curve(c) for c in reversed(loop)]
+        out.append(loop)
+    return out
 
 
 def _size(surface: BSplineSurface) -> float:
