@@ -258,8 +258,8 @@ def _monotone(prof):
 @pytest.mark.parametrize("name", ["freeform_block.step", "mould_insert.step"])
 def test_every_face_rebuilds_valid_with_its_area(name):
     """Every face of a part, holes included (the block's bottom face is a reversed plane with a round
-    hole: its loops run clockwise and were rebuilt invalid before), rebuilds as a valid face; planar
-    faces keep their area to 1e-6."""
+    hole: its loops run clockwise and were rebuilt invalid before), rebuilds as a valid face of the same
+    area within 2e-5 (adaptive integration: the default one is off by 1.4 % on a rational circle hole)."""
     from OCP.BRepGProp import BRepGProp
     from OCP.GProp import GProp_GProps
 
@@ -270,6 +270,5 @@ def test_every_face_rebuilds_valid_with_its_area(name):
     for f in faces:
         topo = face_from_surface(f.surface, [list(lp) for lp in f.loops] or None)
         props = GProp_GProps()
-        BRepGProp.SurfaceProperties_s(topo, props)
-        if f.source_type == "Plane":
-            assert abs(props.Mass() - f.area) <= 1e-6 * f.area + 1e-6, (f.index, f.source_type)
+        BRepGProp.SurfaceProperties_s(topo, props, 1e-10)
+        assert abs(props.Mass() - f.area) <= 2e-5 * f.area, (f.index, f.source_type)
