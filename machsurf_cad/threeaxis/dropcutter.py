@@ -168,7 +168,7 @@ class _Profile:
         _, h1, _ = lower_height(self.segs, np.array([0.0]))
         self.pointed = bool(abs(h1[0]) > 1e-9)
         table = self(np.linspace(0.0, self.R, 2049))[0]
-        slopes = lower_height(self.segs, np.linspace(0.0, self.R * (1 - 1e-6), 2049))[1]
+        slopes = lower_height(self.segs, np.linspace(0.0, self.R, 2049))[1]
         # sine of the steepest profile slope inside the rim: the face is tangent to the profile
         # there only where it is at most this steep (0 for a flat end mill: flat spots only)
         self.max_tilt = float(np.sin(np.arctan(np.abs(slopes).max())))
@@ -566,10 +566,11 @@ def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str, kink: int | None = 
     c = C[q]
     if kind == "face":
         P0 = _surface_eval(fs, fid, u0, v0, 0)[0]
-        out = np.nonzero(np.hypot(*(P0[:, :2] - c).T) > prof.R)[0]
-        if out.size:  # starts outside the disc: onto a circle just inside it first
+        out = np.nonzero(np.hypot(*(P0[:, :2] - c).T) > prof.R * (1 - 1e-3))[0]
+        if out.size:  # starts outside the disc or at its rim: onto a circle just inside it (1e-3 R: a ball's
+            # profile turns vertical at the rim, where Newton would crawl)
             u0, v0 = u0.copy(), v0.copy()
-            u0[out], v0[out] = _project_circle(fs, prof.R * (1 - 1e-7), c[out], fid[out], u0[out], v0[out], 6)
+            u0[out], v0[out] = _project_circle(fs, prof.R * (1 - 1e-3), c[out], fid[out], u0[out], v0[out], 6)
         u, v, g, P = _face_newton(fs, prof, c, fid, u0, v0)
         cand.add(q, g, Contact.FACE, fid, P, np.isfinite(g) & _inside(fs, fid, u, v))
         if prof.pointed:
@@ -646,7 +647,10 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     # edge seeds: best edge sample per edge group, inside and just outside the disc apart
     ed = np.nonzero(is_edge)[0]
     ekey = ekey * 2 + feasible
-    e_seed = ed[_best_per(ekey[ed], val[ed])]
+    # inside the disc the best sample; outside it the one nearest the disc (an edge grazing the
+    # circle between samples reaches into the disc there)
+    e_in, e_out = ed[feasible[ed]], ed[~feasible[ed]]
+    e_seed = np.concatenate([e_in[_best_per(ekey[e_in], val[e_in])], e_out[_best_per(ekey[e_out], -rho[e_out])]])
     n_int = fs.sample_xyz.shape[0]
     e_cov = fs.edge_cover[np.maximum(sj - n_int, 0)]
     e_reach = rho - e_cov
