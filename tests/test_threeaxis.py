@@ -428,3 +428,26 @@ def test_cli_holder_too_low_for_the_pocket_exit_2_with_the_region(tmp_path):
     assert any(w["part_point_mm"][2] >= w["tip_mm"][2] + 8 and w["depth_mm"] > 1.9 for w in hits)  # the holder
     assert rep["verify"]["n_gouging_positions"] == 0
     assert not (out / "toolpath.csv").exists()
+
+
+def test_steep_wall_and_its_top_edge_against_brute_force():
+    """A wavy wall 84 deg steep (all its samples can lie outside the tool's reach while the tool
+    touches it between them) and its top edge grazing the tool's circle: the cases a real impeller
+    blade showed (0.34 mm below the exact height before)."""
+    y = np.linspace(0, 40, 6)
+    z = np.linspace(0, 20, 4)
+    Y, Z = np.meshgrid(y, z, indexing="ij")
+    X = 0.1 * Z + 0.8 * np.sin(Y / 7.0)
+    wall = builders.surface_from_grid(np.stack([X, Y, Z], axis=-1), 3, 3)
+    ball = ms.BallEndMill(6)
+    rng = np.random.default_rng(5)
+    yq = rng.uniform(5, 35, 60)
+    top = wall.evaluate(yq / 40, np.full(60, 1.0))  # the top edge (v = 1) near each query's y
+    # the tool's circle reaches 0.001 .. 0.3 mm over the top edge: a sliver of the face between samples
+    xy = np.column_stack([top[:, 0] + 3 - rng.uniform(0.001, 0.3, 60), top[:, 1]])
+    res = drop_cutter([wall], ball, xy)
+    bf = _brute_force([ms.Face(wall)], ball, xy)
+    ok = ~np.isnan(bf)
+    assert np.array_equal(np.isnan(res.height), np.isnan(bf)) and ok.sum() > 20
+    assert np.all(res.height[ok] >= bf[ok] - 1e-6)
+    assert np.abs(res.height[ok] - bf[ok]).max() < 1e-3
