@@ -8,7 +8,7 @@ from conftest import ROOT, needs_kernel
 
 import machsurf_cad as ms
 from machsurf_cad import builders
-from machsurf_cad.threeaxis import Contact, drop_cutter
+from machsurf_cad.threeaxis import Contact, default_seed_spacing, drop_cutter
 
 BULL = ms.BullNoseEndMill(10, 2)  # R_t = 3, r = 2
 R_T, R_C = 3.0, 2.0
@@ -451,3 +451,24 @@ def test_steep_wall_and_its_top_edge_against_brute_force():
     assert np.array_equal(np.isnan(res.height), np.isnan(bf)) and ok.sum() > 20
     assert np.all(res.height[ok] >= bf[ok] - 1e-6)
     assert np.abs(res.height[ok] - bf[ok]).max() < 1e-3
+
+
+def test_gouging_moves_are_split_until_the_body_check_is_clean(mould):
+    """Long straight moves over a boss (every 8th position of a clean line kept) gouge; splitting the
+    gouging moves at exact heights, checked again by the tool-body check, makes the path clean."""
+    from machsurf_cad.threeaxis import face_set
+    from machsurf_cad.threeaxis.paths import refine_gouging_moves
+
+    tol = 0.01
+    tp = ms.raster(mould, BULL, stepover_mm=4.0, chordal_tolerance_mm=tol, extent=(-28.0, -8.0, -12.0, -8.0))
+    keep = np.ones(tp.n_positions, bool)
+    cut = np.nonzero(tp.move == ms.Move.CUT)[0]
+    keep[cut] = False
+    keep[cut[::8]] = True
+    keep[cut[-1]] = True
+    coarse = tp.subset(np.nonzero(keep)[0])
+    assert not ms.verify(mould, coarse, tolerance=tol).clean
+    fs = face_set(mould, spacing=default_seed_spacing(BULL))
+    fixed = refine_gouging_moves(coarse, mould, BULL, fs, tolerance_mm=tol)
+    assert fixed.info["n_moves_split_after_body_check"] > 0
+    assert ms.verify(mould, fixed, tolerance=tol).clean

@@ -83,6 +83,7 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
                     scallop_mm=spec.scallop,
                     angle_deg=spec.angle,
                     direction=spec.direction,
+                    verify_tolerance_mm=spec.gouge_tol,
                     **common,
                 )
             else:

@@ -86,6 +86,7 @@ def raster(
     extent=None,
     sample_step_mm: float | None = None,
     seed_spacing_mm: float | None = None,
+    verify_tolerance_mm: float | None = None,
     progress: Progress | None = None,
 ) -> ToolPath:
     """Raster tool path over ``faces``, avoiding ``faces`` and ``check_faces``.
@@ -115,6 +116,9 @@ def raster(
         Plan box in the tool frame (default: the machined faces' extent).
     sample_step_mm : float, optional
         Dense sampling along lines before chordal reduction (default ``min(0.25, D/20)``).
+    verify_tolerance_mm : float, optional
+        Check the tool body against the faces and split cutting moves that gouge deeper than this
+        (:func:`refine_gouging_moves`); the caller still checks the path it writes.
 
     Returns
     -------
@@ -165,10 +169,73 @@ def raster(
         for p in passes:
             if p[3] % 2 == 1:
                 p[0], p[1], p[2] = p[0][::-1], p[1][::-1], p[2][::-1]
-    return _link(fs, cutter, passes, d, nrm, offsets, step, z_top + clearance_mm, chordal_tolerance_mm, direction,
-                 info={"pattern": "raster", "direction": direction.value, "angle_deg": float(angle_deg),
-                       "stepover_mm": step, "scallop_target_mm": scallop_mm, "n_lines": int(len(offsets)),
-                       "sample_step_mm": ds, "extent_mm": [float(e) for e in extent]})  # fmt: skip
+    tp = _link(fs, cutter, passes, d, nrm, offsets, step, z_top + clearance_mm, chordal_tolerance_mm, direction,
+               info={"pattern": "raster", "direction": direction.value, "angle_deg": float(angle_deg),
+                     "stepover_mm": step, "scallop_target_mm": scallop_mm, "n_lines": int(len(offsets)),
+                     "sample_step_mm": ds, "extent_mm": [float(e) for e in extent]})  # fmt: skip
+    if verify_tolerance_mm is not None:
+        tp = refine_gouging_moves(tp, machined + list(check_faces), cutter, fs, tolerance_mm=verify_tolerance_mm)
+    return tp
+
+
+def _insert(tp: ToolPath, k, tips, ccs) -> ToolPath:
+    """``tips[i]`` (m, 3) inserted as cutting positions before position ``k[i]``."""
+    m = tips.shape[1]
+    at = np.repeat(k, m)
+    return ToolPath(
+        np.insert(tp.tip, at, tips.reshape(-1, 3), axis=0),
+        np.insert(tp.axis, at, np.repeat(tp.axis[k], m, axis=0), axis=0),
+        np.insert(tp.move, at, Move.CUT),
+        np.insert(tp.pass_index, at, np.repeat(tp.pass_index[k], m)),
+        None if tp.cc is None else np.insert(tp.cc, at, ccs.reshape(-1, 3), axis=0),
+        None,
+        tp.cutter,
+        tp.name,
+        {},
+        dict(tp.info),
+    )
+
+
+def refine_gouging_moves(tp: ToolPath, faces, cutter, fs: FaceSet, *, tolerance_mm: float, rounds: int = 6,
+                         n_sub: int = 8, jump_mm: float = 2e-3) -> ToolPath:  # fmt: skip
+    """Cutting moves the tool body check finds gouging (deeper than ``tolerance_mm``) are split into
+    ``n_sub`` moves at exact drop-cutter heights, and the path is checked again, up to ``rounds`` times.
+    The chordal check samples each move at three points; a narrow rise of the heights between them (a
+    thin blade's edge) is only seen by the body check. ``info`` gets ``n_moves_split``."""
+    from ..gougecheck import GOUGE, verify
+
+    split_total = 0
+    for _ in range(rounds):
+        v = verify(faces, tp, cutter, tolerance=tolerance_mm)
+        k = np.nonzero((v.status == GOUGE) & (tp.move == Move.CUT))[0]  # gouge at the move ending at k
+        k = k[k > 0]  # a cutting move (a line's or a link's on the part) from the position before
+        if k.size == 0:
+            break
+        fa_, fb_ = fs.to_frame(tp.tip[k - 1]), fs.to_frame(tp.tip[k])
+        short = np.linalg.norm(fb_[:, :2] - fa_[:, :2], axis=1) < jump_mm
+        if short.any():  # across a jump of the heights (a wall's edge): up (or down) plus a level move
+            ks = k[short]
+            corner = np.where((fa_[short, 2] < fb_[short, 2])[:, None],
+                              np.column_stack([fa_[short, :2], fb_[short, 2]]),
+                              np.column_stack([fb_[short, :2], fa_[short, 2]]))  # fmt: skip
+            tp = _insert(tp, ks, fs.to_world(corner)[:, None, :], np.full((ks.size, 1, 3), np.nan))
+            split_total += int(ks.size)
+            continue
+        a = fa_[:, :2]
+        b = fb_[:, :2]
+        w = (np.arange(1, n_sub) / n_sub)[None, :, None]
+        q = (a[:, None, :] * (1 - w) + b[:, None, :] * w).reshape(-1, 2)
+        r = drop_cutter(None, cutter, q, face_set_=fs)
+        z = r.height.reshape(k.size, n_sub - 1)
+        za = fs.to_frame(tp.tip[k - 1])[:, 2]
+        zb = fs.to_frame(tp.tip[k])[:, 2]
+        # where no face is under the tool, stay on the chord
+        z = np.where(np.isfinite(z), z, za[:, None] * (1 - w[..., 0]) + zb[:, None] * w[..., 0])
+        new_tip = fs.to_world(np.concatenate([q, z.reshape(-1, 1)], axis=1)).reshape(k.size, n_sub - 1, 3)
+        tp = _insert(tp, k, new_tip, r.contact.reshape(k.size, n_sub - 1, 3))
+        split_total += int(k.size)
+    return ToolPath(tp.tip, tp.axis, tp.move, tp.pass_index, tp.cc, None, tp.cutter, tp.name, {},
+                    dict(tp.info, n_moves_split_after_body_check=split_total))  # fmt: skip
 
 
 def _runs(ok: np.ndarray) -> list[tuple[int, int]]:
