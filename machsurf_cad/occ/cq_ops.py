@@ -1,4 +1,5 @@
-"""cadquery entry points: from a face to its machining surfaces in one call.
+"""cadquery entry points: from a face to its machining surfaces in one call, and 3-axis tool paths
+on several faces of a cadquery solid (exact drop-cutter on the B-rep).
 
 Examples
 --------
@@ -51,3 +52,27 @@ def machining_surface_op(tool, **kwargs):
         return wp.newObject(result)
 
     return op
+
+
+def raster_on_faces(faces, tool, *, check_faces=(), **kwargs):
+    """A 3-axis raster tool path over cadquery Faces (e.g. ``solid.faces(">Z").vals()``), keeping the
+    tool out of ``check_faces`` too: :func:`machsurf_cad.raster` on their numpy form (mm, degrees).
+
+    >>> import cadquery as cq
+    >>> from machsurf_cad.occ.cq_ops import raster_on_faces
+    >>> box = cq.Workplane().box(40, 30, 10).faces(">Z").workplane().hole(8)
+    >>> solid = box.val()
+    >>> top = [f for f in solid.Faces() if f.Center().z > 4.9]
+    >>> tp = raster_on_faces(top, "ball:D=6", check_faces=[f for f in solid.Faces() if f not in top],
+    ...                      stepover_mm=5.0, chordal_tolerance_mm=0.01)
+    >>> z = tp.tip[tp.move == 2, 2]
+    >>> bool(abs(z.max() - 5.0) < 1e-9), bool(z.min() < 5.0)  # on the top face; into the hole near it
+    (True, True)
+    """
+    from ..cutters import parse_cutter
+    from ..threeaxis import raster
+
+    cutter = parse_cutter(tool) if isinstance(tool, str) else tool
+    mf = [from_cq_face(f, f"face_{i}") for i, f in enumerate(faces)]
+    cf = [from_cq_face(f, f"check_{i}") for i, f in enumerate(check_faces)]
+    return raster(mf, cutter, check_faces=cf, **kwargs)
