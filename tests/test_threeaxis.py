@@ -263,7 +263,12 @@ def test_raster_zigzag_on_the_mould_insert_is_exact_and_clean(mould):
     # positions are drop-cutter heights, or above them where a jump (a wall's edge) is stepped over
     assert np.all(tp.tip[cut, 2] >= res.height - 1e-9)
     on_part = np.abs(tp.tip[cut, 2] - res.height) < 1e-9
-    assert on_part.mean() > 0.95
+    assert on_part.mean() > 0.85
+    # the others are the upper corners of jumps: a move straight up or down at the same plan point
+    idx = np.nonzero(cut)[0][~on_part]
+    prev_same = np.linalg.norm(tp.tip[idx - 1, :2] - tp.tip[idx, :2], axis=1) < 2e-3
+    next_same = np.linalg.norm(tp.tip[np.minimum(idx + 1, tp.n_positions - 1), :2] - tp.tip[idx, :2], axis=1) < 2e-3
+    assert np.all(prev_same | next_same)
     v = ms.verify(mould, tp, tolerance=tol)
     assert v.clean and v.max_gouge <= tol
     # zig-zag: consecutive lines run in opposite directions
