@@ -39,7 +39,8 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
 
         from .run_verify import _shank
 
-        cutter = dataclasses.replace(cutter, shank=_shank(spec.shank, "shank"), holder=_shank(spec.holder, "holder"))
+        shank, holder = _shank(spec.shank, "shank"), _shank(spec.holder, "holder")
+        cutter = dataclasses.replace(cutter, shank=shank, holder=holder)  # type: ignore[type-var]
     faces, desc = _part(spec)
     axis = spec.axis if spec.axis is not None else (0.0, 0.0, 1.0)
     machined = select_faces(faces, spec.faces or "all", axis=axis, what="--faces")

@@ -1,0 +1,380 @@
+"""Local solves of the exact drop-cutter on the NURBS faces: the cutter's lower surface ``h(rho)``, the
+face-interior ascent, the ascent along the rim and along circles where the profile's slope jumps, the
+search along trimming edges and the point below a pointed tip (see :mod:`.dropcutter`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..cutter_profiles import lower_height
+from .faceset import FaceSet
+
+
+# ----------------------------------------------------------------------------- evaluation helpers
+def _surface_eval(fs: FaceSet, fid, u, v, order: int):
+    """Point and derivatives of each point's face: arrays (m, 3) for P, Su, Sv (and Suu, Suv, Svv)."""
+    m = u.shape[0]
+    keys = 1 if order == 0 else (3 if order == 1 else 6)
+    out = [np.empty((m, 3)) for _ in range(keys)]
+    for f in np.unique(fid):
+        sel = np.nonzero(fid == f)[0]
+        d = fs.faces[f].surface.derivatives(u[sel], v[sel], order)
+        parts = [d.point, d.su, d.sv, d.suu, d.suv, d.svv][:keys]
+        for o, p in zip(out, parts):
+            o[sel] = p
+    return out
+
+
+def _clamp_uv(fs: FaceSet, fid, u, v):
+    """Parameters kept in each face's box: wrapped across a seam where the face closes on itself,
+    clamped elsewhere."""
+    b = fs.bounds[fid]
+    cl = fs.closed[fid]
+    pu = b[:, 1] - b[:, 0]
+    pv = b[:, 3] - b[:, 2]
+    u = np.where(cl[:, 0], b[:, 0] + np.mod(u - b[:, 0], np.where(cl[:, 0], pu, 1.0)), np.clip(u, b[:, 0], b[:, 1]))
+    v = np.where(cl[:, 1], b[:, 2] + np.mod(v - b[:, 2], np.where(cl[:, 1], pv, 1.0)), np.clip(v, b[:, 2], b[:, 3]))
+    return u, v
+
+
+def _inside(fs: FaceSet, fid, u, v) -> np.ndarray:
+    ok = np.zeros(u.shape[0], bool)
+    for f in np.unique(fid):
+        sel = np.nonzero(fid == f)[0]
+        face = fs.faces[f]
+        u0, u1, v0, v1 = face.uv_bounds
+        tol = 1e-12 * max(u1 - u0, v1 - v0, 1.0)
+        ok[sel] = face.contains_uv(u[sel], v[sel], n_per_curve=1024) if face.is_trimmed else (
+            (u[sel] >= u0 - tol) & (u[sel] <= u1 + tol) & (v[sel] >= v0 - tol) & (v[sel] <= v1 + tol)
+        )  # fmt: skip
+    return ok
+
+
+class _Profile:
+    """``h``, ``h'``, ``h''`` of the cutter's lower surface out to its largest radius."""
+
+    def __init__(self, cutter):
+        self.segs = cutter.profile()
+        pts = cutter.profile_points(64)
+        self.R = float(pts[:, 0].max())
+        self.h_R = float(lower_height(self.segs, np.array([self.R]))[0][0])
+        if not math.isfinite(self.h_R):  # a vertical side only: its foot
+            self.h_R = float(pts[np.argmax(pts[:, 0]), 1])
+        _, h1, _ = lower_height(self.segs, np.array([0.0]))
+        self.pointed = bool(abs(h1[0]) > 1e-9)
+        table = self(np.linspace(0.0, self.R, 2049))[0]
+        slopes = lower_height(self.segs, np.linspace(0.0, self.R, 2049))[1]
+        # sine of the steepest profile slope inside the rim: the face is tangent to the profile
+        # there only where it is at most this steep (0 for a flat end mill: flat spots only)
+        self.max_tilt = float(np.sin(np.arctan(np.abs(slopes).max())))
+        self.monotone = bool(np.all(np.diff(table) >= -1e-12))
+        # radii inside the rim where the slope of h jumps: (radius, h) of each such circle
+        self.kinks = []
+        ends = sorted({round(float(x), 12) for seg in self.segs for x in seg.points(2)[:, 0]})
+        for rk in ends:
+            if 1e-9 < rk < self.R * (1 - 1e-9):
+                _, sl, _ = lower_height(self.segs, np.array([rk - 1e-7, rk + 1e-7]))
+                if abs(sl[1] - sl[0]) > 1e-6:
+                    self.kinks.append((rk, float(self(np.array([rk]))[0][0])))
+        self.h_min = float(table.min())
+
+    def floor(self, rho) -> np.ndarray:
+        """A lower bound of ``h`` on ``[rho, R]`` (``h(max(rho, 0))`` for a profile rising outwards)."""
+        rho = np.asarray(rho, float)
+        if not self.monotone:
+            return np.full(rho.shape, self.h_min)
+        return self(np.clip(rho, 0.0, self.R))[0]
+
+    def __call__(self, rho):
+        rho = np.asarray(rho, float)
+        h, h1, h2 = lower_height(self.segs, np.minimum(rho, self.R))
+        h = np.where(rho <= self.R * (1 + 1e-12), np.where(np.isfinite(h), h, self.h_R), np.inf)
+        return h, h1, h2
+
+
+def _g_and_derivs(prof: _Profile, c, P, Su, Sv, Suu=None, Suv=None, Svv=None):
+    """``g = S_z - h(|S_xy - c|)`` with its (u, v) gradient and Hessian."""
+    d = P[:, :2] - c
+    rho = np.hypot(d[:, 0], d[:, 1])
+    h, h1, h2 = prof(rho)
+    g = P[:, 2] - h
+    small = rho < 1e-9
+    rs = np.where(small, 1.0, rho)
+    B = np.where(small, h2, h1 / rs)  # h'/rho -> h''(0) at the axis
+    A = np.where(small, 0.0, (h2 - B) / rs**2)
+    gd = B[:, None] * d
+    xu, xv = Su[:, :2], Sv[:, :2]
+    gu = Su[:, 2] - np.einsum("ij,ij->i", gd, xu)
+    gv = Sv[:, 2] - np.einsum("ij,ij->i", gd, xv)
+    if Suu is None:
+        return g, gu, gv, None
+    du = np.einsum("ij,ij->i", d, xu)
+    dv = np.einsum("ij,ij->i", d, xv)
+    Huu = Suu[:, 2] - (A * du * du + B * np.einsum("ij,ij->i", xu, xu)) - np.einsum("ij,ij->i", gd, Suu[:, :2])
+    Huv = Suv[:, 2] - (A * du * dv + B * np.einsum("ij,ij->i", xu, xv)) - np.einsum("ij,ij->i", gd, Suv[:, :2])
+    Hvv = Svv[:, 2] - (A * dv * dv + B * np.einsum("ij,ij->i", xv, xv)) - np.einsum("ij,ij->i", gd, Svv[:, :2])
+    return g, gu, gv, (Huu, Huv, Hvv)
+
+
+# ----------------------------------------------------------------------------- local solves
+def _up_curvature(Huu, Huv, Hvv, Su, Sv, radius):
+    """Unit-length (``radius`` mm on the surface) parameter step along the eigenvector of the largest
+    eigenvalue of the (u, v) Hessian, and the second-order gain ``e^T H e / 2`` along it (mm)."""
+    tr = Huu + Hvv
+    disc = np.sqrt(np.maximum(0.25 * (Huu - Hvv) ** 2 + Huv * Huv, 0.0))
+    lam = 0.5 * tr + disc
+    eu = np.where(np.abs(Huv) > 1e-300, Huv, np.where(Huu >= Hvv, 1.0, 0.0))
+    ev = np.where(np.abs(Huv) > 1e-300, lam - Huu, np.where(Huu >= Hvv, 0.0, 1.0))
+    ln = np.linalg.norm(Su * eu[:, None] + Sv * ev[:, None], axis=1)
+    k = radius / np.maximum(ln, 1e-300)
+    eu, ev = eu * k, ev * k
+    quad = 0.5 * (Huu * eu * eu + 2 * Huv * eu * ev + Hvv * ev * ev)
+    return eu, ev, np.where(np.isfinite(quad), quad, 0.0)
+
+
+def _off_poles(fs, prof, c, fid, u, v, n: int = 16):
+    """Starts at a pole (a box side collapsed to a point, where one tangent vanishes) moved just off it,
+    at the best of ``n`` directions around it: at the pole the parameter of the collapsed side says
+    nothing about the direction, and ascent may need to cross the pole."""
+    _, Su, Sv = _surface_eval(fs, fid, u, v, 1)
+    E = np.einsum("ij,ij->i", Su, Su)
+    G = np.einsum("ij,ij->i", Sv, Sv)
+    pole = np.nonzero(np.minimum(E, G) <= 1e-14 * np.maximum(E, G))[0]
+    if pole.size == 0:
+        return u, v
+    b = fs.bounds[fid[pole]]
+    along_v = G[pole] <= E[pole]  # Sv vanishes: the side u = const is the pole, v runs around it
+    mid_u = 0.5 * (b[:, 0] + b[:, 1])
+    mid_v = 0.5 * (b[:, 2] + b[:, 3])
+    off_u = u[pole] + 1e-4 * (b[:, 1] - b[:, 0]) * np.sign(mid_u - u[pole])
+    off_v = v[pole] + 1e-4 * (b[:, 3] - b[:, 2]) * np.sign(mid_v - v[pole])
+    k = (np.arange(n) + 0.5) / n
+    cu = np.where(along_v[:, None], off_u[:, None], b[:, 0:1] + k * (b[:, 1:2] - b[:, 0:1]))
+    cv = np.where(along_v[:, None], b[:, 2:3] + k * (b[:, 3:4] - b[:, 2:3]), off_v[:, None])
+    f = np.repeat(fid[pole], n)
+    P = _surface_eval(fs, f, cu.ravel(), cv.ravel(), 0)[0]
+    rho = np.hypot(*(P[:, :2] - np.repeat(c[pole], n, axis=0)).T)
+    g = (P[:, 2] - prof(rho)[0]).reshape(-1, n)
+    g = np.where(np.isfinite(g), g, -np.inf)
+    j = np.argmax(g, axis=1)
+    r = np.arange(pole.size)
+    u[pole], v[pole] = cu[r, j], cv[r, j]
+    return u, v
+
+
+def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
+    """Maximise ``g`` from ``(u, v)``: damped Newton (Hessian shifted to negative definite) with a trust
+    region in mm; steps that do not increase ``g`` or leave the tool's disc are refused."""
+    u, v = _off_poles(fs, prof, c, fid, u.copy(), v.copy())
+    D = _surface_eval(fs, fid, u, v, 2)
+    g, gu, gv, H = _g_and_derivs(prof, c, *D)
+    radius = np.full(u.shape, 0.5 * fs.spacing)
+    active = np.isfinite(g)
+    for _ in range(iters):
+        idx = np.nonzero(active)[0]
+        if idx.size == 0:
+            break
+        Huu, Huv, Hvv = (h[idx] for h in H)
+        a, b, d_ = -Huu, -Huv, -Hvv  # M = -H: Newton where it is positive definite
+        det = a * d_ - b * b
+        newton = (a > 0) & (det > 1e-14 * (a * a + d_ * d_ + b * b))
+        det = np.where(newton, det, 1.0)
+        du = np.where(newton, (d_ * gu[idx] - b * gv[idx]) / det, 0.0)
+        dv = np.where(newton, (-b * gu[idx] + a * gv[idx]) / det, 0.0)
+        Su, Sv = D[1][idx], D[2][idx]
+        # elsewhere steepest ascent on the surface (first fundamental form), as long as the trust radius
+        E = np.einsum("ij,ij->i", Su, Su)
+        F = np.einsum("ij,ij->i", Su, Sv)
+        G = np.einsum("ij,ij->i", Sv, Sv)
+        dg = E * G - F * F
+        # near a pole or a collapsed edge (one tangent vanishing): the parameter gradient instead
+        regular = (dg > 1e-10 * E * G) & (np.minimum(E, G) > 1e-14 * np.maximum(E, G))
+        dg = np.where(regular, dg, 1.0)
+        au = np.where(regular, (G * gu[idx] - F * gv[idx]) / dg, gu[idx])
+        av = np.where(regular, (-F * gu[idx] + E * gv[idx]) / dg, gv[idx])
+        alen = np.linalg.norm(Su * au[:, None] + Sv * av[:, None], axis=1)
+        k = radius[idx] / np.maximum(alen, 1e-300)
+        du = np.where(newton, du, au * k)
+        dv = np.where(newton, dv, av * k)
+        # at a minimum or saddle of g (a fillet's foot, a valley) the gradient step crawls: step along
+        # the direction of largest upward curvature instead, to whichever side rises more
+        eu, ev, quad = _up_curvature(Huu, Huv, Hvv, Su, Sv, radius[idx])
+        lin = np.abs(gu[idx] * au + gv[idx] * av) * k
+        escape = ~newton & (quad > lin)
+        du = np.where(escape, eu, du)
+        dv = np.where(escape, ev, dv)
+        step = np.linalg.norm(Su * du[:, None] + Sv * dv[:, None], axis=1)
+        shrink = np.minimum(1.0, radius[idx] / np.maximum(step, 1e-300))
+        nu, nv = _clamp_uv(fs, fid[idx], u[idx] + du * shrink, v[idx] + dv * shrink)
+        Dn = _surface_eval(fs, fid[idx], nu, nv, 2)
+        gn, gun, gvn, Hn = _g_and_derivs(prof, c[idx], *Dn)
+        e_ = np.nonzero(escape)[0]
+        if e_.size:  # the other side
+            mu_, mv_ = _clamp_uv(fs, fid[idx[e_]], u[idx[e_]] - du[e_] * shrink[e_], v[idx[e_]] - dv[e_] * shrink[e_])
+            Dm = _surface_eval(fs, fid[idx[e_]], mu_, mv_, 2)
+            gm, gum, gvm, Hm = _g_and_derivs(prof, c[idx[e_]], *Dm)
+            better = np.nan_to_num(gm, nan=-np.inf) > np.nan_to_num(gn[e_], nan=-np.inf)
+            b_ = e_[better]
+            nu[b_], nv[b_], gn[b_], gun[b_], gvn[b_] = mu_[better], mv_[better], gm[better], gum[better], gvm[better]
+            for j in range(6):
+                Dn[j][b_] = Dm[j][better]
+            for j in range(3):
+                Hn[j][b_] = Hm[j][better]
+        moved = np.linalg.norm(Dn[0] - D[0][idx], axis=1)  # a step clamped at the box may not move
+        rises = np.isfinite(gn) & (gn >= g[idx] - 1e-13 * (1 + np.abs(g[idx])))
+        ok = rises & (moved > 0)
+        acc = idx[ok]
+        u[acc], v[acc], g[acc], gu[acc], gv[acc] = nu[ok], nv[ok], gn[ok], gun[ok], gvn[ok]
+        for k in range(6):
+            D[k][acc] = Dn[k][ok]
+        for k in range(3):
+            H[k][acc] = Hn[k][ok]
+        radius[idx] = np.where(ok, np.maximum(radius[idx], 2 * moved), 0.25 * radius[idx])
+        done = (ok & (moved < 1e-11)) | (rises & newton & (moved == 0)) | (~ok & (radius[idx] < 1e-12))
+        active[idx[done]] = False
+    return u, v, g, D[0]
+
+
+def _rim_newton(fs, prof, c, fid, u, v, iters: int = 40, radius: float | None = None, h_at: float | None = None):
+    """The highest point of a face on the circle ``|S_xy - c| = R``, near ``(u, v)``: projected Newton
+    ascent along the circle (steps along the constraint's tangent, Newton where the Lagrangian's second
+    derivative along it is negative, else a trust-radius step uphill, each followed by a projection
+    onto the circle; steps that do not rise are refused and the radius shrinks)."""
+    R = prof.R if radius is None else float(radius)
+    h_R = prof.h_R if h_at is None else float(h_at)
+    with np.errstate(all="ignore"):
+        return _rim_ascent(fs, R, h_R, c, fid, u, v, iters)
+
+
+def _project_circle(fs, R, c, fid, u, v, n: int = 4):
+    """Minimum-norm Newton steps onto ``rho = R``; returns (u, v)."""
+    for _ in range(n):
+        P, Su, Sv = _surface_eval(fs, fid, u, v, 1)
+        d = P[:, :2] - c
+        rho = np.hypot(d[:, 0], d[:, 1])
+        ru = np.einsum("ij,ij->i", d, Su[:, :2]) / np.maximum(rho, 1e-300)
+        rv = np.einsum("ij,ij->i", d, Sv[:, :2]) / np.maximum(rho, 1e-300)
+        n2 = ru * ru + rv * rv
+        t = np.where(n2 > 1e-300, (R - rho) / np.where(n2 > 1e-300, n2, 1.0), 0.0)
+        step = np.linalg.norm(Su * (t * ru)[:, None] + Sv * (t * rv)[:, None], axis=1)
+        shrink = np.minimum(1.0, fs.spacing / np.maximum(step, 1e-300))
+        shrink = np.where(np.isfinite(shrink), shrink, 0.0)
+        u, v = _clamp_uv(fs, fid, u + t * ru * shrink, v + t * rv * shrink)
+    return u, v
+
+
+def _rim_ascent(fs, R, h_R, c, fid, u, v, iters):
+    u, v = _project_circle(fs, R, c, fid, u.copy(), v.copy(), 6)
+    P = _surface_eval(fs, fid, u, v, 0)[0]
+    z = np.where(np.abs(np.hypot(*(P[:, :2] - c).T) - R) <= 1e-9 * max(R, 1.0), P[:, 2], -np.inf)
+    radius = np.full(u.shape, 0.5 * fs.spacing)
+    active = np.ones(u.shape, bool)
+    for _ in range(iters):
+        a_ = np.nonzero(active)[0]
+        if a_.size == 0:
+            break
+        Pa, Su, Sv, Suu, Suv, Svv = _surface_eval(fs, fid[a_], u[a_], v[a_], 2)
+        d = Pa[:, :2] - c[a_]
+        pu = np.einsum("ij,ij->i", d, Su[:, :2]) / R  # gradient of phi = (|d|^2 - R^2) / (2R)
+        pv = np.einsum("ij,ij->i", d, Sv[:, :2]) / R
+        n2 = pu * pu + pv * pv
+        ok_n = n2 > 1e-300
+        lam = np.where(ok_n, (Su[:, 2] * pu + Sv[:, 2] * pv) / np.where(ok_n, n2, 1.0), 0.0)
+        tu, tv = -pv, pu  # tangent of the circle on the face
+        zt = Su[:, 2] * tu + Sv[:, 2] * tv
+        hz = Suu[:, 2] * tu * tu + 2 * Suv[:, 2] * tu * tv + Svv[:, 2] * tv * tv
+        xt = Su[:, :2] * tu[:, None] + Sv[:, :2] * tv[:, None]
+        xtt = Suu[:, :2] * (tu * tu)[:, None] + 2 * Suv[:, :2] * (tu * tv)[:, None] + Svv[:, :2] * (tv * tv)[:, None]
+        hphi = (np.einsum("ij,ij->i", xt, xt) + np.einsum("ij,ij->i", d, xtt)) / R
+        Ltt = hz - lam * hphi
+        tlen = np.linalg.norm(Su * tu[:, None] + Sv * tv[:, None], axis=1)
+        newton = Ltt < -1e-300
+        s = np.where(newton, -zt / np.where(newton, Ltt, -1.0), np.sign(zt) * radius[a_] / np.maximum(tlen, 1e-300))
+        step = np.abs(s) * tlen
+        s = s * np.minimum(1.0, radius[a_] / np.maximum(step, 1e-300))
+        s = np.where(np.isfinite(s), s, 0.0)
+        nu, nv = _clamp_uv(fs, fid[a_], u[a_] + s * tu, v[a_] + s * tv)
+        nu, nv = _project_circle(fs, R, c[a_], fid[a_], nu, nv, 3)
+        Pn = _surface_eval(fs, fid[a_], nu, nv, 0)[0]
+        on = np.abs(np.hypot(*(Pn[:, :2] - c[a_]).T) - R) <= 1e-9 * max(R, 1.0)
+        zn = np.where(on, Pn[:, 2], -np.inf)
+        acc = np.isfinite(zn) & (zn >= z[a_] - 1e-13 * (1 + np.abs(z[a_])))
+        moved = np.linalg.norm(Pn - Pa, axis=1)
+        ia = a_[acc]
+        u[ia], v[ia], z[ia] = nu[acc], nv[acc], zn[acc]
+        radius[a_] = np.where(acc, np.maximum(radius[a_], 2 * moved), 0.25 * radius[a_])
+        done = (acc & (moved < 1e-11)) | (~acc & (radius[a_] < 1e-12))
+        active[a_[done]] = False
+    P = _surface_eval(fs, fid, u, v, 0)[0]
+    return u, v, np.where(np.isfinite(z), z - h_R, -np.inf), P
+
+
+def _edge_points(fs, eid, t):
+    """Surface points of edge parameters ``t`` (each on its own edge ``eid``)."""
+    uv = np.empty((t.size, 2))
+    for e in np.unique(eid):
+        sel = np.nonzero(eid == e)[0]
+        uv[sel] = fs.edges[e].evaluate(t[sel])
+    fid = fs.edge_face[eid]
+    return _surface_eval(fs, fid, uv[:, 0], uv[:, 1], 0)[0]
+
+
+def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 30):
+    """Maximise ``g`` along an edge near ``t0`` (golden section on ``[t0 - 2 dt, t0 + 2 dt]`` within the
+    edge) with the part outside the tool's disc penalised steeply; a maximum found just outside the
+    circle is moved onto it (Newton on ``rho(t) = R``). Returns the value (``-inf`` if no feasible point
+    was reached) and the point."""
+    lo_b = np.array([e.bounds[0] for e in fs.edges])[eid]
+    hi_b = np.array([e.bounds[1] for e in fs.edges])[eid]
+    a, b = np.maximum(t0 - 2 * dt, lo_b), np.minimum(t0 + 2 * dt, hi_b)
+    R = prof.R
+
+    def f(t):
+        P = _edge_points(fs, eid, t)
+        rho = np.hypot(*(P[:, :2] - c).T)
+        return P[:, 2] - prof(np.minimum(rho, R))[0] - 1e6 * np.maximum(rho - R, 0.0), rho, P
+
+    gr = (math.sqrt(5) - 1) / 2
+    x1, x2 = b - gr * (b - a), a + gr * (b - a)
+    f1, f2 = f(x1)[0], f(x2)[0]
+    for _ in range(iters):
+        left = f1 >= f2
+        b = np.where(left, x2, b)
+        a = np.where(left, a, x1)
+        x2n = np.where(left, x1, a + gr * (b - a))
+        x1n = np.where(left, b - gr * (b - a), x2)
+        fn = f(np.where(left, x1n, x2n))[0]
+        f1, f2 = np.where(left, fn, f2), np.where(left, f1, fn)
+        x1, x2 = x1n, x2n
+    t = np.clip(0.5 * (a + b), lo_b, hi_b)
+    for _ in range(4):  # onto the circle where the maximum sits just outside it
+        _, rho, _ = f(t)
+        out = rho > R
+        if not out.any():
+            break
+        e = 1e-7 * np.maximum(dt, 1e-12)
+        rp = f(np.clip(t + e, lo_b, hi_b))[1]
+        rm = f(np.clip(t - e, lo_b, hi_b))[1]
+        slope = (rp - rm) / (np.clip(t + e, lo_b, hi_b) - np.clip(t - e, lo_b, hi_b))
+        step = np.where(out & (np.abs(slope) > 0), (rho - R) * (1 + 1e-9) / np.where(slope == 0, 1, slope), 0.0)
+        t = np.clip(t - step, lo_b, hi_b)
+    g, rho, P = f(t)
+    return np.where(rho <= R * (1 + 1e-12), g, -np.inf), P
+
+
+def _tip_solve(fs, c, fid, u, v, iters: int = 30):
+    """The face point straight below the axis: Newton on ``S_xy(u, v) = c``."""
+    for _ in range(iters):
+        P, Su, Sv = _surface_eval(fs, fid, u, v, 1)
+        r = P[:, :2] - c
+        a, b, cc, d = Su[:, 0], Sv[:, 0], Su[:, 1], Sv[:, 1]
+        det = a * d - b * cc
+        det = np.where(np.abs(det) < 1e-300, 1e-300, det)
+        du = -(d * r[:, 0] - b * r[:, 1]) / det
+        dv = -(-cc * r[:, 0] + a * r[:, 1]) / det
+        u, v = _clamp_uv(fs, fid, u + du, v + dv)
+    P = _surface_eval(fs, fid, u, v, 0)[0]
+    ok = np.hypot(*(P[:, :2] - c).T) < 1e-9
+    return u, v, ok, P
