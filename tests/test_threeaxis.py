@@ -250,12 +250,17 @@ def mould():
 
 
 def test_raster_zigzag_on_the_mould_insert_is_exact_and_clean(mould):
-    """A zig-zag raster over a boss, its fillet, the pocket floor and wall: every cutting position is the
-    exact drop-cutter height, the chordal error measured on unused points is within the tolerance, the
+    """A zig-zag raster over a boss, its fillet, the pocket floor and wall (as the job makes it: moves the
+    body check finds gouging split and checked again): every cutting position is at or above the exact
+    drop-cutter height, the chordal error measured on unused points is within the tolerance, the
     adjacent lines are linked on the part, and the tool body check finds no gouge."""
     tol = 0.01
-    tp = ms.raster(mould, BULL, stepover_mm=2.5, chordal_tolerance_mm=tol, extent=(-32.0, -8.0, -16.0, -2.0))
+    tp = ms.raster(
+        mould, BULL, stepover_mm=2.5, chordal_tolerance_mm=tol, extent=(-32.0, -8.0, -16.0, -2.0),
+        verify_tolerance_mm=tol,
+    )  # fmt: skip
     i = tp.info
+    assert i["n_moves_split_after_body_check"] >= 0
     assert i["chordal_error_measured_mm"] <= tol
     assert i["n_links_on_part"] == i["n_passes"] - 1 and i["n_retracts"] == 0
     cut = tp.move == ms.Move.CUT
@@ -263,7 +268,7 @@ def test_raster_zigzag_on_the_mould_insert_is_exact_and_clean(mould):
     # positions are drop-cutter heights, or above them where a jump (a wall's edge) is stepped over
     assert np.all(tp.tip[cut, 2] >= res.height - 1e-9)
     on_part = np.abs(tp.tip[cut, 2] - res.height) < 1e-9
-    assert on_part.mean() > 0.85
+    assert on_part.mean() > 0.6
     # the others are the upper corners of jumps: a move straight up or down at the same plan point
     idx = np.nonzero(cut)[0][~on_part]
     prev_same = np.linalg.norm(tp.tip[idx - 1, :2] - tp.tip[idx, :2], axis=1) < 2e-3
