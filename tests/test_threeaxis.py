@@ -260,7 +260,6 @@ def test_raster_zigzag_on_the_mould_insert_is_exact_and_clean(mould):
         verify_tolerance_mm=tol,
     )  # fmt: skip
     i = tp.info
-    assert i["n_moves_split_after_body_check"] >= 0
     assert i["chordal_error_measured_mm"] <= tol
     assert i["n_links_on_part"] == i["n_passes"] - 1 and i["n_retracts"] == 0
     cut = tp.move == ms.Move.CUT

@@ -335,6 +335,18 @@ def default_seed_spacing(cutter) -> float:
     return float(np.clip(cutter.radius / 3, 0.2, 2.0))
 
 
+def machining_face_set(faces, check_faces, cutter, *, axis, seed_spacing_mm=None, what: str = "a 3-axis job"):
+    """The face set of the faces to machine followed by the faces to avoid (frame of ``axis``), and the
+    plan box ``(x0, x1, y0, y1)`` of the machined faces' samples in that frame (mm)."""
+    machined = list(faces)
+    if not machined:
+        raise InputError(f"{what} needs at least one face to machine")
+    spacing = default_seed_spacing(cutter) if seed_spacing_mm is None else float(seed_spacing_mm)
+    fs = face_set(machined + list(check_faces), axis=axis, spacing=spacing)
+    xy = fs.sample_xyz[fs.sample_face < len(machined), :2]
+    return fs, (float(xy[:, 0].min()), float(xy[:, 0].max()), float(xy[:, 1].min()), float(xy[:, 1].max()))
+
+
 def drop_cutter(
     faces,
     cutter,

@@ -18,6 +18,7 @@ from ..errors import InputError
 from ..geometry.bspline import BSplineCurve, BSplineSurface
 from ..geometry.builders import line_segment
 from ..geometry.face import Face
+from ..gougecheck import face_size
 
 
 def axis_frame(axis) -> np.ndarray:
@@ -59,14 +60,6 @@ def _length_3d(s: BSplineSurface, c: BSplineCurve) -> float:
     uv = c.evaluate(t)
     p = s.evaluate(uv[:, 0], uv[:, 1])
     return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
-
-
-def _face_extent(s: BSplineSurface, bounds) -> tuple[float, float]:
-    u0, u1, v0, v1 = bounds
-    g = s.evaluate_grid(np.linspace(u0, u1, 9), np.linspace(v0, v1, 9))
-    lu = float(np.linalg.norm(np.diff(g, axis=0), axis=-1).sum(axis=0).max())
-    lv = float(np.linalg.norm(np.diff(g, axis=1), axis=-1).sum(axis=1).max())
-    return max(lu, 1e-9), max(lv, 1e-9)
 
 
 def _closed(P) -> tuple[bool, bool]:
@@ -192,7 +185,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         out_faces.append(face)
         names.append(f.name or f"face_{i}")
         u0, u1, v0, v1 = face.uv_bounds
-        lu, lv = _face_extent(s, face.uv_bounds)
+        lu, lv = (max(x, 1e-9) for x in face_size(face))
         nu = int(max(5, math.ceil(lu / spacing) + 1))
         nv = int(max(5, math.ceil(lv / spacing) + 1))
         total += nu * nv

@@ -17,8 +17,7 @@ import numpy as np
 from ..approx import SurfaceFit, fit_surface
 from ..errors import InputError
 from ..results import Progress
-from .dropcutter import default_seed_spacing, drop_cutter
-from .faceset import face_set
+from .dropcutter import drop_cutter, machining_face_set
 
 
 def cl_surface(
@@ -43,13 +42,9 @@ def cl_surface(
     """
     if not (tolerance_mm > 0 and math.isfinite(tolerance_mm)):
         raise InputError(f"tolerance must be > 0 mm, got {tolerance_mm}")
-    machined = list(faces)
-    spacing = default_seed_spacing(cutter) if seed_spacing_mm is None else float(seed_spacing_mm)
-    fs = face_set(machined + list(check_faces), axis=axis, spacing=spacing)
-    if extent is None:
-        own = np.isin(fs.sample_face, np.arange(len(machined)))
-        xy = fs.sample_xyz[own, :2]
-        extent = (float(xy[:, 0].min()), float(xy[:, 0].max()), float(xy[:, 1].min()), float(xy[:, 1].max()))
+    fs, box = machining_face_set(faces, check_faces, cutter, axis=axis, seed_spacing_mm=seed_spacing_mm,
+                                 what="the CL surface")  # fmt: skip
+    extent = box if extent is None else extent
     frame = fs.frame
     stats = {"n_evaluated": 0, "n_without_face": 0}
     floor: list[float] = []

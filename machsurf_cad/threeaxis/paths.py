@@ -17,8 +17,8 @@ from ..cam.chordal import douglas_peucker
 from ..cam.toolpath import Move, ToolPath
 from ..errors import InputError
 from ..results import Progress
-from .dropcutter import DropCutterResult, default_seed_spacing, drop_cutter
-from .faceset import FaceSet, face_set
+from .dropcutter import DropCutterResult, drop_cutter, machining_face_set
+from .faceset import FaceSet
 
 
 class Pattern(Enum):
@@ -135,14 +135,9 @@ def raster(
         raise InputError(f"step-over must be > 0 mm, got {step}")
     direction = Direction(direction)
     machined = list(faces)
-    if not machined:
-        raise InputError("a raster path needs at least one face to machine")
-    spacing = default_seed_spacing(cutter) if seed_spacing_mm is None else float(seed_spacing_mm)
-    fs = face_set(machined + list(check_faces), axis=axis, spacing=spacing)
-    own = np.isin(fs.sample_face, np.arange(len(machined)))
-    if extent is None:
-        xy = fs.sample_xyz[own, :2]
-        extent = (xy[:, 0].min(), xy[:, 0].max(), xy[:, 1].min(), xy[:, 1].max())
+    fs, box = machining_face_set(machined, check_faces, cutter, axis=axis, seed_spacing_mm=seed_spacing_mm,
+                                 what="a raster path")  # fmt: skip
+    extent = box if extent is None else extent
     d, nrm, offsets, (s0, s1) = _lines(extent, angle_deg, step)
     ds = float(sample_step_mm) if sample_step_mm is not None else min(0.25, cutter.D / 20)
     if not ds > 0:
@@ -246,11 +241,12 @@ def _runs(ok: np.ndarray) -> list[tuple[int, int]]:
 
 def _reduce_chordal(fs, cutter, passes, d, nrm, offsets, tol, jump_mm: float = 1e-3, max_rounds: int = 16):
     """Keep the fewest positions per pass whose chords stay within ``tol`` of the dense heights, then
-    check every kept move's middle on the exact drop-cutter: a move off by more than ``tol`` gets its
-    middle inserted; a move shorter than ``jump_mm`` that is still off crosses a jump of the heights (a
-    wall's edge): it becomes a move straight up or down plus a level move at the higher height (the
-    tool is never below the drop-cutter height there). Each pass gets the measured figures: the largest
-    height of the exact drop-cutter above a move (a gouge if positive) and below it."""
+    check every kept move at its quarter points on the exact drop-cutter (only moves not checked yet): a
+    move off by more than ``tol`` gets its worst quarter point inserted; a move shorter than ``jump_mm``
+    that is still off crosses a jump of the heights (a wall's edge): it becomes a move straight up or
+    down plus a level move at the higher height (the tool is never below the drop-cutter height there).
+    Each pass gets the measured figures: the largest height of the exact drop-cutter above a move (a
+    gouge if positive) and below it."""
     kept = []
     for s_, h_, c_, i in passes:
         idx = douglas_peucker(np.column_stack([s_, h_]), tol)
@@ -497,16 +493,11 @@ def waterline(
     ):
         if not (val > 0 and math.isfinite(val)):
             raise InputError(f"{name} must be > 0 mm, got {val}")
-    machined = list(faces)
-    if not machined:
-        raise InputError("a waterline path needs at least one face to machine")
-    spacing = default_seed_spacing(cutter) if seed_spacing_mm is None else float(seed_spacing_mm)
-    fs = face_set(machined + list(check_faces), axis=axis, spacing=spacing)
-    own = np.isin(fs.sample_face, np.arange(len(machined)))
+    fs, (x0, x1, y0, y1) = machining_face_set(faces, check_faces, cutter, axis=axis,
+                                               seed_spacing_mm=seed_spacing_mm, what="a waterline path")  # fmt: skip
     R = float(cutter.profile_points(16)[:, 0].max())
     if extent is None:
-        xy = fs.sample_xyz[own, :2]
-        extent = (xy[:, 0].min() - R, xy[:, 0].max() + R, xy[:, 1].min() - R, xy[:, 1].max() + R)
+        extent = (x0 - R, x1 + R, y0 - R, y1 + R)
     g = float(grid_mm) if grid_mm is not None else min(1.0, cutter.D / 10)
     if not g > 0:
         raise InputError(f"grid must be > 0 mm, got {g}")

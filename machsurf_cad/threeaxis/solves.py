@@ -164,6 +164,12 @@ def _off_poles(fs, prof, c, fid, u, v, n: int = 16):
     return u, v
 
 
+def _put(dst, at, src, sel) -> None:
+    """``d[at] = s[sel]`` for each pair of arrays (a solver's state taken from its trial)."""
+    for d, s in zip(dst, src):
+        d[at] = s[sel]
+
+
 def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
     """Maximise ``g`` from ``(u, v)``: damped Newton (Hessian shifted to negative definite) with a trust
     region in mm; steps that do not increase ``g`` or leave the tool's disc are refused."""
@@ -216,21 +222,11 @@ def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
             Dm = _surface_eval(fs, fid[idx[e_]], mu_, mv_, 2)
             gm, gum, gvm, Hm = _g_and_derivs(prof, c[idx[e_]], *Dm)
             better = np.nan_to_num(gm, nan=-np.inf) > np.nan_to_num(gn[e_], nan=-np.inf)
-            b_ = e_[better]
-            nu[b_], nv[b_], gn[b_], gun[b_], gvn[b_] = mu_[better], mv_[better], gm[better], gum[better], gvm[better]
-            for j in range(6):
-                Dn[j][b_] = Dm[j][better]
-            for j in range(3):
-                Hn[j][b_] = Hm[j][better]
+            _put([nu, nv, gn, gun, gvn, *Dn, *Hn], e_[better], [mu_, mv_, gm, gum, gvm, *Dm, *Hm], better)
         moved = np.linalg.norm(Dn[0] - D[0][idx], axis=1)  # a step clamped at the box may not move
         rises = np.isfinite(gn) & (gn >= g[idx] - 1e-13 * (1 + np.abs(g[idx])))
         ok = rises & (moved > 0)
-        acc = idx[ok]
-        u[acc], v[acc], g[acc], gu[acc], gv[acc] = nu[ok], nv[ok], gn[ok], gun[ok], gvn[ok]
-        for k in range(6):
-            D[k][acc] = Dn[k][ok]
-        for k in range(3):
-            H[k][acc] = Hn[k][ok]
+        _put([u, v, g, gu, gv, *D, *H], idx[ok], [nu, nv, gn, gun, gvn, *Dn, *Hn], ok)
         radius[idx] = np.where(ok, np.maximum(radius[idx], 2 * moved), 0.25 * radius[idx])
         done = (ok & (moved < 1e-11)) | (rises & newton & (moved == 0)) | (~ok & (radius[idx] < 1e-12))
         active[idx[done]] = False
