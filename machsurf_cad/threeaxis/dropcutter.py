@@ -41,6 +41,7 @@ from .solves import (
     _edge_search,
     _face_newton,
     _inside,
+    _into_disc,
     _Profile,
     _project_circle,
     _rim_newton,
@@ -208,10 +209,11 @@ def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str, kink: int | None = 
     if kind == "face":
         P0 = _surface_eval(fs, fid, u0, v0, 0)[0]
         out = np.nonzero(np.hypot(*(P0[:, :2] - c).T) > prof.R * (1 - 1e-3))[0]
-        if out.size:  # starts outside the disc or at its rim: onto a circle just inside it (1e-3 R: a ball's
-            # profile turns vertical at the rim, where Newton would crawl)
+        if out.size:  # starts outside the disc or at its rim: towards the axis, onto a circle just inside
+            # the rim where the face reaches it (1e-3 R: a ball's profile turns vertical at the rim, where
+            # Newton would crawl), else to the face's point nearest the axis (a sliver under the rim)
             u0, v0 = u0.copy(), v0.copy()
-            u0[out], v0[out] = _project_circle(fs, prof.R * (1 - 1e-3), c[out], fid[out], u0[out], v0[out], 6)
+            u0[out], v0[out] = _into_disc(fs, prof.R, c[out], fid[out], u0[out], v0[out])
         u, v, g, P = _face_newton(fs, prof, c, fid, u0, v0)
         cand.add(q, g, Contact.FACE, fid, P, np.isfinite(g) & _inside(fs, fid, u, v))
         if prof.pointed:
@@ -320,6 +322,25 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     _solve(fs, prof, C, cand, qi[f2], sj[f2], "face")
     _solve(fs, prof, C, cand, qi[r2], sj[r2], "rim")
     _solve(fs, prof, C, cand, qi[e2], sj[e2], "edge")
+    # further rounds: a face seed is the best sample of its group, whose ascent may end on a lower
+    # local maximum (a flat bottom over a wavy face has many) while another sample of the group still
+    # bounds above the best contact: the untried sample of highest bound per group, away from the
+    # best contact, until no bound beats it
+    tried = np.zeros(qi.size, bool)
+    tried[f_seed] = True
+    pool = np.nonzero(feasible & ~is_edge & (fs.min_tilt[sj] <= prof.max_tilt + 1e-9))[0]
+    for _ in range(_EXTRA_ROUNDS):
+        h_b, k_b, f_b, p_b = cand.best(m)
+        low = np.nan_to_num(h_b, nan=-np.inf)
+        p3 = pool[~tried[pool] & (ub[pool] > low[qi[pool]] + _BOUND_MARGIN_MM)]
+        far = (k_b[qi[p3]] != Contact.FACE) | (fid_all[p3] != f_b[qi[p3]])
+        far |= np.linalg.norm(xyz[p3] - p_b[qi[p3]], axis=1) > cover[p3]
+        p3 = p3[far]
+        if p3.size == 0:
+            break
+        p3 = p3[_best_per(fkey[p3], ub[p3])]
+        tried[p3] = True
+        _solve(fs, prof, C, cand, qi[p3], sj[p3], "face")
     # circles inside the rim where the profile's slope jumps (a cone's or APT tool's bottom edge): the
     # highest sample near each, where its bound can still win
     for k, (rk, hk) in enumerate(prof.kinks):
@@ -328,6 +349,10 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
         seeds_k = near_k[_best_per(fkey[near_k], xyz[near_k, 2])]
         _solve(fs, prof, C, cand, qi[seeds_k], sj[seeds_k], "rim", kink=k)
     return cand.best(m)
+
+
+_EXTRA_ROUNDS = 4
+_BOUND_MARGIN_MM = 1e-7
 
 
 def default_seed_spacing(cutter) -> float:

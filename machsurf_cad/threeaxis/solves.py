@@ -261,6 +261,49 @@ def _project_circle(fs, R, c, fid, u, v, n: int = 4):
     return u, v
 
 
+def _into_disc(fs, R, c, fid, u, v, iters: int = 16):
+    """Starts moved onto a circle just inside the rim (``rho = R (1 - 1e-3)``: a ball's profile turns
+    vertical at the rim, where Newton would crawl), and where the face does not reach that circle near
+    the start, to its point nearest the axis (damped Gauss-Newton on ``|S_xy - c|^2``, halving steps
+    that do not get closer): a face that only grazes the disc (a sliver under the rim, e.g. the
+    vertical foot of a boss's round under a bull-nose's corner) has its feasible starts there. Starts
+    that cannot get inside stay where the descent ends."""
+    target = R * (1 - 1e-3)
+    u, v = _project_circle(fs, target, c, fid, u, v, 6)
+    active = np.ones(u.shape, bool)
+    for _ in range(iters):
+        a_ = np.nonzero(active)[0]
+        if a_.size == 0:
+            break
+        P, Su, Sv = _surface_eval(fs, fid[a_], u[a_], v[a_], 1)
+        d = P[:, :2] - c[a_]
+        rho = np.hypot(d[:, 0], d[:, 1])
+        active[a_[~(rho > target)]] = False
+        xu, xv = Su[:, :2], Sv[:, :2]
+        a = np.einsum("ij,ij->i", xu, xu)
+        b = np.einsum("ij,ij->i", xu, xv)
+        e = np.einsum("ij,ij->i", xv, xv)
+        gu = np.einsum("ij,ij->i", d, xu)
+        gv = np.einsum("ij,ij->i", d, xv)
+        lm = 1e-9 * (a + e) + 1e-300  # Levenberg damping: a tangent with no plan component
+        det = (a + lm) * (e + lm) - b * b
+        du = -((e + lm) * gu - b * gv) / det
+        dv = -(-b * gu + (a + lm) * gv) / det
+        step = np.linalg.norm(Su * du[:, None] + Sv * dv[:, None], axis=1)
+        k = np.minimum(1.0, fs.spacing / np.maximum(step, 1e-300))
+        k = np.where(np.isfinite(k), k, 0.0)
+        moved = np.zeros(a_.size, bool)
+        for _half in range(8):
+            nu, nv = _clamp_uv(fs, fid[a_], u[a_] + du * k, v[a_] + dv * k)
+            rn = np.hypot(*(_surface_eval(fs, fid[a_], nu, nv, 0)[0][:, :2] - c[a_]).T)
+            ok = active[a_] & ~moved & np.isfinite(rn) & (rn < rho - 1e-12)
+            u[a_[ok]], v[a_[ok]] = nu[ok], nv[ok]
+            moved |= ok
+            k = 0.5 * k
+        active[a_[~moved]] = False
+    return u, v
+
+
 def _rim_ascent(fs, R, h_R, c, fid, u, v, iters):
     u, v = _project_circle(fs, R, c, fid, u.copy(), v.copy(), 6)
     P = _surface_eval(fs, fid, u, v, 0)[0]
