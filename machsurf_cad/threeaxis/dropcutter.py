@@ -43,7 +43,6 @@ from .solves import (
     _inside,
     _into_disc,
     _Profile,
-    _project_circle,
     _rim_newton,
     _surface_eval,
     _tip_solve,
