@@ -505,3 +505,28 @@ def test_gouging_moves_are_split_until_the_body_check_is_clean(mould):
     fixed = refine_gouging_moves(coarse, mould, BULL, fs, tolerance_mm=tol)
     assert fixed.info["n_moves_split_after_body_check"] > 0
     assert ms.verify(mould, fixed, tolerance=tol).clean
+
+
+def test_waterline_on_the_mould_insert_touches_and_is_clean(mould):
+    """Waterline around the boss and the narrow dip beside it (bull D10 r2): every cutting position is
+    at its exact drop-cutter height (or the foot of a wall's jump, never below the height), moves that
+    stay above their level (a dip narrower than the grid) are dropped and counted, the chordal bound is
+    within the tolerance, and the tool body check finds every position touching the part, none gouging."""
+    tol = 0.01
+    tp = ms.waterline(
+        mould, BULL, stepdown_mm=3.0, chordal_tolerance_mm=tol, grid_mm=2.0, extent=(-26.0, -10.0, -6.0, 6.0),
+        verify_tolerance_mm=tol,
+    )  # fmt: skip
+    i = tp.info
+    assert i["chordal_error_measured_mm"] <= tol
+    assert i["n_moves_dropped_above_level"] > 0 and i["length_dropped_above_level_mm"] > 0
+    cut = tp.move == ms.Move.CUT
+    res = drop_cutter(mould, BULL, tp.tip[cut, :2])
+    assert np.all(tp.tip[cut, 2] >= res.height - 1e-9)
+    # each contour runs at one level
+    for j in np.unique(tp.pass_index):
+        z = tp.tip[(tp.pass_index == j) & (tp.move != ms.Move.RAPID) & (tp.move != ms.Move.RETRACT), 2]
+        assert np.ptp(z) < 1e-12
+    v = ms.verify(mould, tp, tolerance=tol)
+    assert v.clean and v.max_gouge <= tol
+    assert np.abs(v.cut_distance[cut]).max() <= tol  # touches: within tol of the part, never deeper

@@ -88,7 +88,8 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
                     **common,
                 )
             else:
-                tp = waterline(mf, cutter, stepdown_mm=spec.stepdown or spec.stepover, grid_mm=spec.grid, **common)
+                tp = waterline(mf, cutter, stepdown_mm=spec.stepdown or spec.stepover, grid_mm=spec.grid,
+                               verify_tolerance_mm=spec.gouge_tol, **common)  # fmt: skip
             i = tp.info
             rep["toolpath"] = tp.report()
             say(
@@ -98,7 +99,9 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
                     f"; step-over {i['stepover_mm']:.4g} mm, {i['n_links_on_part']} links on the part, "
                     f"{i['n_retracts']} retracts"
                     if i["pattern"] == "raster"
-                    else ""
+                    else f"; {i['n_moves_dropped_above_level'] + i.get('n_moves_dropped_after_body_check', 0)} "
+                    "moves dropped where the part rises above the level between crossings (contours cut "
+                    "open: material left there, refine --grid)"
                 )  # fmt: skip
             )
             rep["verify"], c2 = write_checked_toolpath(st, say, tp, faces, spec, tolerance=spec.gouge_tol, render=True)

@@ -409,10 +409,11 @@ def _link(fs: FaceSet, cutter, passes, d, nrm, offsets, step, z_safe, tol, direc
     )
 
 
-def _crossing(fs, cutter, a, b, fa, fb, level, iters: int = 40, tol: float = 1e-10):
+def _crossing(fs, cutter, a, b, fa, fb, level, iters: int = 40, tol: float = 1e-10, bracket_mm: float = 1e-6):
     """Points between ``a`` and ``b`` (rows, tool-frame plan) where the drop-cutter height equals
     ``level`` (per row; Illinois regula falsi on the exact heights; ``fa``, ``fb`` the heights minus
-    ``level`` at the ends, of opposite signs). Returns, per row, the bracket's end at or below the level
+    ``level`` at the ends, of opposite signs; a bracket narrower than ``bracket_mm`` in plan is a jump
+    and stops). Returns, per row, the bracket's end at or below the level
     (where a wall's edge makes the heights jump, the foot of the jump) and its contact."""
     a, b = a.copy(), b.copy()
     fa, fb = fa.copy(), fb.copy()
@@ -427,7 +428,8 @@ def _crossing(fs, cutter, a, b, fa, fb, level, iters: int = 40, tol: float = 1e-
         i = np.nonzero(live)[0]
         if i.size == 0:
             break
-        w = fa[i] / (fa[i] - fb[i])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            w = fa[i] / (fa[i] - fb[i])
         w = np.clip(np.where(np.isfinite(w), w, 0.5), 0.0, 1.0)
         x = a[i] + w[:, None] * (b[i] - a[i])
         r = _drop(fs, cutter, x)
@@ -445,7 +447,7 @@ def _crossing(fs, cutter, a, b, fa, fb, level, iters: int = 40, tol: float = 1e-
         fb[i] = np.where(left, fb[i], fx)
         side[i] = np.where(left, 1, -1)
         x_last[i], c_last[i], f_last[i] = x, r.contact, fx
-        live[i] = (np.abs(fx) > tol) & (np.linalg.norm(b[i] - a[i], axis=1) > 1e-12)
+        live[i] = (np.abs(fx) > tol) & (np.linalg.norm(b[i] - a[i], axis=1) > bracket_mm)
     # converged: the last iterate; else (a jump at a wall's edge) the end of the bracket below the
     # level, where the tool touches nothing above it
     a_safe = fa <= fb
@@ -467,6 +469,7 @@ def waterline(
     grid_mm: float | None = None,
     z_min_mm: float | None = None,
     seed_spacing_mm: float | None = None,
+    verify_tolerance_mm: float | None = None,
     progress: Progress | None = None,
 ) -> ToolPath:
     """Waterline (constant-z) tool path: at each level, the closed contours where the exact drop-cutter
@@ -480,7 +483,13 @@ def waterline(
         Distance between levels, from the part's top down to ``z_min_mm`` (default: the lowest tool
         height over the machined faces).
     grid_mm : float, optional
-        Plan grid of exact heights the contours are found on (default ``min(1, D/10)``).
+        Plan grid of exact heights the contours are found on (default ``min(1, D/10)``). A feature
+        narrower than the grid may leave moves above their level after refinement: they are dropped
+        (the contour is cut open, the tool retracts and plunges again) and counted in ``info``
+        (``n_moves_dropped_above_level``, ``length_dropped_above_level_mm``).
+    verify_tolerance_mm : float, optional
+        Check the tool body against the faces and drop cutting moves that gouge deeper than this
+        (counted in ``info``); the caller still checks the path it writes.
 
     Other parameters as :func:`raster`.
     """
@@ -526,11 +535,47 @@ def waterline(
                 lv.append(float(level))
     if not lines:
         raise InputError("no waterline contour: the part is flat under every level")
-    pts, ccs, above, lv = _refine_contours(fs, cutter, xs, ys, Zf, lines, np.array(lv), chordal_tolerance_mm, g)
-    passes = list(zip(pts, lv, ccs))
-    return _link_levels(fs, cutter, passes, z_top + clearance_mm, chordal_tolerance_mm, above,
-                        info={"pattern": "waterline", "stepdown_mm": float(stepdown_mm), "grid_mm": g,
-                              "n_levels": int(levels.size), "extent_mm": [float(e) for e in extent]})  # fmt: skip
+    pts, ccs, rise, lv = _refine_contours(fs, cutter, xs, ys, Zf, lines, np.array(lv), chordal_tolerance_mm, g)
+    # moves still above their level (a feature narrower than the grid the contours were found on) are
+    # dropped: the contour is cut open there, the tool retracts and plunges again (material left there)
+    pts, ccs, lv, n_drop, l_drop = _split_at(pts, ccs, lv, [r > chordal_tolerance_mm for r in rise])
+    above = max([0.0] + [float(r[r <= chordal_tolerance_mm].max(initial=0.0)) for r in rise])
+    info = {"pattern": "waterline", "stepdown_mm": float(stepdown_mm), "grid_mm": g, "n_levels": int(levels.size),
+            "extent_mm": [float(e) for e in extent], "n_moves_dropped_above_level": n_drop,
+            "length_dropped_above_level_mm": l_drop}  # fmt: skip
+    if not pts:
+        raise InputError("no waterline contour stays at its level: refine --grid")
+    z_safe = z_top + clearance_mm
+    tp = _link_levels(fs, cutter, list(zip(pts, lv, ccs)), z_safe, chordal_tolerance_mm, above, info=info)
+    if verify_tolerance_mm is not None:
+        tp = _drop_gouging_moves(tp, fs, cutter, list(faces) + list(check_faces), pts, ccs, lv, z_safe,
+                                 chordal_tolerance_mm, above, info, verify_tolerance_mm)  # fmt: skip
+    return tp
+
+
+def _drop_gouging_moves(tp, fs, cutter, faces, pts, ccs, lv, z_safe, tol, above, info, verify_tol, rounds=4):
+    """Waterline moves the tool body check finds gouging (deeper than ``verify_tol``: between two exact
+    crossings the part rises above the level, or the shank or holder meets it) are dropped and their
+    contours cut open there, until the check is clean. ``info`` counts them."""
+    from ..gougecheck import GOUGE, verify
+
+    n_total, l_total = 0, 0.0
+    for _ in range(rounds):
+        v = verify(faces, tp, cutter, tolerance=verify_tol)
+        k = np.nonzero((v.status == GOUGE) & (tp.move == Move.CUT))[0]
+        if k.size == 0:
+            break
+        first = np.searchsorted(tp.pass_index, np.arange(len(pts)))  # each pass's rapid
+        drop = [np.zeros(p.shape[0] - 1, bool) for p in pts]
+        for kk in k:
+            j = int(tp.pass_index[kk])
+            drop[j][kk - first[j] - 2] = True  # rapid, approach (contour position 0), then the moves
+        pts, ccs, lv, n, length = _split_at(pts, ccs, lv, drop)
+        n_total, l_total = n_total + n, l_total + length
+        tp = _link_levels(fs, cutter, list(zip(pts, lv, ccs)), z_safe, tol, above, info=info)
+    return ToolPath(tp.tip, tp.axis, tp.move, tp.pass_index, tp.cc, None, tp.cutter, tp.name, {},
+                    dict(tp.info, n_moves_dropped_after_body_check=n_total,
+                         length_dropped_after_body_check_mm=l_total))  # fmt: skip
 
 
 def _grid_values(xs, ys, Zf, pts, levels):
@@ -558,8 +603,8 @@ def _grid_values(xs, ys, Zf, pts, levels):
 def _refine_contours(fs, cutter, xs, ys, Zf, lines, levels, tol, g, rounds: int = 6):
     """All contours' vertices on their exact crossings (one batched solve), then, round by round, the
     middles of moves whose quarter points rise above their level by more than ``tol`` replaced by exact
-    crossings across the move. Returns per contour the points and contacts, and the largest measured
-    rise of the exact heights above the level between positions (mm)."""
+    crossings across the move. Returns per contour the points and contacts, and per move the measured
+    bound on how deep the tool at the level cuts in between positions (mm; see ``measure``)."""
     sizes = [ln.shape[0] for ln in lines]
     allv = np.concatenate(lines)
     lev = np.repeat(levels, sizes)
@@ -578,17 +623,35 @@ def _refine_contours(fs, cutter, xs, ys, Zf, lines, levels, tol, g, rounds: int 
     lines = [ln for ln, g_ in zip(lines, good) if g_]
     closed = [bool(np.allclose(ln[0], ln[-1])) for ln in lines]
     fr = np.array([0.25, 0.5, 0.75])
-    above = 0.0
-    for _ in range(rounds):
+
+    def measure():
+        """Per quarter point: the exact height's rise above the level, and a bound on how deep the
+        tool at the level cuts in there: the rise, or, beside a wall (the height jumps within a plan
+        distance ``tol / 2`` of the point), ``tol / 2`` plus the rise at the wall's foot."""
         q = np.concatenate(
             [(p[:-1, None, :] * (1 - fr)[:, None] + p[1:, None, :] * fr[:, None]).reshape(-1, 2) for p in pts]
         )
         qlev = np.concatenate([np.full(3 * (p.shape[0] - 1), lv) for p, lv in zip(pts, levels)])
         h = _drop(fs, cutter, q).height - qlev
-        h = np.where(np.isfinite(h), h, -np.inf).reshape(-1, 3)
-        rise = h.max(axis=1)
-        above = max(0.0, float(rise.max(initial=0.0)))
-        bad = np.nonzero(rise > tol)[0]
+        h = np.where(np.isfinite(h), h, -np.inf)
+        bound = np.maximum(h, 0.0)
+        hi = np.nonzero(h > tol)[0]
+        if hi.size:  # a translation by delta clears the tool: it cuts in by at most delta (plus the rise)
+            t = np.concatenate([np.repeat(np.diff(p, axis=0), 3, axis=0) for p in pts])[hi]
+            n = np.column_stack([t[:, 1], -t[:, 0]]) / np.maximum(np.linalg.norm(t, axis=1), 1e-300)[:, None]
+            d = 0.5 * tol
+            side = _drop(fs, cutter, np.vstack([q[hi] + d * n, q[hi] - d * n])).height - np.tile(qlev[hi], 2)
+            side = np.where(np.isfinite(side), side, -np.inf).reshape(2, -1).min(axis=0)
+            bound[hi] = np.minimum(h[hi], d + np.maximum(side, 0.0))
+        return h.reshape(-1, 3), bound.reshape(-1, 3)
+
+    for k, cl in enumerate(closed):
+        if cl and not np.allclose(pts[k][0], pts[k][-1]):
+            pts[k] = np.vstack([pts[k], pts[k][:1]])
+            ccs[k] = np.vstack([ccs[k], ccs[k][:1]])
+    for _ in range(rounds):
+        h, bound = measure()
+        bad = np.nonzero(bound.max(axis=1) > tol)[0]
         if bad.size == 0:
             break
         starts = np.concatenate([[0], np.cumsum([p.shape[0] - 1 for p in pts])])
@@ -601,15 +664,18 @@ def _refine_contours(fs, cutter, xs, ys, Zf, lines, levels, tol, g, rounds: int 
         t = P1 - P0
         n = np.column_stack([t[:, 1], -t[:, 0]]) / np.maximum(np.linalg.norm(t, axis=1), 1e-300)[:, None]
         hm = h[bad, 1]
-        o1 = mid + n * g
-        o2 = mid - n * g
-        h1 = _drop(fs, cutter, o1).height - lvb
-        h2 = _drop(fs, cutter, o2).height - lvb
-        h1 = np.where(np.isfinite(h1), h1, -1.0)
-        h2 = np.where(np.isfinite(h2), h2, -1.0)
-        use1 = h1 < h2
-        out_pt = np.where(use1[:, None], o1, o2)
-        ho = np.where(use1, h1, h2)
+        # the level's crossing across the move: the nearest of 2 x 4 points at plan distances g / 64 .. g
+        # on either side that is below the level (a dip narrower than the grid has one only close by)
+        dist = g * np.array([1 / 64, 1 / 16, 1 / 4, 1.0, -1 / 64, -1 / 16, -1 / 4, -1.0])
+        trial = mid[None] + dist[:, None, None] * n[None]
+        ht = (_drop(fs, cutter, trial.reshape(-1, 2)).height.reshape(dist.size, -1) - lvb).T
+        ht = np.where(np.isfinite(ht), ht, -1.0)
+        below = ht < 0
+        order = np.argsort(np.abs(dist), kind="stable")
+        pick = order[np.argmax(below[:, order], axis=1)]
+        rows = np.arange(bad.size)
+        out_pt = trial[pick, rows]
+        ho = ht[rows, pick]
         ok = (ho < 0) & np.isfinite(hm) & (hm > 0)
         if not ok.any():
             break
@@ -619,11 +685,32 @@ def _refine_contours(fs, cutter, xs, ys, Zf, lines, levels, tol, g, rounds: int 
             at = local[ok][sel] + 1
             pts[o] = np.insert(pts[o], at, xk[sel], axis=0)
             ccs[o] = np.insert(ccs[o], at, ck[sel], axis=0)
-    for k, cl in enumerate(closed):
-        if cl and not np.allclose(pts[k][0], pts[k][-1]):
-            pts[k] = np.vstack([pts[k], pts[k][:1]])
-            ccs[k] = np.vstack([ccs[k], ccs[k][:1]])
-    return pts, ccs, above, levels
+    rise = measure()[1].max(axis=1)
+    starts = np.concatenate([[0], np.cumsum([p.shape[0] - 1 for p in pts])])
+    return pts, ccs, [rise[starts[k] : starts[k + 1]] for k in range(len(pts))], levels
+
+
+def _split_at(pts, ccs, levels, drop):
+    """Contours cut open at the moves flagged in ``drop`` (one boolean array per contour, per move):
+    pieces of two positions or more, with their levels; the number and plan length of dropped moves."""
+    out_p, out_c, out_l, n, length = [], [], [], 0, 0.0
+    for p, c, lv, d in zip(pts, ccs, levels, drop):
+        if not d.any():
+            out_p.append(p), out_c.append(c), out_l.append(lv)
+            continue
+        n += int(d.sum())
+        length += float(np.linalg.norm(np.diff(p, axis=0)[d], axis=1).sum())
+        closed = bool(np.allclose(p[0], p[-1])) and p.shape[0] > 2
+        if closed:  # the loop restarted after its first dropped move: no piece ends at the seam
+            k = int(np.argmax(d)) + 1
+            p = np.vstack([p[k:-1], p[: k + 1]])
+            c = np.vstack([c[k:-1], c[: k + 1]])
+            d = np.concatenate([d[k:], d[:k]])
+        cut = np.flatnonzero(d) + 1  # a dropped move i runs from position i to i + 1
+        for pp, cc in zip(np.split(p, cut), np.split(c, cut)):
+            if pp.shape[0] >= 2:
+                out_p.append(pp), out_c.append(cc), out_l.append(lv)
+    return out_p, out_c, np.array(out_l, float), n, length
 
 
 def _link_levels(fs, cutter, passes, z_safe, tol, above, info) -> ToolPath:
