@@ -189,3 +189,33 @@ def test_evaluate_with_normals_matches_derivatives(rng):
     collapsed = builders.bezier_surface([[[0, 0, 0], [50, 50, 0]], [[100, 0, 0], [50, 50, 0]]])
     with pytest.raises(DegenerateGeometryError):
         collapsed.evaluate_with_normals(np.array([0.3, 0.5]), np.array([0.2, 1.0]))
+
+
+def test_surface_atlas_equals_each_surface_evaluated_alone(rng):
+    """Many surfaces (polynomial and rational, of several degree pairs, periodic, one above the power
+    basis' degree limit) evaluated together: the same points and derivatives as each surface's own
+    evaluation, inside and a little outside their domains."""
+    from machsurf_cad.geometry.atlas import SurfaceAtlas
+
+    per = BSplineSurface(3, 1, np.arange(7.0), [1] * 7, [0, 1], [2, 2], rng.normal(size=(6, 2, 3)), periodic_u=True)
+    surfs = [
+        random_surface(rng),
+        random_surface(rng, rational=True),
+        random_surface(rng, degree=(2, 2), n=(6, 4)),
+        random_surface(rng, rational=True, degree=(3, 2)),
+        random_surface(rng, degree=(8, 2), n=(10, 4)),
+        per,
+    ]
+    atlas = SurfaceAtlas(surfs)
+    n = 3000
+    fid = rng.integers(0, len(surfs), n)
+    box = np.array([[s.knots_u[0], s.knots_u[-1], s.knots_v[0], s.knots_v[-1]] for s in surfs])[fid]
+    u = box[:, 0] + rng.uniform(-0.05, 1.05, n) * (box[:, 1] - box[:, 0])
+    v = box[:, 2] + rng.uniform(-0.05, 1.05, n) * (box[:, 3] - box[:, 2])
+    u[:50], v[:50] = box[:50, 0], box[:50, 3]  # corners: the last span
+    got = atlas.derivatives(fid, u, v, 2)
+    for f, s in enumerate(surfs):
+        sel = fid == f
+        d = s.derivatives(u[sel], v[sel], 2)
+        for a, b in zip(got, [d.point, d.su, d.sv, d.suu, d.suv, d.svv]):
+            assert np.abs(a[sel] - b).max() <= 1e-12 * max(1.0, np.abs(b).max())

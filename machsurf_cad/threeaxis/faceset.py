@@ -10,11 +10,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
+from ..geometry.atlas import SurfaceAtlas
 from ..geometry.bspline import BSplineCurve, BSplineSurface
 from ..geometry.builders import line_segment
 from ..geometry.face import Face
@@ -148,6 +150,11 @@ class FaceSet:
     bounds: np.ndarray = field(repr=False)
     edge_cover: np.ndarray = field(repr=False)
     min_tilt: np.ndarray = field(repr=False)
+
+    @cached_property
+    def atlas(self) -> SurfaceAtlas:
+        """The faces' surfaces, evaluated together (one vectorised pass per degree pair)."""
+        return SurfaceAtlas([f.surface for f in self.faces])
 
     @property
     def n_samples(self) -> int:

@@ -15,16 +15,7 @@ from .faceset import FaceSet
 # ----------------------------------------------------------------------------- evaluation helpers
 def _surface_eval(fs: FaceSet, fid, u, v, order: int):
     """Point and derivatives of each point's face: arrays (m, 3) for P, Su, Sv (and Suu, Suv, Svv)."""
-    m = u.shape[0]
-    keys = 1 if order == 0 else (3 if order == 1 else 6)
-    out = [np.empty((m, 3)) for _ in range(keys)]
-    for f in np.unique(fid):
-        sel = np.nonzero(fid == f)[0]
-        d = fs.faces[f].surface.derivatives(u[sel], v[sel], order)
-        parts = [d.point, d.su, d.sv, d.suu, d.suv, d.svv][:keys]
-        for o, p in zip(out, parts):
-            o[sel] = p
-    return out
+    return fs.atlas.derivatives(fid, u, v, order)
 
 
 def _clamp_uv(fs: FaceSet, fid, u, v):
