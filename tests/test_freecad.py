@@ -87,6 +87,25 @@ def test_features_recompute_headless(tmp_path):
     assert not ds["valid"] and "deleted" in ds["status"] and ds["n_objects"] >= 5
 
 
+def test_faces_with_holes_convert_exactly(tmp_path):
+    """Inner wires (circle, ellipse, closed spline; planar and on a cylinder; the block's bottom) survive
+    the round trip FreeCAD -> machsurf_cad -> FreeCAD: same wires, a valid face of the same meshed area,
+    points in the holes outside the core's face and points in the material inside; a machining surface
+    of the plate keeps the hole."""
+    import math
+
+    r = _run([FREECADCMD], tmp_path, "holes_check.py")
+    for name in ("round_hole", "three_holes", "pierced_cylinder", "block_bottom"):
+        c = r[name]
+        assert c["wires"] == c["loops"] == c["back_wires"] >= 2 and c["back_valid"], (name, c)
+        assert abs(c["back_area"] - c["area"]) <= 1e-5 * c["area"], (name, c)
+        assert not any(c["hole_points_inside"]) and all(c["material_points_inside"]), (name, c)
+    assert r["three_holes"]["wires"] == 4 and r["pierced_cylinder"]["wires"] == 3
+    # the plate: 100 x 80 less a D20 hole (meshed at 1 um: the polygon in the hole adds < 0.01 mm2)
+    assert r["round_hole"]["back_area"] == pytest.approx(8000 - 100 * math.pi, abs=0.01)
+    assert r["feature"]["valid"] and r["feature"]["wires"] == [2]
+
+
 @pytest.mark.skipif((FREECAD is None or XVFB is None) and not IN_CI, reason="FreeCAD GUI or xvfb-run is not installed")
 def test_gui_command_on_a_selected_face(tmp_path):
     r = _run([XVFB, "-a", "-s", "-screen 0 1600x1200x24", FREECAD], tmp_path, "gui_check.py")

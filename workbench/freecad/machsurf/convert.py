@@ -46,7 +46,10 @@ def face_to_numpy(face, name="F"):
             c2d, first, last = f.curveOnSurface(e)
             bs = c2d.toBSpline(first, last)
             if bs.isPeriodic():
-                bs.setNotPeriodic()  # plain clamped knots: the form machsurf_cad's trimming loops use
+                bs.setNotPeriodic()
+            m = bs.getMultiplicities()
+            if m[0] <= bs.Degree or m[-1] <= bs.Degree:  # a closed curve's knots (a hole's circle): clamp
+                bs.segment(bs.FirstParameter, bs.LastParameter)
             poles = np.array([[p.x, p.y] for p in bs.getPoles()])
             weights = np.array(bs.getWeights(), dtype=float)
             c = BSplineCurve(
@@ -124,7 +127,7 @@ def face_to_part(face):
                     int(c.degree),
                     [float(w) for w in c.weights],
                 )
-            edges.append(g.toShape(bs, float(c.knots[0]), float(c.knots[-1])))
+            edges.append(g.toShape(bs, *c.bounds))
         wires.append(Part.Wire(edges))
     f = Part.Face(bs, wires[0])
     for w in wires[1:]:
