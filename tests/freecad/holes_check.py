@@ -35,8 +35,8 @@ try:
     cases["round_hole"] = (plate, [(50, 40, 10)], [(20, 20, 10)])
     ell = Part.Face(Part.Wire(Part.Ellipse(V(75, 40, 0), 12, 6).toShape())).extrude(V(0, 0, 10))
     spl = Part.BSplineCurve()
-    spl.interpolate([V(40 + 8 * np.cos(a), 20 + 5 * np.sin(a) + 2 * np.sin(3 * a), 0) for a in np.linspace(0, 2 * np.pi, 9)[:-1]],
-                    PeriodicFlag=True)  # fmt: skip
+    ang = np.linspace(0, 2 * np.pi, 9)[:-1]
+    spl.interpolate([V(40 + 8 * np.cos(a), 20 + 5 * np.sin(a) + 2 * np.sin(3 * a), 0) for a in ang], PeriodicFlag=True)
     sp = Part.Face(Part.Wire(spl.toShape())).extrude(V(0, 0, 10))
     three = Part.makeBox(100, 80, 10).cut(Part.makeCylinder(8, 10, V(20, 60, 0))).cut(ell).cut(sp)
     cases["three_holes"] = (three, [(20, 60, 10), (75, 40, 10), (40, 20, 10)], [(5, 5, 10), (60, 70, 10)])
@@ -54,7 +54,7 @@ try:
         nf = face_to_numpy(face, name)
         back = face_to_part(nf)
 
-        def inside(points):
+        def inside(points, face=face, nf=nf):
             if not points:
                 return []
             uv = []
