@@ -231,7 +231,11 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     f.add_argument("--tool", default="cyl:D=20", help="cylindrical cutter, e.g. cyl:D=80 (mm)")
     f.add_argument("--rule", type=float, default=0.5, help="rule position as a fraction of the u range [0, 1]")
     f.add_argument(
-        "--setting", default="optimum", choices=["standard-tangent", "standard-distributed", "optimum", "minimax"]
+        "--setting",
+        default="optimum",
+        choices=["standard-tangent", "standard-distributed", "standard-bisector", "optimum", "minimax"],
+        help="standard-distributed: Rubio's equal error at both directrices; standard-bisector: offset along the "
+        "bisector of the end normals",
     )
     f.add_argument("--side", type=int, default=1, help="+1: tool on the side of S_u x S_v, -1: the other")
     f.add_argument("--whole", action="store_true", help="settings on the whole surface: tool path, envelope, map")

@@ -9,6 +9,7 @@ import pytest
 from machsurf_cad import examples
 from machsurf_cad.errors import InputError
 from machsurf_cad.flank_milling import (
+    SETTINGS,
     NoAdmissibleSetting,
     RuledSurface,
     interference,
@@ -204,14 +205,14 @@ def test_error_along_the_rule_is_exported_for_every_setting(tmp_path):
     assert r.returncode == 0, r.stdout + r.stderr
     rows = list(csv.reader((tmp_path / "f" / "error_along_rule.csv").open()))
     head, data = rows[0], np.array(rows[1:], float)
-    assert head == ["v", "standard-tangent_mm", "standard-distributed_mm", "optimum_mm", "minimax_mm"]
-    assert data.shape == (201, 5) and np.allclose(data[:, 0], np.linspace(0, 1, 201), atol=1e-6)
+    assert head == ["v"] + [f"{k}_mm" for k in SETTINGS]
+    assert data.shape == (201, 6) and np.allclose(data[:, 0], np.linspace(0, 1, 201), atol=1e-6)
     surf = examples.liu_ruled()
     lo, hi = surf.u_range
     for j, kind in enumerate(head[1:], 1):
         e = interference(surf, tool_setting(surf, lo + 0.5 * (hi - lo), 10.0, kind.removesuffix("_mm")))
         assert np.abs(data[:, j] - e.e).max() < 1e-8, kind
-    assert abs(np.abs(data[:, 3]).max() - 0.03393) < 5e-6
+    assert abs(np.abs(data[:, head.index("optimum_mm")]).max() - 0.03393) < 5e-6
 
 
 def test_error_along_the_rule_plot(tmp_path):
@@ -240,3 +241,113 @@ def test_pinned_figures_of_the_paper_cases():
         tool_setting(hp, mid, limit + 0.1, "optimum")
     e18 = examples.eq18_ruled()
     assert abs(interference(e18, tool_setting(e18, 0.4, 40.0, "optimum", side=-1)).max_abs - 17.1227) < 1e-3
+
+
+def _circle_and_line(rho, beta_deg, h):
+    """C0 a circle arc of radius rho in z = 0 (centre (0, rho, 0)), C1 a straight line in z = h at beta_deg
+    to C0's tangent at u = 0, whose rule is along z: there the sections normal to the rule are the
+    directrices themselves, so Rubio's formulas (circle against the tool's circle) are exact."""
+    b = math.radians(beta_deg)
+
+    def c0(u, order=2):
+        u = np.asarray(u, float)
+        z = np.zeros_like(u)
+        rows = [
+            np.stack([rho * np.sin(u), rho * (1 - np.cos(u)), z], -1),
+            np.stack([rho * np.cos(u), rho * np.sin(u), z], -1),
+            np.stack([-rho * np.sin(u), rho * np.cos(u), z], -1),
+        ]
+        return np.stack(rows[: order + 1], -2)
+
+    def c1(u, order=2):
+        u = np.asarray(u, float)
+        one, z = np.ones_like(u), np.zeros_like(u)
+        rows = [
+            np.stack([rho * u * math.cos(b), rho * u * math.sin(b), h * one], -1),
+            np.stack([rho * math.cos(b) * one, rho * math.sin(b) * one, z], -1),
+            np.stack([z, z, z], -1),
+        ]
+        return np.stack(rows[: order + 1], -2)
+
+    return RuledSurface(c0, c1, (-0.6, 0.6), "circle_line")
+
+
+@pytest.mark.parametrize(("rho", "beta", "R"), [(30.0, 30.0, 10.0), (15.0, 50.0, 8.0), (200.0, 20.0, 25.0)])
+def test_standard_distributed_is_rubios_equal_error_setting(rho, beta, R):
+    """Rubio's distributed standard setting shares the error equally between the directrices: on a
+    circle (radius rho, convex towards the tool) and a line at beta to it, the error is the paper's
+    rho + R - sqrt(R^2 + rho^2 + 2 R rho cos a0) = R (1 - cos a1), a0 + a1 = beta (solved here), and
+    the bisector variant (a0 = a1) is worse at the circle."""
+    from scipy.optimize import brentq
+
+    s = _circle_and_line(rho, beta, 40.0)
+    b = math.radians(beta)
+    a0 = brentq(
+        lambda a: rho + R - math.sqrt(R * R + rho * rho + 2 * R * rho * math.cos(a)) - R * (1 - math.cos(b - a)), 0, b
+    )
+    eps = R * (1 - math.cos(b - a0))
+    st = standard_setting(s, 0.0, R)
+    e0, e1 = st.contacts["end_errors_mm"]
+    assert st.kind == "standard-distributed"
+    assert abs(e0 + eps) < 1e-9 and abs(e1 + eps) < 1e-9
+    e = interference(s, st)
+    assert abs(e.e[0] + eps) < 1e-9 and abs(e.e[-1] + eps) < 1e-9 and abs(e.max_abs - eps) < 1e-9
+    bis = interference(s, standard_setting(s, 0.0, R, split="bisector"))
+    circle_error = rho + R - math.sqrt(R * R + rho * rho + 2 * R * rho * math.cos(b / 2))
+    assert abs(bis.e[0] + circle_error) < 1e-9 and bis.max_abs > eps
+
+
+def test_distributed_and_bisector_on_the_paper_surfaces():
+    """Hyperbolic paraboloid (straight directrices): equal error is the bisector, R (1 - cos alpha0) =
+    5.35898 mm; Liu's middle rule (R 10, curved C1): equal error 0.483864 mm against the bisector's
+    0.564782 mm (Rubio's closed form with the normal-section curvature radius gives 0.4886 mm)."""
+    from machsurf_cad.flank_milling import tool_setting
+
+    hp = examples.hypar_ruled(30.0, 80.0)
+    mid = 0.5 * sum(hp.u_range)
+    d = interference(hp, tool_setting(hp, mid, 40.0, "standard-distributed")).max_abs
+    b = interference(hp, tool_setting(hp, mid, 40.0, "standard-bisector")).max_abs
+    assert abs(d - 40 * (1 - math.cos(math.radians(30)))) < 1e-9 and abs(b - d) < 1e-9
+    liu = examples.liu_ruled()
+    mid = 0.5 * sum(liu.u_range)
+    d = interference(liu, tool_setting(liu, mid, 10.0, "standard-distributed"))
+    b = interference(liu, tool_setting(liu, mid, 10.0, "standard-bisector"))
+    assert abs(d.max_abs - 0.483864) < 1e-6 and abs(b.max_abs - 0.564782) < 1e-6
+    assert abs(d.e[0] - d.e[-1]) < 1e-9
+
+
+@pytest.mark.parametrize(("side", "key", "bracket", "u_edge", "error"), [
+    (1, "u0", (20.13, 20.72), 20.42304, 0.18456),
+    (-1, "u1", (21.28, 21.87), 21.51005, 0.25717),
+])  # fmt: skip
+def test_liu_optimum_where_its_contact_reaches_the_surface_edge(side, key, bracket, u_edge, error):
+    """Liu's surface, R = 10: beyond the rule where a tangency point reaches the end of the directrix
+    (C0 on side +1, C1 on side -1) the optimum's contacts leave the surface; the error on that last rule
+    whose contacts stay on the surface is pinned (the rule found by a root solve of the contact position)."""
+    from scipy.optimize import brentq
+
+    from machsurf_cad.flank_milling import tool_setting
+
+    s = examples.liu_ruled()
+    hi = s.u_range[1]
+    u = brentq(lambda x: tool_setting(s, x, 10.0, "optimum", side=side).contacts[key] - hi, *bracket, xtol=1e-12)
+    st = tool_setting(s, u, 10.0, "optimum", side=side)
+    assert abs(u - u_edge) < 1e-5 and abs(st.contacts[key] - hi) < 1e-9
+    assert abs(interference(s, st).max_abs - error) < 1e-5
+
+
+def test_whole_liu_side_minus_one_is_checked_against_the_material_side(tmp_path):
+    """An example surface is a bare sheet: with the tool on side -1 the material is on the normal's side.
+    The tool-body check then finds only the cut's own interference (as the settings' along-rule error
+    says), no collision of the sideways approach or retract."""
+    import json
+
+    from helpers import run
+
+    r = run("flank", "--example", "liu", "--whole", "--side", "-1", "--no-render", "-o", tmp_path / "f")
+    assert r.returncode == 2, r.stdout + r.stderr
+    rep = json.loads((tmp_path / "f" / "report.json").read_text())
+    v, w = rep["whole"]["verify"], rep["whole"]
+    assert v["n_collisions"] == 0
+    assert all(g["move"] == "cut" for g in v["worst"])
+    assert abs(v["max_gouge_mm"] - w["max_gouge_mm"]) < 0.01

@@ -16,9 +16,9 @@ from .path import FlankPath
 from .ruled import RuledSurface
 from .settings import SETTINGS, Interference, NoAdmissibleSetting, Setting, interference, tool_setting
 
-SettingKind = Literal["standard-tangent", "standard-distributed", "optimum", "minimax"]
-"""The tool settings: the paper's standard (tangent to C0, or error shared), optimum (three
-tangencies) and minimax (beyond the paper)."""
+SettingKind = Literal["standard-tangent", "standard-distributed", "standard-bisector", "optimum", "minimax"]
+"""The tool settings: the paper's standard (tangent to C0, or Rubio's equal error at both directrices),
+the bisector variant of the distributed one, optimum (three tangencies) and minimax (beyond the paper)."""
 
 
 def setting_profiles(surface: RuledSurface, u_p: float, R: float, *, side: int = 1) -> dict:
@@ -144,7 +144,7 @@ def flank(
         A cylindrical cutter, ``"cyl:D=20"`` (a flat end mill), or a radius in mm.
     rule : float
         Rule position as a fraction of the u range, in [0, 1].
-    setting : {"standard-tangent", "standard-distributed", "optimum", "minimax"}
+    setting : {"standard-tangent", "standard-distributed", "standard-bisector", "optimum", "minimax"}
         The tool setting.
     side : {1, -1}
         +1: tool on the side of ``S_u x S_v``.

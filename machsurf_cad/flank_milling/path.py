@@ -122,7 +122,7 @@ def flank_path(
         The ruled surface.
     R : float
         Cylinder radius, mm.
-    kind : {"standard-tangent", "standard-distributed", "optimum", "minimax"}
+    kind : {"standard-tangent", "standard-distributed", "standard-bisector", "optimum", "minimax"}
         The setting on each rule.
     side : {1, -1}
         Tool side.

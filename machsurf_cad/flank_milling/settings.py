@@ -13,9 +13,11 @@ After Redonnet, Rubio, Dessein (1998), rewritten in vector form:
   cylinder's tangent plane at M2, so it touches the tool there.
 
 Settings: **standard tangent** (axis along the rule, tool tangent to C0 at P0, or C1 at P1),
-**standard distributed** (axis along the rule, offset along ``y1``: the error is shared by both
-ends), **optimum** (the paper's: also tangent to C0 at M0 and C1 at M1, solved for ``h0`` and
-``gamma``), **minimax** (beyond the paper: minimises the largest |error| over ``h0, gamma, phi``).
+**standard distributed** (Rubio's, the paper's baseline: axis along the rule, offset so that the
+errors at both directrices are equal), **standard bisector** (axis along the rule, offset along
+``y1``; equal to the distributed one on straight directrices), **optimum** (the paper's: also
+tangent to C0 at M0 and C1 at M1, solved for ``h0`` and ``gamma``), **minimax** (beyond the paper:
+minimises the largest |error| over ``h0, gamma, phi``).
 
 Interference convention: along the rule, for each ``v``, ``e(v) = min_u dist(S(u, v), axis) - R``
 over a band of the surface around the rule (``band_mm`` of surface length each side).
@@ -187,27 +189,78 @@ def _newton_min(directrix, q, a, u, lo, hi, iters):
 
 
 def standard_setting(
-    surface: RuledSurface, u_p: float, R: float, *, side: int = 1, distributed: bool = True, end: int = 0
+    surface: RuledSurface,
+    u_p: float,
+    R: float,
+    *,
+    side: int = 1,
+    distributed: bool = True,
+    end: int = 0,
+    split: str = "equal-error",
 ) -> Setting:
-    """Standard setting, axis collinear with the rule: distributed error (b) or tangent to one directrix (a)."""
+    """Standard setting, axis collinear with the rule: tangent to one directrix (a) or the error distributed (b).
+
+    ``distributed=False``: tangent to C0 at P0 (``end=0``) or to C1 at P1 (``end=1``), kind
+    ``standard-tangent``. ``distributed=True`` with ``split="equal-error"`` is Rubio's setting (the
+    paper's baseline, kind ``standard-distributed``): the axis offset from the rule in the direction
+    that makes the errors at the two directrices equal (min over u of the distance from each directrix
+    to the axis, minus R); on straight directrices it is the bisector of the end normals. With
+    ``split="bisector"`` the offset is along the bisector ``y1`` whatever the curvature (kind
+    ``standard-bisector``).
+    """
     _check_R(R)
     fr = rule_frame(surface, u_p, side)
-    if distributed:
-        y, kind = fr.y1, "standard-distributed"
-    else:
+    phi = 0.0
+    if not distributed:
         y, kind = (fr.n0 if end == 0 else fr.n1), "standard-tangent"
+    elif split == "bisector":
+        y, kind = fr.y1, "standard-bisector"
+    elif split == "equal-error":
+        phi = _equal_error_phi(surface, fr, float(R))
+        y, kind = math.cos(phi) * fr.y1 + math.sin(phi) * fr.x1, "standard-distributed"
+    else:
+        raise InputError(f"split must be 'equal-error' or 'bisector', got {split!r}")
     q = fr.p0 + R * y
-    return Setting(
-        kind,
-        fr,
-        float(R),
-        q,
-        fr.z1.copy(),
-        fr.h_p / 2,
-        0.0,
-        0.0,
-        {"P0": fr.p0, "P1": fr.p1, "tangent_end": None if distributed else end},
-    )
+    contacts: dict = {"P0": fr.p0, "P1": fr.p1, "tangent_end": None if distributed else end}
+    if kind == "standard-distributed":
+        contacts["end_errors_mm"] = [float(e) for e in _end_errors(surface, fr, float(R), phi)]
+    return Setting(kind, fr, float(R), q, fr.z1.copy(), fr.h_p / 2, 0.0, math.degrees(phi), contacts)
+
+
+def _end_errors(surface: RuledSurface, fr: RuleFrame, R: float, phi: float) -> tuple[float, float]:
+    """Errors at the two directrices (mm, negative = gouge) of the axis along the rule offset at ``phi``."""
+    q, a = axis_of(fr, R, 0.0, 0.0, phi)
+    lo, hi = surface.u_range
+    out = []
+    for c in (surface.c0, surface.c1):
+        r = _curve_min(c, q, a, fr.u_p, (lo, hi))
+        out.append(0.0 if r is None else min(0.0, r[1] - R))
+    return out[0], out[1]
+
+
+def _equal_error_phi(surface: RuledSurface, fr: RuleFrame, R: float) -> float:
+    """Rubio's distributed standard setting: the offset angle from ``y1`` (radians, about the rule) at
+    which the errors at both directrices are equal, between the two tangent settings (offset along
+    ``n0`` and along ``n1``). Where they never become equal there, the end with the smaller larger error."""
+    from scipy.optimize import brentq
+
+    phis = [math.atan2(float(n @ fr.x1), float(n @ fr.y1)) for n in (fr.n0, fr.n1)]
+    a, b = min(phis), max(phis)
+    if b - a < 1e-12:
+        return 0.0
+
+    def g(phi):
+        e0, e1 = _end_errors(surface, fr, R, phi)
+        return e0 - e1
+
+    ga, gb = g(a), g(b)
+    if ga == 0.0:
+        return a
+    if gb == 0.0:
+        return b
+    if ga * gb > 0:
+        return min((a, b), key=lambda p: max(-e for e in _end_errors(surface, fr, R, p)))
+    return float(brentq(g, a, b, xtol=1e-14, rtol=4 * np.finfo(float).eps, maxiter=200))
 
 
 def _check_R(R):
@@ -520,18 +573,19 @@ def _simplex(x0):
     return np.vstack([x0] + [x0 + np.eye(3)[i] * steps[i] for i in range(3)])
 
 
-SETTINGS = ("standard-tangent", "standard-distributed", "optimum", "minimax")
+SETTINGS = ("standard-tangent", "standard-distributed", "standard-bisector", "optimum", "minimax")
 
 
 def tool_setting(
     surface: RuledSurface, u_p: float, R: float, kind: str, *, side: int = 1, start: Setting | None = None
 ) -> Setting:
-    """Setting by name: standard-tangent, standard-distributed, optimum, minimax (``start``: a
-    neighbouring rule's setting to continue from)."""
+    """Setting by name, one of :data:`SETTINGS` (``start``: a neighbouring rule's setting to continue from)."""
     if kind == "standard-tangent":
         return standard_setting(surface, u_p, R, side=side, distributed=False)
     if kind == "standard-distributed":
         return standard_setting(surface, u_p, R, side=side, distributed=True)
+    if kind == "standard-bisector":
+        return standard_setting(surface, u_p, R, side=side, split="bisector")
     if kind == "optimum":
         return optimum_setting(surface, u_p, R, side=side, start=start)
     if kind == "minimax":

@@ -19,11 +19,13 @@ def _ruled_input(spec: FlankJob):
     return s, f"face {f.index} '{f.name}' of {spec.part} (deviation from ruled: {s.source_deviation:.3g} mm)"
 
 
-def _example_face(name: str):
+def _example_face(name: str, side: int = 1):
+    """The example's surface as the part: a bare sheet, the material on the side away from the tool
+    (``side`` -1: the tool is against the normal S_u x S_v, so the face's outward normal is reversed)."""
     from ..examples import example
     from ..geometry.face import Face
 
-    return Face(example(name, "surface"), name=name)
+    return Face(example(name, "surface"), name=name, reversed=side < 0)
 
 
 def _write_rule_errors(path, profiles: dict) -> str:
@@ -106,7 +108,7 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
 
             path, env, dev = res.path, res.envelope, res.envelope_deviation
             # the tool body against the part: every face of a STEP part, or the example's surface
-            faces = part_faces(spec.part) if spec.part else [_example_face(spec.example)]
+            faces = part_faces(spec.part) if spec.part else [_example_face(spec.example, spec.side)]
             gtol = spec.gouge_tol if spec.gouge_tol is not None else spec.tol
             rep["whole"]["verify"], vcode = write_checked_toolpath(
                 st, say, res.toolpath, faces, spec, tolerance=gtol, render=spec.render

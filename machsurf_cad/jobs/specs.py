@@ -8,14 +8,14 @@ numbers), so it can be written to JSON, sent to another process and run there by
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
-from typing import Literal
+from typing import Literal, get_args
 
 from ..checks import positive
 from ..errors import InputError
 
 LoopPolicy = Literal["error", "flag", "trim"]
 Continuity = Literal["g0", "g1"]
-Setting = Literal["standard-tangent", "standard-distributed", "optimum", "minimax"]
+Setting = Literal["standard-tangent", "standard-distributed", "standard-bisector", "optimum", "minimax"]
 
 
 def _positive(name: str, v, allow_none: bool = False) -> None:
@@ -221,7 +221,7 @@ class FlankJob(_Post, JobSpec):
 
     def __post_init__(self) -> None:
         _one_input(self.part, self.example)
-        _choice("setting", self.setting, ("standard-tangent", "standard-distributed", "optimum", "minimax"))
+        _choice("setting", self.setting, get_args(Setting))
         _choice("side", self.side, (1, -1))
         if not 0.0 <= self.rule <= 1.0:
             raise InputError(f"rule {self.rule:g} is outside [0, 1] (fraction of the u range)")

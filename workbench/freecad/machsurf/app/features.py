@@ -201,7 +201,7 @@ class FlankSettingFeature(_Base):
             "Setting",
             "Strategy",
             "Tool setting",
-            ["optimum", "standard-distributed", "standard-tangent", "minimax"],
+            ["optimum", "standard-distributed", "standard-bisector", "standard-tangent", "minimax"],
         )
         _add(obj, "App::PropertyInteger", "Side", "Strategy", "+1 or -1", 1)
         for name in ("MaxGouge", "MaxUndercut", "Gamma"):
