@@ -1,5 +1,5 @@
-"""Flank milling: optimum setting + interference on one rule (goal < 5 ms), and a 500-rule path
-(goal < 3 s). The reference is the brute-force way: interference by dense sampling of the band
+"""Flank milling: optimum setting (every solution searched) + interference on one rule (goal < 10 ms),
+and a 500-rule path (goal < 3 s). The reference is the brute-force way: interference by dense sampling of the band
 (2000 x 101 points, distance to the axis minus R), as in the tests."""
 
 from __future__ import annotations

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..errors import InputError, MachsurfError
 from ..results import Result
+from . import tangency
 from .ruled import RuledSurface
 
 
@@ -143,51 +144,6 @@ def _dist_axis(p, q, a):
     return np.linalg.norm(w, axis=-1)
 
 
-def _curve_min(directrix, q, a, u_start, u_range, iters=40):
-    """Local minimum over u of the distance from a directrix to the axis (Newton, from u_start).
-
-    Where Newton from ``u_start`` fails (a concave stretch of the distance, or outside a directrix's
-    domain), it starts again from the smallest of 129 samples over the range.
-    """
-    lo, hi = u_range
-    out = _newton_min(directrix, q, a, float(u_start), lo, hi, iters)
-    if out is not None:
-        return out
-    us = np.linspace(lo, hi, 129)
-    c = directrix(us, 0)[:, 0]
-    w = c - q
-    w = w - (w @ a)[:, None] * a
-    d = np.linalg.norm(w, axis=1)
-    if not np.any(np.isfinite(d)):
-        return None
-    return _newton_min(directrix, q, a, float(us[int(np.nanargmin(d))]), lo, hi, iters)
-
-
-def _newton_min(directrix, q, a, u, lo, hi, iters):
-    scale = max(1.0, abs(hi - lo))
-    for _ in range(iters):
-        c = directrix(np.array([u]), 2)[0]
-        w = c[0] - q
-        w = w - (w @ a) * a
-        d1 = c[1] - (c[1] @ a) * a
-        g = 2 * (w @ c[1])
-        h = 2 * (d1 @ d1 + w @ c[2])
-        if not (h > 0) or not np.isfinite(g):
-            return None
-        step = g / h
-        u_new = min(max(u - step, lo), hi)
-        done = abs(u_new - u) < 1e-13 * scale
-        u = u_new
-        if done:
-            break
-    c = directrix(np.array([u]), 2)[0]
-    w = c[0] - q
-    w = w - (w @ a) * a
-    if not np.all(np.isfinite(w)):
-        return None
-    return u, float(np.linalg.norm(w)), c[0], float(2 * (w @ c[1]))
-
-
 def standard_setting(
     surface: RuledSurface,
     u_p: float,
@@ -233,8 +189,8 @@ def _end_errors(surface: RuledSurface, fr: RuleFrame, R: float, phi: float) -> t
     lo, hi = surface.u_range
     out = []
     for c in (surface.c0, surface.c1):
-        r = _curve_min(c, q, a, fr.u_p, (lo, hi))
-        out.append(0.0 if r is None else min(0.0, r[1] - R))
+        r = tangency.contact_points(c, q[None], a[None], [fr.u_p], (lo, hi))
+        out.append(min(0.0, float(r.dist[0]) - R) if r.ok[0] else 0.0)
     return out[0], out[1]
 
 
@@ -280,8 +236,6 @@ def optimum_setting(
     ``contacts["other_solutions"]``. Raises :class:`NoAdmissibleSetting` when no solution has M2
     on the rule, |gamma| < 80 deg and true tangencies (minima of the distance) on this side.
     """
-    from scipy.optimize import root
-
     _check_R(R)
     fr = rule_frame(surface, u_p, side)
     lo0, hi0 = surface.u_range
@@ -289,94 +243,35 @@ def optimum_setting(
     # tangency is sought on the directrices' natural extension too (end rules touch it there)
     lo, hi = lo0 - 0.5 * span, hi0 + 0.5 * span
 
-    warm = [u_p, u_p]  # the tangency points move little between solver steps: start from the last ones
-    if start is not None and start.kind == "optimum":
-        warm = [start.contacts["u0"] + (u_p - start.frame.u_p), start.contacts["u1"] + (u_p - start.frame.u_p)]
-
-    def contacts(h0, gamma):
-        q, a = axis_of(fr, R, h0, gamma)
-        r0 = _curve_min(surface.c0, q, a, warm[0], (lo, hi))
-        r1 = _curve_min(surface.c1, q, a, warm[1], (lo, hi))
-        if r0 is None or r1 is None:  # retry from the rule itself
-            r0 = _curve_min(surface.c0, q, a, u_p, (lo, hi))
-            r1 = _curve_min(surface.c1, q, a, u_p, (lo, hi))
-        if r0 is not None and r1 is not None and abs(r0[0] - u_p) < 0.5 * span and abs(r1[0] - u_p) < 0.5 * span:
-            warm[0], warm[1] = r0[0], r1[0]
-        return q, a, r0, r1
-
-    def residual(x):
-        h0, gamma = x[0] * fr.h_p, x[1]
-        _, _, r0, r1 = contacts(h0, gamma)
-        if r0 is None or r1 is None:
-            return np.array([1e3, 1e3])
-        return np.array([(r0[1] - R) / R, (r1[1] - R) / R])
-
-    # gamma = 0 (the standard setting) makes the Jacobian singular: start just off it
     starts = [(0.5, -0.05), (0.5, 0.05), (0.25, 0.1), (0.75, -0.1), (0.25, -0.1), (0.75, 0.1), (0.5, 0.3), (0.5, -0.3)]
-    if start is not None:  # continuation from a neighbouring rule
-        starts.insert(0, (start.h0 / start.frame.h_p, math.radians(start.gamma_deg)))
+    # gamma = 0 (the standard setting) makes the Jacobian singular: the starts are off it
+    wide = [(h, g) for h in (0.25, 0.6) for g in np.radians([-45, -25, -12, 12, 25, 45])]
 
-    def newton(x0, iters=30):
-        """Newton on (h0, gamma) with the analytic Jacobian: at a tangency the distance is stationary
-        in u, so its derivatives in h0 and gamma are those at fixed contact points."""
-        h0, gamma = x0[0] * fr.h_p, x0[1]
-        for _ in range(iters):
-            q, a, r0, r1 = contacts(h0, gamma)
-            if r0 is None or r1 is None:
-                return None
-            x = fr.x1  # phi = 0
-            da = -math.sin(gamma) * fr.z1 + math.cos(gamma) * x
-            F = np.array([r0[1] - R, r1[1] - R])
-            if np.abs(F).max() < 1e-12 * R:
-                return np.array([h0 / fr.h_p, gamma])
-            J = np.empty((2, 2))
-            for k, r_ in enumerate((r0, r1)):
-                w = r_[2] - q
-                wa = float(w @ a)
-                wp = w - wa * a
-                nh = wp / np.linalg.norm(wp)
-                J[k, 0] = -float(nh @ fr.z1)
-                J[k, 1] = -wa * float(nh @ da)
-            try:
-                step = np.linalg.solve(J, F)
-            except np.linalg.LinAlgError:
-                return None
-            if abs(step[0]) > fr.h_p or abs(step[1]) > 1.0:
-                return None  # far off: leave it to another start
-            h0 -= step[0]
-            gamma -= step[1]
-            if not (np.isfinite(h0) and np.isfinite(gamma)) or abs(gamma) > 1.5:
-                return None
-        return None
-
-    def candidates():
-        for x0 in starts:  # fast Newton first, from every start ...
-            xs = newton(np.array(x0))
-            if xs is not None:
-                yield xs
-        for x0 in starts:  # ... then the robust (slower) hybrid solver
-            yield root(residual, np.array(x0), method="hybr", options={"xtol": 1e-14}).x
-
-    def admissible(xs):
-        h0, gamma = xs[0] * fr.h_p, xs[1]
-        if not np.all(np.abs(residual(xs)) < 1e-11):
-            return None
-        q, a, r0, r1 = contacts(h0, gamma)
-        # a true tangency: the distance is stationary there (not a minimum clipped at the domain's edge)
-        tangent = all(
-            abs(r_[3]) <= 1e-7 * R * max(1.0, float(np.linalg.norm(d(np.array([r_[0]]), 1)[0, 1])))
-            for r_, d in ((r0, surface.c0), (r1, surface.c1))
-        )
-        ok = (
-            -1e-9 <= h0 <= fr.h_p + 1e-9
-            and abs(gamma) < math.radians(80)
-            and tangent
-            and abs(r0[0] - u_p) < 0.5 * span
-            and abs(r1[0] - u_p) < 0.5 * span
-            and np.all(np.isfinite(r0[2]))
-            and np.all(np.isfinite(r1[2]))
-        )
-        return (h0, gamma, q, a, r0, r1) if ok else None
+    def admissible(sols: tangency.Solutions) -> list[tuple]:
+        out: list[tuple] = []
+        for i in range(sols.h0.size):
+            h0, gamma = float(sols.h0[i]), float(sols.gamma[i])
+            r0, r1 = (
+                (float(c.u[i]), float(c.dist[i]), c.point[i], float(c.slope[i])) for c in (sols.c0, sols.c1)
+            )
+            # a true tangency: the distance is stationary there (not a minimum clipped at the domain's edge)
+            tangent = all(
+                abs(r_[3]) <= 1e-7 * R * max(1.0, float(np.linalg.norm(d(np.array([r_[0]]), 1)[0, 1])))
+                for r_, d in ((r0, surface.c0), (r1, surface.c1))
+            )
+            ok = (
+                -1e-9 <= h0 <= fr.h_p + 1e-9
+                and abs(gamma) < math.radians(80)
+                and tangent
+                and abs(r0[0] - u_p) < 0.5 * span
+                and abs(r1[0] - u_p) < 0.5 * span
+                and np.all(np.isfinite(r0[2]))
+                and np.all(np.isfinite(r1[2]))
+            )
+            if ok and all(abs(h0 - f[0]) > 1e-6 * fr.h_p or abs(gamma - f[1]) > 1e-9 for f in out):
+                q, a = axis_of(fr, R, h0, gamma)
+                out.append((h0, gamma, q, a, r0, r1))
+        return out
 
     def make(sol, others=()):
         h0, gamma, q, a, r0, r1 = sol
@@ -403,27 +298,21 @@ def optimum_setting(
         )
 
     if start is not None:  # continuation along a path: the branch of the neighbouring rule, when it holds
-        xs = newton(np.array(starts[0]))
-        sol = admissible(xs) if xs is not None else None
-        if sol is not None:
-            return make(sol)
-    # every three-tangency solution from starts over the admissible (h0, gamma) range, then the best by
-    # the interference along the rule (the first found is not always the best: Liu's surface, side -1)
-    wide = [(h, g) for h in (0.25, 0.6) for g in np.radians([-45, -25, -12, 12, 25, 45])]
-    found: list[tuple] = []
-    for x0 in starts + wide:
-        xs = newton(np.array(x0))
-        if xs is None:
-            continue
-        sol = admissible(xs)
-        if sol is not None and all(abs(sol[0] - f[0]) > 1e-6 * fr.h_p or abs(sol[1] - f[1]) > 1e-9 for f in found):
-            found.append(sol)
+        x0 = (start.h0 / start.frame.h_p, math.radians(start.gamma_deg))
+        warm = None
+        if start.kind == "optimum":  # the tangency points move little between neighbouring rules
+            du = u_p - start.frame.u_p
+            warm = (start.contacts["u0"] + du, start.contacts["u1"] + du)
+        found = admissible(tangency.solve(surface, fr, R, [x0], (lo, hi), warm=warm))
+        if found:
+            return make(found[0])
+        starts.insert(0, x0)
+    # every three-tangency solution from starts over the admissible (h0, gamma) range (all advanced
+    # together), then the best by the interference along the rule (the first found is not always the
+    # best: Liu's surface, side -1)
+    found = admissible(tangency.solve(surface, fr, R, starts + wide, (lo, hi)))
     if not found:
-        for x0 in starts + wide:  # the robust (slower) hybrid solver
-            sol = admissible(root(residual, np.array(x0), method="hybr", options={"xtol": 1e-14}).x)
-            if sol is not None:
-                found.append(sol)
-                break
+        found = _hybrid_fallback(surface, fr, R, starts + wide, (lo, hi), admissible)
     if not found:
         raise NoAdmissibleSetting(
             f"no admissible optimum setting for R = {R:g} mm on side {side:+d} at u = {u_p:g}: the three-tangency "
@@ -446,6 +335,29 @@ def optimum_setting(
         for i in order[1:]
     ]
     return make(found[order[0]], others)
+
+
+def _hybrid_fallback(surface, fr, R, starts, u_range, admissible) -> list:
+    """The robust (slower) hybrid solver of scipy from each start, for the rare rule where Newton from
+    every start fails; the first admissible solution."""
+    from scipy.optimize import root
+
+    def residual(x):
+        q, a = tangency.axes(fr, R, [x[0] * fr.h_p], [x[1]])
+        r0 = tangency.contact_points(surface.c0, q, a, [fr.u_p], u_range)
+        r1 = tangency.contact_points(surface.c1, q, a, [fr.u_p], u_range)
+        if not (r0.ok[0] and r1.ok[0]):
+            return np.array([1e3, 1e3])
+        return np.array([(r0.dist[0] - R) / R, (r1.dist[0] - R) / R])
+
+    for x0 in starts:
+        xs = root(residual, np.array(x0), method="hybr", options={"xtol": 1e-14}).x
+        if np.all(np.abs(residual(xs)) < 1e-11):
+            sols = tangency.solve(surface, fr, R, [xs], u_range, iters=3)
+            found = admissible(sols)
+            if found:
+                return found
+    return []
 
 
 @dataclass(frozen=True, eq=False)
