@@ -251,9 +251,7 @@ def optimum_setting(
         out: list[tuple] = []
         for i in range(sols.h0.size):
             h0, gamma = float(sols.h0[i]), float(sols.gamma[i])
-            r0, r1 = (
-                (float(c.u[i]), float(c.dist[i]), c.point[i], float(c.slope[i])) for c in (sols.c0, sols.c1)
-            )
+            r0, r1 = ((float(c.u[i]), float(c.dist[i]), c.point[i], float(c.slope[i])) for c in (sols.c0, sols.c1))
             # a true tangency: the distance is stationary there (not a minimum clipped at the domain's edge)
             tangent = all(
                 abs(r_[3]) <= 1e-7 * R * max(1.0, float(np.linalg.norm(d(np.array([r_[0]]), 1)[0, 1])))
