@@ -351,3 +351,37 @@ def test_whole_liu_side_minus_one_is_checked_against_the_material_side(tmp_path)
     assert v["n_collisions"] == 0
     assert all(g["move"] == "cut" for g in v["worst"])
     assert abs(v["max_gouge_mm"] - w["max_gouge_mm"]) < 0.01
+
+
+def test_whole_path_beyond_the_existence_limit_falls_back_and_is_cut_into_segments():
+    """Hyperbolic paraboloid (alpha0 30 deg, h_p 80 mm) with R = 80.5 mm, just beyond the middle rule's
+    existence limit of 80 mm: the optimum is missing around the middle, where Rubio's setting is used
+    (its error is the closed form R (1 - cos alpha0) there); the path is cut into three continuous
+    segments at the two jumps, one pass each."""
+    from machsurf_cad.flank_milling import flank_path
+
+    s = examples.hypar_ruled(30.0, 80.0)
+    p = flank_path(s, 80.5, "optimum", tolerance=0.01)
+    fb = p.fallback_u
+    assert fb.size > 0 and 0.35 < fb.min() < 0.5 < fb.max() < 0.65
+    assert all(st.kind == ("standard-distributed" if st.frame.u_p in fb else "optimum") for st in p.settings)
+    segs = p.segments()
+    assert [len(x.settings) for x in segs] == [np.sum(p.u < fb.min()), fb.size, np.sum(p.u > fb.max())]
+    assert abs(segs[1].max_gouge - 80.5 * (1 - math.cos(math.radians(30)))) < 1e-6
+    for seg in segs:  # inside a segment the axis moves continuously (within the step criterion)
+        assert np.linalg.norm(np.diff(seg.tip, axis=0), axis=1).max() < 5.0
+    assert p.toolpath().report()["n_passes"] == 3
+    assert len(p.report()["segments_u"]) == 3 and p.report()["n_fallback_rules"] == fb.size
+
+
+def test_deviation_on_the_positions_agrees_with_the_envelope():
+    """Where a segment's envelope cannot be fitted its map is measured on the tool positions: on Liu's
+    surface both maps exist and agree within 0.002 mm (the largest deviation 0.3468 mm on both)."""
+    from machsurf_cad.flank_milling import flank_path
+    from machsurf_cad.flank_milling.path import envelope_deviation, envelope_surface, positions_deviation
+
+    p = flank_path(examples.liu_ruled(), 10.0, "optimum", tolerance=0.01)
+    a = envelope_deviation(p, envelope_surface(p, tolerance=1e-3).surface, n=61)
+    b = positions_deviation(p, n=61)
+    assert np.abs(a.signed - b.signed).max() < 0.002
+    assert abs(a.max_abs - 0.3468) < 1e-4 and abs(b.max_abs - a.max_abs) < 1e-9

@@ -10,7 +10,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..cam.toolpath import ToolPath
-from ..errors import InputError
+from ..errors import InputError, ToleranceError
 from ..results import Progress, Result
 from .path import FlankPath
 from .ruled import RuledSurface
@@ -65,6 +65,10 @@ class FlankResult(Result):
     radius_range: dict | None = None
     time_s: dict | None = None
     profiles: dict | None = None
+    segment_envelopes: tuple = ()
+    """Per continuous segment of the path: ``(segment, fit, deviation)``, or ``(segment, None, deviation,
+    reason)`` where it has no envelope (fewer than 4 rules, or a folding motion whose envelope fit missed
+    the tolerance): its deviation is then measured on the tool positions (None below 2 rules)."""
 
     @property
     def R(self) -> float:
@@ -95,6 +99,7 @@ class FlankResult(Result):
                 "deviation_from_envelope": (
                     self.envelope_deviation.report() if self.envelope_deviation is not None else None
                 ),
+                "segments": [_segment_report(*x) for x in self.segment_envelopes],
             }
         if self.study is not None:
             rep["study"] = self.study
@@ -200,22 +205,43 @@ def flank(
     R = cutter.D / 2
     lo, hi = surf.u_range
     u_p = lo + rule * (hi - lo)
-    st = tool_setting(surf, u_p, R, setting, side=side)
+    try:
+        st = tool_setting(surf, u_p, R, setting, side=side)
+    except NoAdmissibleSetting:
+        if not whole:
+            raise
+        st = tool_setting(surf, u_p, R, "standard-distributed", side=side)  # as the whole path does there
     times = {"setting_s": time.perf_counter() - t0}
     e = interference(surf, st)
     profiles = setting_profiles(surf, u_p, R, side=side)
     comparison = compare_settings(surf, u_p, R, side=side, profiles=profiles)
     path = tp = env = dev = None
+    segment_envelopes: tuple = ()
     if whole:
-        from .path import envelope_deviation, envelope_surface, flank_path
+        from .path import envelope_deviation, envelope_surface, flank_path, positions_deviation
 
         t1 = time.perf_counter()
         path = flank_path(
             surf, R, setting, side=side, tolerance=tolerance, progress=progress, chunks=chunks, map_chunks=map_chunks
         )
         tp = path.toolpath(FlatEndMill(cutter.D, max(cutter.length, path.length)), clearance=clearance)
-        env = envelope_surface(path, tolerance=envelope_tolerance)
-        dev = envelope_deviation(path, env.surface)
+        segs = []
+        for seg in path.segments():  # one envelope per continuous segment (a jump has no envelope)
+            fit = None
+            if len(seg.settings) < 4:
+                why = f"{len(seg.settings)} rule(s): too short for an envelope"
+            else:
+                try:
+                    fit = envelope_surface(seg, tolerance=envelope_tolerance)
+                except ToleranceError as exc:  # the motion folds its envelope: measured on the positions
+                    why = f"swept envelope not fitted ({exc})"
+            if fit is not None:
+                segs.append((seg, fit, envelope_deviation(seg, fit.surface)))
+            else:
+                segs.append((seg, None, positions_deviation(seg) if len(seg.settings) >= 2 else None, why))
+        longest = max(segs, key=lambda x: len(x[0].settings))
+        env, dev = longest[1], longest[2]
+        segment_envelopes = tuple(segs)
         times["whole_s"] = time.perf_counter() - t1
     data = None
     if study:
@@ -233,8 +259,25 @@ def flank(
         times["radius_range_s"] = time.perf_counter() - t1
     times["total_s"] = time.perf_counter() - t0
     return FlankResult(
-        surf, cutter, float(rule), float(u_p), st, e, comparison, path, tp, env, dev, data, rr, times, profiles
-    )
+        surf, cutter, float(rule), float(u_p), st, e, comparison, path, tp, env, dev, data, rr, times, profiles,
+        segment_envelopes,
+    )  # fmt: skip
+
+
+def _segment_report(seg, fit, dev, why: str = "") -> dict:
+    rep = {
+        "u_range": [float(seg.u[0]), float(seg.u[-1])],
+        "n_rules": len(seg.settings),
+        "max_gouge_mm": seg.max_gouge,
+        "max_undercut_mm": seg.max_undercut,
+    }
+    if fit is None:
+        rep["no_envelope"] = why
+    else:
+        rep["envelope_fit_max_error_mm"] = fit.max_error
+    rep["deviation_max_abs_mm"] = None if dev is None else dev.max_abs
+    rep["deviation_measured_to"] = "envelope" if fit is not None else ("tool positions" if dev is not None else None)
+    return rep
 
 
 def mean_normal(surface: RuledSurface, side: int = 1) -> np.ndarray:

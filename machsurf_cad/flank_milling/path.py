@@ -44,12 +44,42 @@ class FlankPath(Result):
     step_tolerance: float
     discontinuities: tuple = ()
 
+    @property
+    def fallback_u(self) -> np.ndarray:
+        """Rules where the requested setting does not exist and Rubio's standard-distributed one is used."""
+        return np.array([s.frame.u_p for s in self.settings if s.kind != self.kind], float)
+
+    def segment_slices(self) -> list[slice]:
+        """Runs of rules with no discontinuity between them (one per continuous branch of the setting)."""
+        cuts = sorted({int(np.searchsorted(self.u, d["u"])) for d in self.discontinuities})
+        edges = [0] + [c for c in cuts if 0 < c < len(self.u)] + [len(self.u)]
+        return [slice(a, b) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+    def segments(self) -> tuple[FlankPath, ...]:
+        """The path cut at its discontinuities: continuous sub-paths (their own gouge and undercut)."""
+        if not self.discontinuities:
+            return (self,)
+        out = []
+        for sl in self.segment_slices():
+            sets = self.settings[sl]
+            errs = [interference(self.surface, st, n_v=101) for st in sets]
+            k = int(np.argmax([e.max_abs for e in errs]))
+            out.append(
+                FlankPath(
+                    self.surface, self.R, self.kind, self.side, sets, self.u[sl], self.tip[sl], self.axis[sl],
+                    self.length, max(e.max_gouge for e in errs), max(e.max_undercut for e in errs),
+                    {**errs[k].worst(), "rule_u": sets[k].frame.u_p}, self.step_tolerance,
+                )
+            )  # fmt: skip
+        return tuple(out)
+
     def toolpath(self, cutter=None, *, clearance: float = 5.0) -> ToolPath:
-        """The settings as one 5-axis pass of the one :class:`~machsurf_cad.cam.ToolPath` type: tips on
-        the axis below the C0 end (``overhang`` mm beyond the surface), axes towards C1 (tip to shank),
-        CC at the rule contact M2 where the setting has one. The tool lies along the surface, so it
-        approaches and leaves sideways, away from the rule (from the contact M2 towards its axis),
-        not along its axis (which would slide it along the surface)."""
+        """The settings as 5-axis passes of the one :class:`~machsurf_cad.cam.ToolPath` type, one pass per
+        continuous segment (retract and approach between them): tips on the axis below the C0 end
+        (``overhang`` mm beyond the surface), axes towards C1 (tip to shank), CC at the rule contact M2
+        where the setting has one. The tool lies along the surface, so it approaches and leaves
+        sideways, away from the rule (from the contact M2 towards its axis), not along its axis (which
+        would slide it along the surface)."""
         from ..cutters import FlatEndMill
 
         c = cutter if cutter is not None else FlatEndMill(2 * self.R, self.length)
@@ -59,6 +89,7 @@ class FlankPath(Result):
             "gamma_deg": np.array([s.gamma_deg for s in self.settings]),
             "h0_mm": np.array([s.h0 for s in self.settings]),
         }
+        slices = self.segment_slices()
 
         def away(s):  # from the rule contact towards the axis: the side the tool leaves by
             m2 = np.asarray(s.contacts.get("M2", s.frame.p0 + 0.5 * (s.frame.p1 - s.frame.p0)), float)
@@ -67,15 +98,21 @@ class FlankPath(Result):
             return w / np.linalg.norm(w)
 
         return ToolPath.from_passes(
-            [self.tip],
-            [self.axis],
-            cc=[cc],
-            extras=[extras],
+            [self.tip[sl] for sl in slices],
+            [self.axis[sl] for sl in slices],
+            cc=[cc[sl] for sl in slices],
+            extras=[{k: v[sl] for k, v in extras.items()} for sl in slices],
             clearance=clearance,
             cutter=c,
             name=f"flank_{self.kind}",
-            info={"setting": self.kind, "n_rules": len(self.settings), "step_tolerance_mm": self.step_tolerance},
-            linking=[(away(self.settings[0]), away(self.settings[-1]))],
+            info={
+                "setting": self.kind,
+                "n_rules": len(self.settings),
+                "step_tolerance_mm": self.step_tolerance,
+                "n_segments": len(slices),
+                "n_fallback_rules": int(self.fallback_u.size),
+            },
+            linking=[(away(self.settings[sl.start]), away(self.settings[sl.stop - 1])) for sl in slices],
         )
 
     def report(self) -> dict:
@@ -91,6 +128,12 @@ class FlankPath(Result):
             "max_undercut_mm": self.max_undercut,
             "worst": self.worst,
             "discontinuities": list(self.discontinuities),
+            "n_segments": len(self.segment_slices()),
+            "segments_u": [[float(self.u[sl.start]), float(self.u[sl.stop - 1])] for sl in self.segment_slices()],
+            "n_fallback_rules": int(self.fallback_u.size),
+            "fallback_u_range": (
+                [float(self.fallback_u.min()), float(self.fallback_u.max())] if self.fallback_u.size else None
+            ),
         }
 
 
@@ -143,12 +186,11 @@ def flank_path(
     -------
     FlankPath
         Settings, tips and axes per rule, max gouge and undercut; ``toolpath()`` gives the
-        :class:`~machsurf_cad.cam.ToolPath`.
-
-    Raises
-    ------
-    NoAdmissibleSetting
-        The setting does not exist on some rule.
+        :class:`~machsurf_cad.cam.ToolPath` (one pass per continuous segment). Where the setting
+        does not exist on a rule (the optimum beyond its existence limit) Rubio's standard-distributed
+        setting is used there (``fallback_u``); where the setting jumps between neighbouring rules
+        (a branch ends, or a fallback begins) the path is cut into segments (``discontinuities``,
+        ``segments()``).
 
     Examples
     --------
@@ -166,7 +208,7 @@ def flank_path(
     sets0: list[Setting] = []
     prev = None
     for u in us:  # sweep once in order so each rule continues from the previous one
-        prev = tool_setting(surface, float(u), R, kind, side=side, start=prev)
+        prev = _setting(surface, float(u), R, kind, side, prev)
         sets0.append(prev)
     n_chunks = max(1, min(int(chunks), len(us) - 1))
     cuts = np.linspace(0, len(us) - 1, n_chunks + 1).astype(int)
@@ -204,6 +246,18 @@ def flank_path(
     )
 
 
+def _setting(surface, u, R, kind, side, start):
+    """The setting ``kind`` on the rule at ``u``, continuing from ``start``; where it does not exist (the
+    optimum beyond its existence limit), Rubio's standard-distributed setting, so that a whole surface
+    always gets a path (the rules are listed in :attr:`FlankPath.fallback_u` and the report)."""
+    try:
+        return tool_setting(
+            surface, u, R, kind, side=side, start=start if start is None or start.kind == kind else None
+        )
+    except NoAdmissibleSetting:
+        return tool_setting(surface, u, R, "standard-distributed", side=side)
+
+
 def _refine_span(surface, R, kind, side, tolerance, overhang, adaptive, budget, min_span, progress, span):
     """Rules between consecutive initial rules of one span (``(us, settings, drop_first)``), split
     until the interpolated axis is within ``tolerance``, and their interference. Module level: spans
@@ -215,7 +269,7 @@ def _refine_span(surface, R, kind, side, tolerance, overhang, adaptive, budget, 
     def setting(u, near=None):
         key = float(u)
         if key not in cache:
-            cache[key] = tool_setting(surface, key, R, kind, side=side, start=near)
+            cache[key] = _setting(surface, key, R, kind, side, near)
         return cache[key]
 
     jumps = []
@@ -434,3 +488,25 @@ def envelope_deviation(path: FlankPath, env_surface, n: int = 121):
     stats["n_measured_to_end_positions"] = int(at_end.sum())
     stats["sign_convention"] = "gouge positive (nominal inside the swept tool), undercut negative"
     return DeviationResult(pts, signed, uv, proj.foot, proj.on_boundary, (n, n), None, path.step_tolerance, stats)
+
+
+def positions_deviation(path: FlankPath, n: int = 121):
+    """Deviation of the nominal from the swept tool measured on the tool positions themselves (mm, gouge
+    positive): :func:`position_deviation` (every nominal sample against densely interpolated
+    positions) as a :class:`~machsurf_cad.measure.DeviationResult`. The map of a segment whose swept
+    envelope could not be fitted (a folding motion); needs at least 2 rules."""
+    from ..measure import DeviationResult, deviation_stats
+
+    if len(path.settings) < 2:
+        raise InputError("a deviation map needs at least 2 rules")
+    pts_grid, brute = position_deviation(path, n_u=n, n_v=n)
+    pts = pts_grid.reshape(-1, 3)
+    signed = -brute.ravel()
+    uu, vv = np.meshgrid(np.linspace(path.u[0], path.u[-1], n), np.linspace(0, 1, n), indexing="ij")
+    uv = np.stack([uu.ravel(), vv.ravel()], 1)
+    stats = deviation_stats(signed, pts, uv)
+    stats["measured_to"] = "the interpolated tool positions (no envelope surface)"
+    stats["sign_convention"] = "gouge positive (nominal inside the swept tool), undercut negative"
+    return DeviationResult(
+        pts, signed, uv, pts.copy(), np.zeros(len(pts), bool), (n, n), None, path.step_tolerance, stats
+    )

@@ -70,8 +70,10 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
         f"surface: {desc}; rule u = {res.u_p:.6g} (fraction {spec.rule:g}), h_p = {st_.frame.h_p:.4f} mm, "
         f"alpha0 = {st_.frame.alpha0_deg:.4f} deg; tool {cutter.spec()} (R = {res.R:g} mm), side {spec.side:+d}"
     )
+    if st_.kind != spec.setting:
+        say(f"{spec.setting} does not exist on this rule: {st_.kind} shown (and used where it is missing)")
     say(
-        f"{spec.setting}: gamma = {st_.gamma_deg:.6f} deg, h0 = {st_.h0:.6f} mm, h1 = {st_.h1:.6f} mm"
+        f"{st_.kind}: gamma = {st_.gamma_deg:.6f} deg, h0 = {st_.h0:.6f} mm, h1 = {st_.h1:.6f} mm"
         + (f", phi = {st_.phi_deg:.6f} deg" if st_.phi_deg else "")
     )
     for k in ("M0", "M1", "M2"):
@@ -113,27 +115,56 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
             rep["whole"]["verify"], vcode = write_checked_toolpath(
                 st, say, res.toolpath, faces, spec, tolerance=gtol, render=spec.render
             )
-            env_face = Face(env.surface, name="flank_envelope")
-            write_step(st.path("envelope.step"), [env_face])
-            write_stl(st.path("envelope.stl"), [env_face], linear_deflection=0.01)
-            if spec.render:
+            env_faces = [
+                Face(fit.surface, name=f"flank_envelope_{k}" if len(res.segment_envelopes) > 1 else "flank_envelope")
+                for k, (_, fit, *_) in enumerate(res.segment_envelopes)
+                if fit is not None
+            ]
+            if env_faces:
+                write_step(st.path("envelope.step"), env_faces)
+                write_stl(st.path("envelope.stl"), env_faces, linear_deflection=0.01)
+            if spec.render and dev is not None:
                 from ..viz import render_deviation
 
                 render_deviation(
                     dev,
                     st.path("deviation.png"),
                     vtp_path=st.path("deviation.vtp"),
-                    title=f"nominal vs envelope of {cutter.spec()} ({spec.setting}); red gouge, blue undercut",
+                    title=f"nominal vs {'envelope' if env is not None else 'positions'} of {cutter.spec()} "
+                    f"({spec.setting}); red gouge, blue undercut",
                     tolerance=spec.tol,
                     view_direction=mean_normal(surf, spec.side),
                 )
             say(
                 f"whole surface: {len(path.settings)} rules, max gouge {path.max_gouge:.4g} mm, max undercut "
-                f"{path.max_undercut:.4g} mm (rule u = {path.worst['rule_u']:.5g}); envelope {env.surface.shape[0]}x"
-                f"{env.surface.shape[1]} poles, fit error {env.max_error:.3g} mm; nominal vs envelope max "
-                f"{dev.max_abs:.4g} mm"
+                f"{path.max_undercut:.4g} mm (rule u = {path.worst['rule_u']:.5g}); "
+                + (
+                    f"envelope {env.surface.shape[0]}x{env.surface.shape[1]} poles, fit error {env.max_error:.3g} mm; "
+                    f"nominal vs envelope max {dev.max_abs:.4g} mm"
+                    if env is not None
+                    else "no envelope fitted (see the segments); "
+                    + (f"nominal vs tool positions max {dev.max_abs:.4g} mm" if dev is not None else "")
+                )
                 + (f"; {len(path.discontinuities)} setting jump(s)" if path.discontinuities else "")
             )
+            if path.fallback_u.size:
+                say(
+                    f"{spec.setting} does not exist on {path.fallback_u.size} of {len(path.settings)} rules "
+                    f"(u in [{path.fallback_u.min():.5g}, {path.fallback_u.max():.5g}]): standard-distributed "
+                    "used there"
+                )
+            if len(res.segment_envelopes) > 1:
+                say(f"the path is cut into {len(res.segment_envelopes)} segments where the setting jumps:")
+            for seg, fit, d, *why in res.segment_envelopes if len(res.segment_envelopes) > 1 or env is None else ():
+                say(
+                    f"  u in [{seg.u[0]:.5g}, {seg.u[-1]:.5g}], {len(seg.settings)} rules, max gouge "
+                    f"{seg.max_gouge:.4g} mm, max undercut {seg.max_undercut:.4g} mm; "
+                    + (
+                        f"envelope fit {fit.max_error:.3g} mm, nominal vs envelope {d.max_abs:.4g} mm"
+                        if fit is not None
+                        else why[0] + (f"; nominal vs tool positions {d.max_abs:.4g} mm" if d is not None else "")
+                    )
+                )
             if (res.whole_error_mm or 0.0) > spec.tol:
                 say(f"tolerance {spec.tol:g} mm NOT met on the whole surface")
                 code = EXIT_TOLERANCE
