@@ -69,7 +69,7 @@ def _directrix(value, d1, d2):
     def f(u, order=2):
         u = np.asarray(u, dtype=float)
         with np.errstate(invalid="ignore", divide="ignore"):  # NaN outside a directrix's domain
-            return np.stack([value(u), d1(u), d2(u)][: order + 1], axis=-2)
+            return np.stack([g(u) for g in (value, d1, d2)[: order + 1]], axis=-2)
 
     return f
 

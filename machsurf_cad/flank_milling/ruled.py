@@ -125,7 +125,9 @@ class RuledSurface:
         return p, su, sv, suu, suv
 
     def evaluate(self, u, v) -> np.ndarray:
-        return self.derivatives(u, v)[0]
+        u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
+        vv = v[..., None]
+        return (1 - vv) * self.c0(u, 0)[..., 0, :] + vv * self.c1(u, 0)[..., 0, :]
 
     def normal(self, u, v) -> np.ndarray:
         _, su, sv, _, _ = self.derivatives(u, v)

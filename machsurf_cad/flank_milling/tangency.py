@@ -31,8 +31,11 @@ def _perp(w, a):
 
 
 def _newton_u(directrix, q, a, u, lo, hi, iters):
+    """Newton on u from ``u`` (rows); returns ``(u, ok, d)`` with ``d`` the directrix's derivatives at
+    the last iterate when every row converged (steps below 1e-13 of the range), else None."""
     ok = np.ones(u.shape, bool)
     scale = max(1.0, abs(hi - lo))
+    d = None
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for _ in range(iters):
             d = directrix(u, 2)
@@ -46,8 +49,8 @@ def _newton_u(directrix, q, a, u, lo, hi, iters):
             done = np.abs(u_new - u) < 1e-13 * scale
             u = u_new
             if np.all(done | ~ok):
-                break
-    return u, ok
+                return u, ok, d
+    return u, ok, None
 
 
 def contact_points(directrix, q, a, u_start, u_range, *, iters: int = 40, n_samples: int = 129) -> Contacts:
@@ -58,8 +61,9 @@ def contact_points(directrix, q, a, u_start, u_range, *, iters: int = 40, n_samp
     lo, hi = u_range
     q = np.atleast_2d(np.asarray(q, float))
     a = np.atleast_2d(np.asarray(a, float))
-    u, ok = _newton_u(directrix, q, a, np.clip(np.asarray(u_start, float).copy(), lo, hi), lo, hi, iters)
+    u, ok, d = _newton_u(directrix, q, a, np.clip(np.asarray(u_start, float).copy(), lo, hi), lo, hi, iters)
     if not ok.all():
+        d = None
         f = np.nonzero(~ok)[0]
         us = np.linspace(lo, hi, n_samples)
         with np.errstate(invalid="ignore"):
@@ -71,9 +75,10 @@ def contact_points(directrix, q, a, u_start, u_range, *, iters: int = 40, n_samp
         f = f[has]
         if f.size:
             start = us[np.nanargmin(D[has], axis=1)]
-            u[f], ok[f] = _newton_u(directrix, q[f], a[f], start, lo, hi, iters)
+            u[f], ok[f], _ = _newton_u(directrix, q[f], a[f], start, lo, hi, iters)
     with np.errstate(invalid="ignore"):
-        d = directrix(u, 1)
+        if d is None:  # else: the last Newton evaluation, within 1e-13 of the range of u
+            d = directrix(u, 1)
         w = _perp(d[:, 0] - q, a)
         dist = np.linalg.norm(w, axis=1)
         slope = 2 * np.einsum("ij,ij->i", w, d[:, 1])
