@@ -46,8 +46,10 @@ from .flank_milling import (
     NoAdmissibleSetting,
     RuledSurface,
     Setting,
+    compare_with_rule_optima,
     flank,
     flank_path,
+    smooth_minimax_path,
 )
 from .geometry import BSplineCurve, BSplineSurface, builders, local_properties
 from .geometry.face import Face
@@ -117,6 +119,8 @@ __all__ = [
     "stepover",
     "flank",
     "flank_path",
+    "smooth_minimax_path",
+    "compare_with_rule_optima",
     "envelope",
     "verify",
     "simulate",

@@ -250,6 +250,17 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
         help="smallest and largest R keeping the whole surface within TOL mm",
     )
     f.add_argument(
+        "--smooth",
+        dest="smooth",
+        type=float,
+        nargs="?",
+        const=0.0,
+        default=None,
+        metavar="DEG_PER_MM",
+        help="beyond the paper: a minimax path over the whole surface whose axis turns at most DEG_PER_MM per mm "
+        "(default 1.5x the rules' own turn), compared with the rule-by-rule optima",
+    )
+    f.add_argument(
         "--chunks", type=int, default=1, help="--whole: split the rules into N spans (over the cluster in a batch)"
     )
     f.add_argument("--no-render", dest="render", action="store_false", help="numbers and files, no pictures")

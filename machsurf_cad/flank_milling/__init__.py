@@ -15,6 +15,7 @@ from .settings import (
     standard_setting,
     tool_setting,
 )
+from .smooth import axis_turn_rates, compare_with_rule_optima, smooth_minimax_path
 
 __all__ = [
     "RuledSurface",
@@ -38,4 +39,7 @@ __all__ = [
     "envelope_deviation",
     "radius_range",
     "mean_normal",
+    "smooth_minimax_path",
+    "compare_with_rule_optima",
+    "axis_turn_rates",
 ]

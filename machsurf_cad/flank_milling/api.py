@@ -66,6 +66,8 @@ class FlankResult(Result):
     time_s: dict | None = None
     profiles: dict | None = None
     segment_envelopes: tuple = ()
+    smooth: dict | None = None
+    """The smooth minimax path beside the rule-by-rule optima (``smooth``), see ``compare_with_rule_optima``."""
     """Per continuous segment of the path: ``(segment, fit, deviation)``, or ``(segment, None, deviation,
     reason)`` where it has no envelope (fewer than 4 rules, or a folding motion whose envelope fit missed
     the tolerance): its deviation is then measured on the tool positions (None below 2 rules)."""
@@ -105,6 +107,8 @@ class FlankResult(Result):
             rep["study"] = self.study
         if self.radius_range is not None:
             rep["radius_range"] = self.radius_range
+        if self.smooth is not None:
+            rep["smooth_minimax_vs_rule_optima"] = self.smooth
         return rep
 
 
@@ -133,6 +137,7 @@ def flank(
     envelope_tolerance: float = 1e-3,
     study: bool = False,
     radius_range: float | None = None,
+    smooth: float | None = None,
     ruled_tolerance: float = 1e-6,
     clearance: float = 5.0,
     progress: Progress | None = None,
@@ -160,6 +165,10 @@ def flank(
         Also the paper's parameter study (figs 9 and 10, hyperbolic paraboloid).
     radius_range : float, optional
         Also the smallest and largest tool radius keeping the whole surface within this many mm.
+    smooth : float, optional
+        Also (beyond the paper) the minimax path over the whole surface whose axis turns at most this
+        many deg per mm between rules (0: 1.5 times the rules' own turn), compared with the
+        rule-by-rule optima (:func:`~machsurf_cad.flank_milling.smooth.compare_with_rule_optima`).
     clearance : float
         Approach and retract distance along the axis of the tool path, mm.
     progress : Progress, optional
@@ -257,10 +266,17 @@ def flank(
         t1 = time.perf_counter()
         rr = _radius_range(surf, radius_range, kind=setting, side=side)
         times["radius_range_s"] = time.perf_counter() - t1
+    sm = None
+    if smooth is not None:
+        from .smooth import compare_with_rule_optima
+
+        t1 = time.perf_counter()
+        sm = compare_with_rule_optima(surf, R, side=side, n_rules=21, max_turn_deg_per_mm=smooth or None)
+        times["smooth_s"] = time.perf_counter() - t1
     times["total_s"] = time.perf_counter() - t0
     return FlankResult(
         surf, cutter, float(rule), float(u_p), st, e, comparison, path, tp, env, dev, data, rr, times, profiles,
-        segment_envelopes,
+        segment_envelopes, sm,
     )  # fmt: skip
 
 

@@ -43,6 +43,8 @@ class FlankPath(Result):
     worst: dict
     step_tolerance: float
     discontinuities: tuple = ()
+    smoothness: dict | None = None
+    """For a smooth minimax path: the axis turn bound and the turn rate reached (deg/mm)."""
 
     @property
     def fallback_u(self) -> np.ndarray:
@@ -130,6 +132,7 @@ class FlankPath(Result):
             "discontinuities": list(self.discontinuities),
             "n_segments": len(self.segment_slices()),
             "segments_u": [[float(self.u[sl.start]), float(self.u[sl.stop - 1])] for sl in self.segment_slices()],
+            "smoothness": self.smoothness,
             "n_fallback_rules": int(self.fallback_u.size),
             "fallback_u_range": (
                 [float(self.fallback_u.min()), float(self.fallback_u.max())] if self.fallback_u.size else None

@@ -58,6 +58,7 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
         envelope_tolerance=spec.envelope_tol,
         study=spec.study,
         radius_range=spec.radius_range,
+        smooth=spec.smooth,
         clearance=spec.clearance,
         progress=progress,
         chunks=int(spec.chunks),
@@ -189,6 +190,15 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
                     title="hyperbolic paraboloid, h_p = 80 mm (fig. 10)",
                 )
             say(f"parameter study: smallest ratio standard/optimum {data['min_ratio']:.3g}")
+        if res.smooth is not None:
+            sm, ro = res.smooth["smooth_minimax"], res.smooth["rule_optima"]
+            say(
+                f"smooth minimax over {res.smooth['n_rules']} rules: max |error| {sm['max_abs_mm']:.4g} mm, axis "
+                f"turn at most {sm['max_turn_reached_deg_per_mm']:.4g} deg/mm "
+                f"(bound {sm['max_turn_bound_deg_per_mm']:.4g}, "
+                f"{'met' if sm['bound_met'] else 'NOT met'}); rule-by-rule optima: {ro['max_abs_mm']:.4g} mm, "
+                f"{ro['max_turn_deg_per_mm']:.4g} deg/mm"
+            )
         if res.radius_range is not None:
             rr = res.radius_range
             say(

@@ -212,6 +212,8 @@ class FlankJob(_Post, JobSpec):
     envelope_tol: float = 1e-3
     study: bool = False
     radius_range: float | None = None
+    smooth: float | None = None
+    """Smooth minimax path compared with the rule optima: axis turn bound in deg/mm (0: the default bound)."""
     chunks: int = 1
     render: bool = True
     gouge_tol: float | None = None
@@ -228,6 +230,8 @@ class FlankJob(_Post, JobSpec):
         _positive("tol (mm)", self.tol)
         _positive("envelope_tol (mm)", self.envelope_tol)
         _positive("radius_range (mm)", self.radius_range, allow_none=True)
+        if self.smooth is not None and not (isinstance(self.smooth, (int, float)) and self.smooth >= 0):
+            raise InputError(f"smooth must be an axis turn bound >= 0 deg/mm (0: the default), got {self.smooth!r}")
         _positive("fit_ruled (mm)", self.fit_ruled, allow_none=True)
         if int(self.chunks) < 1:
             raise InputError(f"chunks must be >= 1, got {self.chunks}")

@@ -1,0 +1,171 @@
+"""Beyond the paper: a minimax flank path over the whole surface with a smooth axis motion (mm, degrees).
+
+Rule-by-rule settings (the optimum, or the minimax of one rule) are each best on their own rule, but
+nothing bounds how fast the tool axis turns from one rule to the next: a machine's rotary axes
+then jerk, and between two rules the interpolated tool leaves the surface. Here the rules are
+visited in order and each setting minimises the largest absolute error along its rule (over ``h0``,
+``gamma``, ``phi``) subject to the axis turning by at most ``max_turn_deg_per_mm`` per mm of
+travel of the rule's middle from the previous rule (a penalty in the Nelder-Mead cost, the
+constraint checked afterwards). :func:`compare_with_rule_optima` puts it beside the rule-by-rule
+optimum path: largest error and largest turn rate of each.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from .path import FlankPath
+from .ruled import RuledSurface
+from .settings import NoAdmissibleSetting, Setting, axis_of, interference, rule_frame, tool_setting
+
+
+def _turn_deg(a, b) -> float:
+    return math.degrees(math.acos(float(np.clip(a @ b, -1.0, 1.0))))
+
+
+def axis_turn_rates(path: FlankPath) -> np.ndarray:
+    """Angle between consecutive tool axes per mm of travel of the rules' middles (deg/mm)."""
+    mids = np.array([0.5 * (s.frame.p0 + s.frame.p1) for s in path.settings])
+    travel = np.linalg.norm(np.diff(mids, axis=0), axis=1)
+    turns = np.array([_turn_deg(a, b) for a, b in zip(path.axis[:-1], path.axis[1:])])
+    return turns / np.maximum(travel, 1e-12)
+
+
+def smooth_minimax_path(
+    surface: RuledSurface,
+    R: float,
+    *,
+    side: int = 1,
+    n_rules: int = 41,
+    max_turn_deg_per_mm: float | None = None,
+    n_v: int = 41,
+    overhang: float = 1.0,
+) -> FlankPath:
+    """Minimax settings on ``n_rules`` uniform rules with the axis turn between rules bounded.
+
+    Parameters
+    ----------
+    surface : RuledSurface
+        The ruled surface.
+    R : float
+        Cylinder radius, mm.
+    side : {1, -1}
+        Tool side.
+    n_rules : int
+        Uniform rules along u (at least 4).
+    max_turn_deg_per_mm : float, optional
+        Largest angle between consecutive axes per mm of travel (deg/mm). Default: 1.5 times the
+        largest turn rate of the rules themselves (the surface's own twist), which any path
+        following the surface needs.
+    n_v : int
+        Samples along each rule in the minimax cost (the reported errors use 101).
+    overhang : float
+        Tool length beyond each directrix, mm.
+
+    Returns
+    -------
+    FlankPath
+        Kind ``minimax-smooth``; its report says the bound and the largest turn rate reached.
+    """
+    if n_rules < 4:
+        raise InputError("a smooth path needs at least 4 rules")
+    if max_turn_deg_per_mm is not None and not max_turn_deg_per_mm > 0:
+        raise InputError("max_turn_deg_per_mm must be > 0 deg/mm")
+    from scipy.optimize import minimize
+
+    lo, hi = surface.u_range
+    eps = 1e-6 * (hi - lo)
+    us = np.linspace(lo + eps, hi - eps, n_rules)
+    frames = [rule_frame(surface, float(u), side) for u in us]
+    mids = np.array([0.5 * (f.p0 + f.p1) for f in frames])
+    travel = np.linalg.norm(np.diff(mids, axis=0), axis=1)
+    own = np.array([_turn_deg(a.z1, b.z1) for a, b in zip(frames[:-1], frames[1:])]) / np.maximum(travel, 1e-12)
+    bound = float(max_turn_deg_per_mm) if max_turn_deg_per_mm is not None else 1.5 * float(own.max())
+
+    def make(fr, x, kind="minimax-smooth"):
+        q, a = axis_of(fr, R, x[0] * fr.h_p, x[1], x[2])
+        return Setting(kind, fr, float(R), q, a, float(x[0] * fr.h_p), math.degrees(x[1]), math.degrees(x[2]),
+                       {"M2": fr.p0 + x[0] * fr.h_p * fr.z1})  # fmt: skip
+
+    sets: list[Setting] = []
+    prev_a = None
+    for i, fr in enumerate(frames):
+        try:  # start from the rule's optimum when it exists (continuing the previous one), else the standard
+            st0 = tool_setting(surface, float(us[i]), R, "optimum", side=side)
+        except NoAdmissibleSetting:
+            st0 = tool_setting(surface, float(us[i]), R, "standard-distributed", side=side)
+        x0 = np.array([st0.h0 / fr.h_p, math.radians(st0.gamma_deg), math.radians(st0.phi_deg)])
+        if sets:
+            prev = sets[-1]
+            x_prev = np.array([prev.h0 / fr.h_p, math.radians(prev.gamma_deg), math.radians(prev.phi_deg)])
+            limit = bound * travel[i - 1]
+
+            def cost(x, fr=fr, limit=limit, prev_a=prev_a):
+                st = make(fr, x)
+                over = max(0.0, _turn_deg(st.a, prev_a) - limit)
+                return interference(surface, st, n_v=n_v).max_abs + 10.0 * R * math.radians(over)
+
+            starts = [x0, x_prev]
+        else:
+
+            def cost(x, fr=fr):
+                return interference(surface, make(fr, x), n_v=n_v).max_abs
+
+            starts = [x0]
+        best: Any = None
+        for s0 in starts:
+            simplex = np.vstack([s0] + [s0 + np.eye(3)[k] * (0.02, 0.005, 0.005)[k] for k in range(3)])
+            opts = {"xatol": 1e-8, "fatol": 1e-8, "maxiter": 1500, "initial_simplex": simplex}
+            res = minimize(cost, s0, method="Nelder-Mead", options=opts)
+            if best is None or res.fun < best.fun:
+                best = res
+        st = make(fr, best.x)
+        sets.append(st)
+        prev_a = st.a
+    errs = [interference(surface, st, n_v=101) for st in sets]
+    k = int(np.argmax([e.max_abs for e in errs]))
+    tips, axes, lengths = zip(*(s.placement(overhang) for s in sets))
+    path = FlankPath(
+        surface, float(R), "minimax-smooth", side, tuple(sets), us, np.array(tips), np.array(axes),
+        float(max(lengths)), max(e.max_gouge for e in errs), max(e.max_undercut for e in errs),
+        {**errs[k].worst(), "rule_u": sets[k].frame.u_p}, float("nan"),
+    )  # fmt: skip
+    rates = axis_turn_rates(path)
+    return _with_turn_info(path, bound, float(rates.max()), float(own.max()))
+
+
+def _with_turn_info(path: FlankPath, bound: float, reached: float, own: float) -> FlankPath:
+    import dataclasses
+
+    jumps = () if reached <= bound * (1 + 1e-6) else ({"max_turn_deg_per_mm": reached, "bound": bound},)
+    return dataclasses.replace(path, discontinuities=(), smoothness={
+        "max_turn_bound_deg_per_mm": bound, "max_turn_reached_deg_per_mm": reached,
+        "rules_own_max_turn_deg_per_mm": own, "bound_met": not jumps,
+    })  # fmt: skip
+
+
+def compare_with_rule_optima(surface: RuledSurface, R: float, *, side: int = 1, n_rules: int = 41, **kw) -> dict:
+    """The smooth minimax path beside the rule-by-rule optimum path on the same rules: largest gouge,
+    undercut and absolute error (mm), and largest axis turn rate (deg/mm) of each."""
+    from .path import flank_path
+
+    smooth = smooth_minimax_path(surface, R, side=side, n_rules=n_rules, **kw)
+    opt = flank_path(surface, R, "optimum", side=side, n_rules=n_rules)
+
+    def row(p):
+        return {
+            "max_gouge_mm": p.max_gouge,
+            "max_undercut_mm": p.max_undercut,
+            "max_abs_mm": max(p.max_gouge, p.max_undercut),
+            "max_turn_deg_per_mm": float(axis_turn_rates(p).max()),
+        }
+
+    return {
+        "smooth_minimax": {**row(smooth), **(smooth.smoothness or {})},
+        "rule_optima": row(opt),
+        "n_rules": n_rules,
+    }
