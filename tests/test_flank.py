@@ -417,3 +417,20 @@ def test_smooth_bound_below_zero_is_a_one_line_error(tmp_path):
     assert r.stderr.strip().splitlines() == [
         "machsurf: error: smooth must be an axis turn bound >= 0 deg/mm (0: the default), got -1.0"
     ]
+
+
+def test_eq18_at_r40_on_both_sides():
+    """Eq. (18), u = 0.4, R = 40 mm, both sides (the rule is twisted by 2 x 64.7 deg): Rubio's equal-error
+    standard setting 23.5121 mm (side +1) and 20.5387 mm (side -1), the tangent one 11.4839 / 39.8790 mm;
+    the optimum exists only on side -1 (17.1227 mm) and its absence on side +1 names the limit."""
+    from machsurf_cad.flank_milling import tool_setting
+
+    s = examples.eq18_ruled()
+    for side, dist, tang in ((1, 23.5121, 11.4839), (-1, 20.5387, 39.8790)):
+        st = tool_setting(s, 0.4, 40.0, "standard-distributed", side=side)
+        e0, e1 = st.contacts["end_errors_mm"]
+        assert abs(e0 - e1) < 1e-9 and abs(interference(s, st).max_abs - dist) < 1e-4
+        assert abs(interference(s, tool_setting(s, 0.4, 40.0, "standard-tangent", side=side)).max_abs - tang) < 1e-4
+    assert abs(interference(s, tool_setting(s, 0.4, 40.0, "optimum", side=-1)).max_abs - 17.1227) < 1e-4
+    with pytest.raises(NoAdmissibleSetting, match=r"side \+1 at u = 0.4.*up to R = h_p / \(2 sin alpha0\)"):
+        tool_setting(s, 0.4, 40.0, "optimum", side=1)
