@@ -245,6 +245,8 @@ def optimum_setting(
 
     starts = [(0.5, -0.05), (0.5, 0.05), (0.25, 0.1), (0.75, -0.1), (0.25, -0.1), (0.75, 0.1), (0.5, 0.3), (0.5, -0.3)]
     # gamma = 0 (the standard setting) makes the Jacobian singular: the starts are off it
+    # (a 4 x 8 grid of starts out to |gamma| = 65 deg found no better setting on 176 rules of the paper's
+    # surfaces, only repeats on degenerate rules: these 12 are kept for the time)
     wide = [(h, g) for h in (0.25, 0.6) for g in np.radians([-45, -25, -12, 12, 25, 45])]
 
     def admissible(sols: tangency.Solutions) -> list[tuple]:
