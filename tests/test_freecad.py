@@ -73,10 +73,17 @@ def test_features_recompute_headless(tmp_path):
     of = r["other_features"]
     assert of["reff_valid"] and 2.0 <= of["reff_mean"]
     assert of["env_valid"] and of["env_faces"] == 2 and of["env_gap"] < 1e-3
+    q = r["quantities"]  # lengths and angles are quantities: units shown, micrometres kept
+    assert q["half_micron"] == 0.0005 and q["tol_text"].endswith("m") and q["lead_text"].startswith("10")
+    assert q["types"] == ["App::PropertyLength", "App::PropertyAngle", "App::PropertyLength", "App::PropertyAngle"]
+    assert q["migrated"] == ["App::PropertyLength", 0.002, "App::PropertyAngle", 7.5]
+    it = r["invalid_tool"]  # nothing of the previous recompute survives an error
+    assert it["shape_null"] and it["max_s1"] == 0.0 and it["report"] == "" and it["poles"] == ""
+    assert it["status"].startswith("error: ") and "\n" not in it["status"]
     bad = r["bad_input"]
-    assert not bad["edge_valid"] and "not a face" in bad["edge_status"]
+    assert bad["edge_shape_null"] and bad["edge_status"].startswith("error: ") and "not a face" in bad["edge_status"]
     assert bad["planar_valid"] and bad["planar_faces"] == 2  # a plane is converted to NURBS and machined
-    assert not bad["tight_valid"] and "did not reach" in bad["tight_status"]
+    assert bad["tight_shape_null"] and "did not reach" in bad["tight_status"]
     ro = r["reopen"]
     assert ro["valid"] and ro["proxy"] == "MachiningSurfaceFeature" and ro["n_faces"] == 2
     assert ro["max_s1"] == pytest.approx(rc["max_s1"], rel=1e-9)
@@ -84,7 +91,7 @@ def test_features_recompute_headless(tmp_path):
     assert ro["loops"] == "error" and ro["loops_enum"] == ["error", "flag", "trim"]
     assert ro["proxy_module"] == "freecad.machsurf.app.features"
     ds = r["deleted_source"]
-    assert not ds["valid"] and "deleted" in ds["status"] and ds["n_objects"] >= 5
+    assert ds["shape_null"] and ds["max_s1"] == 0.0 and "deleted" in ds["status"] and ds["n_objects"] >= 5
 
 
 def test_faces_with_holes_convert_exactly(tmp_path):
@@ -106,6 +113,47 @@ def test_faces_with_holes_convert_exactly(tmp_path):
     assert r["feature"]["valid"] and r["feature"]["wires"] == [2]
 
 
+def test_cam_operation_in_a_path_job(tmp_path):
+    """A CamOperation on the block's free-form top: added to a Path Job created for the part, its tool from
+    the Job's ToolController (the default 5 mm end mill), clean against every face of the block; one G1
+    per non-rapid position, equal to the CSV machsurf writes for the same path within 1e-6 mm; the
+    bull-nose ToolBit's FlatRadius mapped to the corner radius; a Job without tools: one line, no path."""
+    r = _run([FREECADCMD], tmp_path, "camop_check.py")
+    op, c, m = r["op"], r["csv"], r["mapping"]
+    assert op["status"] == "ok" and op["in_job"] and op["verdict"].startswith("clean")
+    assert op["tool"] == "flat:D=5" and op["tc_diameter"] == 5.0 and 0 <= op["max_gouge"] <= 0.01
+    assert op["n_g1"] == c["rows"] > 500 and op["cut_points"] >= c["cut_rows"] > 500 and op["n_g0"] >= 2
+    assert c["max_dev"] is not None and c["max_dev"] < 1e-6
+    assert m["bull"] == "bull:D=10,r=2,L=20" and m["ball"] == "ball:D=6" and "not supported" in m["chamfer"]
+    nt = r["no_tool"]
+    assert nt["status"].startswith("error: no tool") and nt["n_commands"] == 0 and nt["cut_points"] == 0
+
+
+def test_an_addon_manager_clone_loads_and_recomputes(tmp_path):
+    """The repository cloned into the Mod folder (as the Addon Manager does, no link to workbench/): the
+    root package.xml points FreeCAD to the workbench, which finds the core beside it; a feature recomputes."""
+    files = subprocess.run(
+        ["git", "ls-files", "--cached", "--others", "--exclude-standard"], cwd=ROOT, capture_output=True, text=True
+    ).stdout.split()
+    assert "package.xml" in files and "LICENSE" in files
+    home = tmp_path / "home"
+    clone = home / ".local" / "share" / "FreeCAD" / "Mod" / "machsurf_cad"
+    for f in files:
+        if (ROOT / f).is_file():
+            (clone / f).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / f, clone / f)
+    out = tmp_path / "result.json"
+    env = dict(os.environ, HOME=str(home), MACHSURF_FC_OUT=str(out), MACHSURF_ROOT=str(ROOT))
+    env.pop("PYTHONPATH", None)
+    assert FREECADCMD is not None, "CI installs freecad"
+    subprocess.run([FREECADCMD, str(ROOT / "tests" / "freecad" / "addon_check.py")], cwd=tmp_path, env=env,
+                   timeout=600, stdin=subprocess.DEVNULL, capture_output=True)  # fmt: skip
+    r = json.loads(out.read_text())
+    assert r["ok"], r.get("error")
+    assert r["features_file"].startswith(str(clone)) and r["core_file"].startswith(str(clone))
+    assert r["status"] == "ok" and r["faces"] == 2 and 0 < r["max_s1"] <= 1e-3
+
+
 @pytest.mark.skipif((FREECAD is None or XVFB is None) and not IN_CI, reason="FreeCAD GUI or xvfb-run is not installed")
 def test_gui_command_on_a_selected_face(tmp_path):
     r = _run([XVFB, "-a", "-s", "-screen 0 1600x1200x24", FREECAD], tmp_path, "gui_check.py")
@@ -115,6 +163,7 @@ def test_gui_command_on_a_selected_face(tmp_path):
     assert r["colours"][0][0] == pytest.approx(r["max_s1"] / 1e-3, abs=1e-6)
     assert all(0 <= c[0] <= 1 and abs(c[0] + c[2] - 1) < 1e-6 for c in r["colours"])
     assert r["step_bytes"] > 10000 and r["step_names"] == ["S1_guiding", "S2_orientation"]
+    assert r["panel"]["untouched"] == 0.001 and r["panel"]["typed"] == 0.0005 and r["panel"]["status"] == "ok"
     import numpy as np
     from PIL import Image
 

@@ -51,6 +51,11 @@ def test_one_version():
 
     import machsurf_cad
 
-    xml = (ROOT / "workbench" / "package.xml").read_text()
-    assert re.search(r"<version>([^<]+)</version>", xml).group(1) == machsurf_cad.__version__
+    for xml in ((ROOT / "workbench" / "package.xml").read_text(), (ROOT / "package.xml").read_text()):
+        assert re.search(r"<version>([^<]+)</version>", xml).group(1) == machsurf_cad.__version__
+        icon = re.search(r"<icon>([^<]+)</icon>", xml).group(1)
+        assert "example.invalid" not in xml and icon.endswith("machsurf.svg")
+    assert (ROOT / "LICENSE").is_file() and (
+        ROOT / "workbench" / "freecad" / "machsurf" / "resources" / "machsurf.svg"
+    ).is_file()
     assert 'dynamic = ["version"]' in (ROOT / "pyproject.toml").read_text()

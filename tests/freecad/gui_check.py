@@ -28,7 +28,7 @@ try:
         {
             "valid": ms.isValid(),
             "status": ms.Status,
-            "max_s1": ms.MaxErrorS1,
+            "max_s1": ms.MaxErrorS1.Value,
             "faces": len(ms.Shape.Faces),
             "colours": [list(c) for c in ms.ViewObject.DiffuseColor],
         }
@@ -48,6 +48,18 @@ try:
     result["step_bytes"] = os.path.getsize(step)
     text = open(step, errors="replace").read()
     result["step_names"] = [n for n in ("S1_guiding", "S2_orientation") if n in text]
+    # the task panel: OK without edits writes nothing (0.001 mm stays 0.001 mm); a typed quantity keeps its digits
+    from freecad.machsurf.gui.panels import FeaturePanel
+
+    ms.Tolerance = 0.001
+    doc.recompute()
+    panel = FeaturePanel(ms)
+    panel.accept()
+    untouched = ms.Tolerance.Value
+    panel = FeaturePanel(ms)
+    panel.fields["Tolerance"].setText("0.5 um")
+    panel.accept()
+    result["panel"] = {"untouched": untouched, "typed": ms.Tolerance.Value, "status": ms.Status}
     result["ok"] = True
 except Exception:
     result["error"] = traceback.format_exc()

@@ -44,8 +44,8 @@ try:
         "recompute",
         valid=ms.isValid(),
         status=ms.Status,
-        max_s1=ms.MaxErrorS1,
-        max_s2=ms.MaxErrorS2,
+        max_s1=ms.MaxErrorS1.Value,
+        max_s2=ms.MaxErrorS2.Value,
         poles=ms.PolesS1,
         n_faces=len(ms.Shape.Faces),
     )
@@ -65,7 +65,51 @@ try:
     # change the tool and recompute
     ms.Tool = "ball:D=10"
     doc.recompute()
-    step("change_tool", valid=ms.isValid(), max_s1=ms.MaxErrorS1, report_tool=json.loads(ms.Report)["tool"]["spec"])
+    step(
+        "change_tool",
+        valid=ms.isValid(),
+        max_s1=ms.MaxErrorS1.Value,
+        report_tool=json.loads(ms.Report)["tool"]["spec"],
+    )
+    # quantities: units shown, every digit kept (0.5 um typed stays 0.0005 mm), floats of old documents migrated
+    q = features.make("MachiningSurface", doc, (part, [fname]), Tool="ball:D=10")
+    q.Tolerance = "0.5 um"
+    tol_value = q.Tolerance.Value
+    q.Tolerance = 0.001
+    old = doc.addObject("Part::FeaturePython", "OldFloats")
+    old.addProperty("App::PropertyFloat", "Tolerance", "Approximation", "as saved by 0.2")
+    old.addProperty("App::PropertyFloat", "Lead", "Strategy", "as saved by 0.2")
+    old.Tolerance, old.Lead = 0.002, 7.5
+    features.MachiningSurfaceFeature(old)
+    old.Proxy.onDocumentRestored(old)
+    step(
+        "quantities",
+        half_micron=tol_value,
+        types=[q.getTypeIdOfProperty(n) for n in ("Tolerance", "Lead", "MaxErrorS1", "AlphaMax")],
+        tol_text=q.Tolerance.UserString,
+        lead_text=q.Lead.UserString,
+        migrated=[
+            old.getTypeIdOfProperty("Tolerance"),
+            old.Tolerance.Value,
+            old.getTypeIdOfProperty("Lead"),
+            old.Lead.Value,
+        ],
+    )
+    doc.removeObject(q.Name)
+    doc.removeObject(old.Name)
+    # an invalid tool after a good recompute: the shape and every result emptied, one line, no stale number
+    ms.Tool = "bull:D=-1,r=2"
+    doc.recompute()
+    step(
+        "invalid_tool",
+        shape_null=ms.Shape.isNull(),
+        max_s1=ms.MaxErrorS1.Value,
+        report=ms.Report,
+        poles=ms.PolesS1,
+        status=ms.Status,
+    )
+    ms.Tool = "ball:D=10"
+    doc.recompute()
     # the other features
     flat_face = max(
         (i for i, f in enumerate(shape.Faces) if isinstance(f.Surface, Part.Plane)), key=lambda i: shape.Faces[i].Area
@@ -76,10 +120,10 @@ try:
     step(
         "other_features",
         reff_valid=er.isValid(),
-        reff_mean=er.ReffMean,
+        reff_mean=er.ReffMean.Value,
         env_valid=env.isValid(),
         env_status=env.Status,
-        env_gap=env.MaxSeamGap,
+        env_gap=env.MaxSeamGap.Value,
         env_faces=len(env.Shape.Faces),
     )
     # bad input: an edge, a planar face (converted), an unreachable tolerance, a deleted source
@@ -92,11 +136,13 @@ try:
     step(
         "bad_input",
         edge_valid=bad_edge.isValid(),
+        edge_shape_null=bad_edge.Shape.isNull(),
         edge_status=bad_edge.Status,
         planar_valid=planar.isValid(),
         planar_status=planar.Status,
         planar_faces=len(planar.Shape.Faces),
         tight_valid=tight.isValid(),
+        tight_shape_null=tight.Shape.isNull(),
         tight_status=tight.Status,
     )
     # save, reopen, recompute
@@ -112,7 +158,7 @@ try:
     step(
         "reopen",
         valid=ms2.isValid(),
-        max_s1=ms2.MaxErrorS1,
+        max_s1=ms2.MaxErrorS1.Value,
         n_faces=len(ms2.Shape.Faces),
         proxy=type(ms2.Proxy).__name__,
         proxy_module=type(ms2.Proxy).__module__,
@@ -122,7 +168,14 @@ try:
     # delete the source and recompute: a message and an invalid feature, nothing else broken
     doc2.removeObject("Block")
     doc2.recompute()
-    step("deleted_source", valid=ms2.isValid(), status=ms2.Status, n_objects=len(doc2.Objects))
+    step(
+        "deleted_source",
+        valid=ms2.isValid(),
+        shape_null=ms2.Shape.isNull(),
+        max_s1=ms2.MaxErrorS1.Value,
+        status=ms2.Status,
+        n_objects=len(doc2.Objects),
+    )
     result["ok"] = True
 except Exception:
     result["error"] = traceback.format_exc()

@@ -10,6 +10,14 @@ from machsurf_cad.geometry.face import Face
 
 
 def _surface_arrays(bs, name=""):
+    if bs.isUPeriodic() or bs.isVPeriodic():
+        # OCCT's periodic knot vectors (the poles wrap) read as arrays describe another surface (a converted
+        # cylinder was off by 2.6 mm): the same surface as a clamped B-spline, same parametrisation
+        bs = bs.copy()
+        if bs.isUPeriodic():
+            bs.setUNotPeriodic()
+        if bs.isVPeriodic():
+            bs.setVNotPeriodic()
     poles = np.array([[[p.x, p.y, p.z] for p in row] for row in bs.getPoles()])
     w = np.array(bs.getWeights(), dtype=float)
     rational = bool(bs.isURational() or bs.isVRational())
@@ -26,6 +34,36 @@ def _surface_arrays(bs, name=""):
         bool(bs.isVPeriodic()),
         name,
     )
+
+
+def _connect(loop, bounds):
+    """A seam edge (a closed surface's boundary, used twice in the wire) gives the same 2-D curve both times,
+    on one side of the parameter range: each curve of the loop that does not start where the previous one
+    ends is moved by the period (u1 - u0 or v1 - v0) when that joins them."""
+    u0, u1, v0, v1 = bounds
+    tol = 1e-6 * max(1.0, abs(u1 - u0), abs(v1 - v0))
+    out = list(loop)
+    for k in range(len(out)):
+        prev_end = out[k - 1].evaluate(np.array([out[k - 1].bounds[1]]))[0] if k else None
+        if prev_end is None:
+            continue
+        c = out[k]
+        start = c.evaluate(np.array([c.bounds[0]]))[0]
+        if np.linalg.norm(start - prev_end) <= tol:
+            continue
+        for shift in ((u1 - u0, 0.0), (u0 - u1, 0.0), (0.0, v1 - v0), (0.0, v0 - v1)):
+            if np.linalg.norm(start + shift - prev_end) <= tol:
+                out[k] = BSplineCurve(c.degree, c.knots, c.mults, c.poles + np.array(shift), c.weights)
+                break
+    return out
+
+
+def _on_side(c, bounds, tol=1e-9):
+    """Whether a 2-D trimming curve lies on one side of the parameter rectangle (its poles do)."""
+    u0, u1, v0, v1 = bounds
+    pu, pv = c.poles[:, 0], c.poles[:, 1]
+    scale = tol * max(1.0, abs(u1 - u0), abs(v1 - v0))
+    return any(np.all(np.abs(x - t) <= scale) for x, t in ((pu, u0), (pu, u1), (pv, v0), (pv, v1)))
 
 
 def face_to_numpy(face, name="F"):
@@ -64,9 +102,16 @@ def face_to_numpy(face, name="F"):
                     None if c.weights is None else c.weights[::-1],
                 )
             loop.append(c)
-        loops.append(loop)
+        loops.append(_connect(loop, (u0, u1, v0, v1)))
     sb = surf.bounds
-    natural = len(loops) == 1 and all(abs(a - b) < 1e-9 for a, b in zip((u0, u1, v0, v1), sb)) and len(loops[0]) == 4
+    # untrimmed only when the one loop runs along the four sides of the parameter rectangle (a 4-edge loop
+    # with a curved side, e.g. a cylinder cut by a free-form top, is a trimmed face)
+    natural = (
+        len(loops) == 1
+        and all(abs(a - b) < 1e-9 for a, b in zip((u0, u1, v0, v1), sb))
+        and len(loops[0]) == 4
+        and all(_on_side(c, (u0, u1, v0, v1)) for c in loops[0])
+    )
     return Face(
         surf,
         () if natural else tuple(tuple(lp) for lp in loops),

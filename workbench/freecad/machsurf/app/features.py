@@ -3,8 +3,11 @@
 Each feature is a ``Part::FeaturePython`` whose properties mirror the machsurf_cad Python API
 (lengths in mm, angles in degrees). ``execute`` calls machsurf_cad and turns the returned B-spline
 arrays into Part faces; the measured errors and reports of the last recompute are read-only
-properties. On bad input the message goes to the report view and into ``Status``, and the feature
-is marked invalid; the document is left as it was.
+properties. Lengths are ``App::PropertyLength``/``PropertyDistance`` and angles ``App::PropertyAngle``
+(they show their units and keep every digit: 0.5 um typed stays 0.0005 mm). On bad input the
+message goes to the report view as one line (no traceback) and into ``Status``; the shape is cleared
+and every result emptied, so nothing of the previous recompute survives; the document is left as it
+was. Documents saved with plain-float properties are migrated on opening (``onDocumentRestored``).
 """
 
 import json
@@ -24,12 +27,31 @@ READ_ONLY = 1
 
 
 def _add(obj, kind, name, group, doc, value=None, read_only=False):
-    if name not in obj.PropertiesList:
+    """Add a property unless it exists; one of another type (a float saved by an older version where
+    a length or angle is now a quantity) is replaced by the new type with the same value."""
+    if name in obj.PropertiesList and obj.getTypeIdOfProperty(name) != kind:
+        old = getattr(obj, name)
+        obj.removeProperty(name)
+        obj.addProperty(kind, name, group, doc)
+        try:
+            setattr(obj, name, value_of(old) if isinstance(old, (int, float)) or hasattr(old, "Value") else old)
+        except Exception:  # a value the new type cannot hold: its default
+            if value is not None:
+                setattr(obj, name, value)
+    elif name not in obj.PropertiesList:
         obj.addProperty(kind, name, group, doc)
         if value is not None:
             setattr(obj, name, value)
     if read_only:
         obj.setEditorMode(name, READ_ONLY)
+
+
+def value_of(q) -> float:
+    """A quantity property's value in mm or degrees (FreeCAD's internal units), or a plain number."""
+    return float(q.Value) if hasattr(q, "Value") else float(q)
+
+
+LENGTH, DISTANCE, ANGLE = "App::PropertyLength", "App::PropertyDistance", "App::PropertyAngle"
 
 
 def source_face(obj):
@@ -82,15 +104,32 @@ class _Base:
         try:
             self.compute(obj)
             obj.Status = "ok"
-        except Exception as exc:  # every failure: a message, an invalid feature, the document unharmed
-            msg = (
-                f"{obj.Label}: {exc}"
-                if isinstance(exc, (MachsurfError, ValueError))
-                else f"{obj.Label}: {type(exc).__name__}: {exc}"
-            )
-            obj.Status = str(exc)
-            FreeCAD.Console.PrintError(msg + "\n")
-            raise RuntimeError(msg) from None  # marks the feature invalid; the document stays as it was
+        except Exception as exc:  # every failure: one line, the shape and results emptied, the document unharmed
+            text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            if not isinstance(exc, (MachsurfError, ValueError)):
+                text = f"{type(exc).__name__}: {text}"
+            self.clear(obj)
+            obj.Status = f"error: {text}"
+            FreeCAD.Console.PrintError(f"{obj.Label}: {text}\n")
+
+    def clear(self, obj):
+        """Empty the shape (or path) and every result property (no stale figure survives a failed recompute)."""
+        if "Shape" in obj.PropertiesList and obj.getTypeIdOfProperty("Shape") == "Part::PropertyPartShape":
+            obj.Shape = Part.Shape()
+        if "Path" in obj.PropertiesList:
+            import Path
+
+            obj.Path = Path.Path()
+        for name in obj.PropertiesList:
+            if obj.getGroupOfProperty(name) != "Result" or name == "Status":
+                continue
+            kind = obj.getTypeIdOfProperty(name)
+            if kind == "App::PropertyString":
+                setattr(obj, name, "")
+            elif kind in ("App::PropertyFloat", LENGTH, DISTANCE, ANGLE):
+                setattr(obj, name, 0.0)
+        if hasattr(self, "map"):
+            del self.map
 
 
 class MachiningSurfaceFeature(_Base):
@@ -100,10 +139,25 @@ class MachiningSurfaceFeature(_Base):
         _add(obj, "App::PropertyLinkSub", "Source", "Nominal", "Face to machine")
         _add(obj, "App::PropertyString", "Tool", "Cutter", "ball:D=.., flat:D=.., bull:D=..,r=.. (mm)", "bull:D=20,r=4")
         _add(obj, "App::PropertyEnumeration", "Axes", "Strategy", "3 or 5 axes", ["5", "3"])
-        _add(obj, "App::PropertyString", "Strategy", "Strategy", "planes:x|y|z|a,b,c or iso:u|v", "planes:x")
-        _add(obj, "App::PropertyFloat", "Lead", "Strategy", "Lead angle Omega_t (deg), leans towards the feed", 10.0)
-        _add(obj, "App::PropertyFloat", "Tilt", "Strategy", "Tilt angle Omega_n (deg), about the normal", 0.0)
-        _add(obj, "App::PropertyFloat", "Tolerance", "Approximation", "Max-norm fit tolerance (mm)", 1e-3)
+        _add(
+            obj,
+            "App::PropertyString",
+            "Strategy",
+            "Strategy",
+            "Tool path directions: planes:x|y|z|a,b,c (parallel planes) or iso:u|v (isoparametric)",
+            "planes:x",
+        )
+        _add(obj, ANGLE, "Lead", "Strategy", "Lead angle: the axis leans towards the feed (the paper's Omega_t)", 10.0)
+        _add(obj, ANGLE, "Tilt", "Strategy", "Tilt angle: the axis turns about the normal (the paper's Omega_n)", 0.0)
+        _add(
+            obj,
+            LENGTH,
+            "Tolerance",
+            "Approximation",
+            "Largest distance between the fitted guiding/orientation surfaces and the exact ones, measured "
+            "on points the fit never saw",
+            1e-3,
+        )
         _add(
             obj,
             "App::PropertyEnumeration",
@@ -116,12 +170,12 @@ class MachiningSurfaceFeature(_Base):
             current = str(obj.Loops)
             obj.Loops = ["error", "flag", "trim"]
             obj.Loops = current
-        for name, doc in (
-            ("MaxErrorS1", "Measured max error of S1 (mm)"),
-            ("MaxErrorS2", "Measured max error of S2 (mm)"),
-            ("AlphaMax", "Axis orientation error bound for the measured errors (deg)"),
+        for name, kind, doc in (
+            ("MaxErrorS1", LENGTH, "Measured largest error of the guiding surface (the paper's S1, tool centres)"),
+            ("MaxErrorS2", LENGTH, "Measured largest error of the orientation surface (the paper's S2)"),
+            ("AlphaMax", ANGLE, "Bound of the tool-axis orientation error for the measured errors"),
         ):
-            _add(obj, "App::PropertyFloat", name, "Result", doc, read_only=True)
+            _add(obj, kind, name, "Result", doc, read_only=True)
         for name, doc in (
             ("PolesS1", "Poles of S1"),
             ("PolesS2", "Poles of S2"),
@@ -140,9 +194,9 @@ class MachiningSurfaceFeature(_Base):
             obj.Tool,
             axes=int(obj.Axes),
             strategy=obj.Strategy,
-            lead=float(obj.Lead),
-            tilt=float(obj.Tilt),
-            tolerance=float(obj.Tolerance),
+            lead=value_of(obj.Lead),
+            tilt=value_of(obj.Tilt),
+            tolerance=value_of(obj.Tolerance),
             loops=str(obj.Loops),
         )
         faces = [face_to_part(x) for x in ms.faces()]
@@ -163,11 +217,23 @@ class EffectiveRadiusFeature(_Base):
     def properties(self, obj):
         _add(obj, "App::PropertyLinkSub", "Source", "Nominal", "Face to analyse")
         _add(obj, "App::PropertyString", "Tool", "Cutter", "bull:D=..,r=.. (mm)", "bull:D=10,r=2")
-        _add(obj, "App::PropertyFloat", "Direction", "Strategy", "Machining direction theta (deg from X)", 0.0)
-        _add(obj, "App::PropertyInteger", "Grid", "Strategy", "Samples per parameter direction", 64)
-        _add(obj, "App::PropertyFloat", "Scallop", "Strategy", "Scallop height (mm), 0 for none", 0.0)
-        for name in ("ReffMin", "ReffMean", "ReffMax", "TorusBeatsBall"):
-            _add(obj, "App::PropertyFloat", name, "Result", name + " (mm, or area fraction)", read_only=True)
+        _add(obj, ANGLE, "Direction", "Strategy", "Machining direction, from the X axis", 0.0)
+        _add(
+            obj,
+            "App::PropertyIntegerConstraint",
+            "Grid",
+            "Strategy",
+            "Samples per parameter direction (8 to 1024; 1024 needs about 1.5 GB)",
+            (64, 8, 1024, 8),
+        )
+        _add(obj, LENGTH, "Scallop", "Strategy", "Scallop height for the step-over; 0 for none", 0.0)
+        for name, kind, doc in (
+            ("ReffMin", LENGTH, "Smallest effective cutter radius over the face"),
+            ("ReffMean", LENGTH, "Mean effective cutter radius over the face"),
+            ("ReffMax", LENGTH, "Largest effective cutter radius over the face"),
+            ("TorusBeatsBall", "App::PropertyFloat", "Area fraction where the torus's R_eff beats the ball's"),
+        ):
+            _add(obj, kind, name, "Result", doc, read_only=True)
         for name in ("Status", "Report"):
             _add(obj, "App::PropertyString", name, "Result", name, read_only=True)
 
@@ -177,7 +243,11 @@ class EffectiveRadiusFeature(_Base):
         fc = source_face(obj)
         f = face_to_numpy(fc, "F")
         m = reff_maps(
-            f, obj.Tool, directions=[float(obj.Direction)], grid=int(obj.Grid), scallop=float(obj.Scallop) or None
+            f,
+            obj.Tool,
+            directions=[value_of(obj.Direction)],
+            grid=int(obj.Grid),
+            scallop=value_of(obj.Scallop) or None,
         )
         d = m.report()["directions"][0]
         obj.ReffMin, obj.ReffMean, obj.ReffMax = d["r_eff_min_mm"], d["r_eff_mean_mm"], d["r_eff_max_mm"]
@@ -193,8 +263,15 @@ class FlankSettingFeature(_Base):
 
     def properties(self, obj):
         _add(obj, "App::PropertyLinkSub", "Source", "Nominal", "Ruled face")
-        _add(obj, "App::PropertyFloat", "Radius", "Cutter", "Cylinder radius (mm)", 10.0)
-        _add(obj, "App::PropertyFloat", "Rule", "Strategy", "Rule position, fraction of the u range", 0.5)
+        _add(obj, LENGTH, "Radius", "Cutter", "Radius of the cylindrical cutter (the paper's R)", 10.0)
+        _add(
+            obj,
+            "App::PropertyFloatConstraint",
+            "Rule",
+            "Strategy",
+            "Where the tool sits: 0 at the face's first rule, 1 at its last (fraction of the u range)",
+            (0.5, 0.0, 1.0, 0.05),
+        )
         _add(
             obj,
             "App::PropertyEnumeration",
@@ -203,9 +280,20 @@ class FlankSettingFeature(_Base):
             "Tool setting",
             ["optimum", "standard-distributed", "standard-bisector", "standard-tangent", "minimax"],
         )
-        _add(obj, "App::PropertyInteger", "Side", "Strategy", "+1 or -1", 1)
-        for name in ("MaxGouge", "MaxUndercut", "Gamma"):
-            _add(obj, "App::PropertyFloat", name, "Result", name + " (mm or deg)", read_only=True)
+        _add(
+            obj,
+            "App::PropertyInteger",
+            "Side",
+            "Strategy",
+            "Tool side: +1 on the side of the face normal, -1 the other",
+            1,
+        )
+        for name, kind, doc in (
+            ("MaxGouge", LENGTH, "Deepest the cutter goes into the face along the rule"),
+            ("MaxUndercut", LENGTH, "Thickest material left along the rule"),
+            ("Gamma", ANGLE, "Tool axis inclination to the rule (the paper's gamma)"),
+        ):
+            _add(obj, kind, name, "Result", doc, read_only=True)
         for name in ("Status", "Report"):
             _add(obj, "App::PropertyString", name, "Result", name, read_only=True)
 
@@ -214,7 +302,7 @@ class FlankSettingFeature(_Base):
 
         res = flank(
             face_to_numpy(source_face(obj), "F"),
-            float(obj.Radius),
+            value_of(obj.Radius),
             rule=float(obj.Rule),
             setting=str(obj.Setting),
             side=int(obj.Side),
@@ -224,7 +312,7 @@ class FlankSettingFeature(_Base):
         obj.Report = json.dumps(res.report(), default=float)
         tip, axis, length = st.placement()
         obj.Shape = Part.makeCylinder(
-            float(obj.Radius), float(length), FreeCAD.Vector(*map(float, tip)), FreeCAD.Vector(*map(float, axis))
+            value_of(obj.Radius), float(length), FreeCAD.Vector(*map(float, tip)), FreeCAD.Vector(*map(float, axis))
         )
 
 
@@ -242,10 +330,17 @@ class EnvelopeFeature(_Base):
         )
         _add(obj, "App::PropertyString", "Motion", "Motion", "Example motion: sine, line, helix", "sine")
         _add(obj, "App::PropertyInteger", "Passes", "Motion", "Number of passes", 2)
-        _add(obj, "App::PropertyFloat", "Theta", "Motion", "Axis turn about n1 between passes (deg)", 0.0)
-        _add(obj, "App::PropertyFloat", "Tolerance", "Approximation", "Fit tolerance (mm)", 1e-3)
-        _add(obj, "App::PropertyFloat", "MaxSeamGap", "Result", "Largest seam gap (mm)", read_only=True)
-        _add(obj, "App::PropertyFloat", "MaxSeamAngle", "Result", "Largest seam normal angle (deg)", read_only=True)
+        _add(obj, ANGLE, "Theta", "Motion", "Axis turn about the seam normal between passes (the paper's theta)", 0.0)
+        _add(
+            obj,
+            LENGTH,
+            "Tolerance",
+            "Approximation",
+            "Largest distance of the fitted envelopes from the exact ones",
+            1e-3,
+        )
+        _add(obj, LENGTH, "MaxSeamGap", "Result", "Largest gap at a seam between passes", read_only=True)
+        _add(obj, ANGLE, "MaxSeamAngle", "Result", "Largest normal angle at a seam between passes", read_only=True)
         for name in ("Status", "Report"):
             _add(obj, "App::PropertyString", name, "Result", name, read_only=True)
 
@@ -256,8 +351,8 @@ class EnvelopeFeature(_Base):
             obj.Tool,
             example(str(obj.Motion), "motion"),
             passes=int(obj.Passes),
-            theta_deg=float(obj.Theta),
-            tolerance=float(obj.Tolerance),
+            theta_deg=value_of(obj.Theta),
+            tolerance=value_of(obj.Tolerance),
         )
         ch = res.chain
         faces = []
@@ -273,8 +368,13 @@ class EnvelopeFeature(_Base):
 
 
 def make(kind, doc=None, source=None, **props):
-    """Create a feature in ``doc`` (``kind``: MachiningSurface, EffectiveRadius, FlankSetting, Envelope)."""
+    """Create a feature in ``doc`` (``kind``: MachiningSurface, EffectiveRadius, FlankSetting, Envelope,
+    CamOperation: a Path operation in the document's Job, see :mod:`.camop`)."""
     doc = doc or FreeCAD.ActiveDocument
+    if kind == "CamOperation":
+        from .camop import make_operation
+
+        return make_operation(doc, source, **props)
     classes = {
         "MachiningSurface": MachiningSurfaceFeature,
         "EffectiveRadius": EffectiveRadiusFeature,

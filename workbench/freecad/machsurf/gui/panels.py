@@ -1,4 +1,9 @@
-"""Task panel to edit a feature's parameters (GUI only)."""
+"""Task panel to edit a feature's parameters (GUI only).
+
+Quantities (lengths, angles) are edited as text with their unit and every digit (``0.001 mm``,
+``0.5 um``, ``10 deg``); pressing OK writes only the fields the user changed, so an untouched
+0.001 mm comes back as 0.001 mm.
+"""
 
 import FreeCADGui as Gui
 from PySide2 import QtWidgets
@@ -11,6 +16,17 @@ EDITABLE = {
 }
 
 
+UNITS = {"App::PropertyLength": "mm", "App::PropertyDistance": "mm", "App::PropertyAngle": "deg"}
+
+
+def _read(w):
+    if isinstance(w, QtWidgets.QComboBox):
+        return w.currentText()
+    if isinstance(w, (QtWidgets.QDoubleSpinBox, QtWidgets.QSpinBox)):
+        return w.value()
+    return w.text()
+
+
 class FeaturePanel:
     def __init__(self, obj):
         self.obj = obj
@@ -18,9 +34,14 @@ class FeaturePanel:
         self.form.setWindowTitle(f"machsurf: {obj.Label}")
         lay = QtWidgets.QFormLayout(self.form)
         self.fields = {}
+        self.initial = {}
         for name in EDITABLE.get(obj.Proxy.__class__.__name__, []):
             value = getattr(obj, name)
-            if obj.getTypeIdOfProperty(name) == "App::PropertyEnumeration":
+            kind = obj.getTypeIdOfProperty(name)
+            if kind in UNITS:
+                w = QtWidgets.QLineEdit(f"{value.Value!r} {UNITS[kind]}")
+                w.setToolTip(obj.getDocumentationOfProperty(name) + " (any unit: 0.5 um, 0.02 in, 1 deg)")
+            elif kind == "App::PropertyEnumeration":
                 w = QtWidgets.QComboBox()
                 w.addItems(obj.getEnumerationsOfProperty(name))
                 w.setCurrentText(str(value))
@@ -37,18 +58,16 @@ class FeaturePanel:
                 w = QtWidgets.QLineEdit(str(value))
             lay.addRow(name, w)
             self.fields[name] = w
+            self.initial[name] = _read(w)
         self.status = QtWidgets.QLabel(getattr(obj, "Status", ""))
         self.status.setWordWrap(True)
         lay.addRow("Status", self.status)
 
     def accept(self):
         for name, w in self.fields.items():
-            if isinstance(w, QtWidgets.QComboBox):
-                setattr(self.obj, name, w.currentText())
-            elif isinstance(w, (QtWidgets.QDoubleSpinBox, QtWidgets.QSpinBox)):
-                setattr(self.obj, name, w.value())
-            else:
-                setattr(self.obj, name, w.text())
+            value = _read(w)
+            if value != self.initial[name]:  # only what the user changed
+                setattr(self.obj, name, value)
         self.obj.Document.recompute()
         Gui.Control.closeDialog()
         return True
