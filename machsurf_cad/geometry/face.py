@@ -84,15 +84,8 @@ class Face:
         key = ("_polys", n_per_curve)
         cache = self.__dict__.setdefault("_cache", {})
         if key not in cache:
-            # at least 8 points per knot span: an intersection curve from a CAD system can have hundreds of
-            # spans (a cylinder cut by a free-form top: 186), and 64 chords cut 2 mm off its face
             cache[key] = [
-                np.concatenate(
-                    [
-                        c.evaluate(np.linspace(*c.bounds, max(n_per_curve, 8 * (len(c.knots) - 1) + 1)))[:-1]
-                        for c in loop
-                    ]
-                )
+                np.concatenate([c.evaluate(np.linspace(*c.bounds, n_per_curve))[:-1] for c in loop])
                 for loop in self.loops
             ]
         return cache[key]
