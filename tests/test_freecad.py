@@ -164,6 +164,7 @@ def test_gui_command_on_a_selected_face(tmp_path):
     assert all(0 <= c[0] <= 1 and abs(c[0] + c[2] - 1) < 1e-6 for c in r["colours"])
     assert r["step_bytes"] > 10000 and r["step_names"] == ["S1_guiding", "S2_orientation"]
     assert r["panel"]["untouched"] == 0.001 and r["panel"]["typed"] == 0.0005 and r["panel"]["status"] == "ok"
+    assert r["reopened_view"] == {"before": "NoneType", "after": "ViewProvider"}
     import numpy as np
     from PIL import Image
 

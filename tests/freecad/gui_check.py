@@ -60,6 +60,17 @@ try:
     panel.fields["Tolerance"].setText("0.5 um")
     panel.accept()
     result["panel"] = {"untouched": untouched, "typed": ms.Tolerance.Value, "status": ms.Status}
+    # a document made without the GUI's view providers (as FreeCADCmd makes it) gets them when opened
+    from freecad.machsurf.app.features import MachiningSurfaceFeature
+
+    bare = doc.addObject("Part::FeaturePython", "Bare")
+    MachiningSurfaceFeature(bare)
+    before = type(bare.ViewObject.Proxy).__name__
+    path = os.path.join(os.path.dirname(out_path), "gui_saved.FCStd")
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    doc2 = FreeCAD.openDocument(path)
+    result["reopened_view"] = {"before": before, "after": type(doc2.getObject("Bare").ViewObject.Proxy).__name__}
     result["ok"] = True
 except Exception:
     result["error"] = traceback.format_exc()

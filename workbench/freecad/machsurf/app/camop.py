@@ -22,7 +22,7 @@ ensure_core()
 from machsurf_cad.errors import InputError
 
 from ..convert import face_to_numpy
-from .features import ANGLE, LENGTH, _add, _Base, value_of
+from .features import ANGLE, LENGTH, Progress, _add, _Base, attach_view, value_of
 
 # the ToolBit shapes machsurf maps (FreeCAD's names), and how
 TOOLBIT_SHAPES = ("endmill", "ballend", "bullnose")
@@ -143,11 +143,17 @@ class CamOperationFeature(_Base):
             clearance_mm=value_of(obj.Clearance),
             verify_tolerance_mm=gtol,
         )
-        if str(obj.Pattern) == "raster":
-            tp = ms.raster(faces, cutter, stepover_mm=value_of(obj.StepOver), angle_deg=value_of(obj.Angle), **common)
-        else:
-            tp = ms.waterline(faces, cutter, stepdown_mm=value_of(obj.StepDown), **common)
-        v = ms.verify(faces + others, tp, tolerance=gtol)
+        bar = Progress()  # FreeCAD's progress bar (the GUI's status bar, the console headless)
+        try:
+            if str(obj.Pattern) == "raster":
+                tp = ms.raster(faces, cutter, stepover_mm=value_of(obj.StepOver), angle_deg=value_of(obj.Angle),
+                               progress=bar, **common)  # fmt: skip
+            else:
+                tp = ms.waterline(faces, cutter, stepdown_mm=value_of(obj.StepDown), progress=bar, **common)
+            bar.stop()
+            v = ms.verify(faces + others, tp, tolerance=gtol, progress=bar)
+        finally:
+            bar.stop()
         vr = v.report()
         rep = {"toolpath": tp.report(), "verify": v.report(), "cutter": cutter.spec()}
         obj.Report = json.dumps(rep, default=float)
@@ -198,4 +204,5 @@ def make_operation(doc, source, **props):
             obj.ToolController = job.Tools.Group[0]
     for k, v in props.items():
         setattr(obj, k, v)
+    attach_view(obj)
     return obj

@@ -93,6 +93,7 @@ class _Base:
     def onDocumentRestored(self, obj):
         self.Object = obj
         self.properties(obj)
+        attach_view(obj)  # a document made headless gets the machsurf view (icon, colours, task panel)
 
     def __getstate__(self):
         return None
@@ -367,6 +368,40 @@ class EnvelopeFeature(_Base):
         obj.Report = json.dumps(rep, default=float)
 
 
+def attach_view(obj):
+    """In the GUI, give ``obj`` machsurf's view provider unless it has it (headless: nothing)."""
+    if not FreeCAD.GuiUp or getattr(obj, "ViewObject", None) is None:
+        return
+    from ..gui.view import ViewProvider, attach
+
+    if not isinstance(obj.ViewObject.Proxy, ViewProvider):
+        attach(obj)
+
+
+class Progress:
+    """machsurf_cad's ``progress(done, total, message)`` on FreeCAD's progress bar (Base.ProgressIndicator)."""
+
+    def __init__(self):
+        self.bar = None
+        self.done = 0
+
+    def __call__(self, done, total=None, message=""):
+        if not total:
+            return
+        if self.bar is None:
+            self.bar = FreeCAD.Base.ProgressIndicator()
+            self.bar.start(str(message or "machsurf"), int(total))
+        for _ in range(max(0, int(done) - self.done)):
+            self.bar.next()
+        self.done = max(self.done, int(done))
+
+    def stop(self):
+        if self.bar is not None:
+            self.bar.stop()
+            self.bar = None
+            self.done = 0
+
+
 def make(kind, doc=None, source=None, **props):
     """Create a feature in ``doc`` (``kind``: MachiningSurface, EffectiveRadius, FlankSetting, Envelope,
     CamOperation: a Path operation in the document's Job, see :mod:`.camop`)."""
@@ -387,4 +422,5 @@ def make(kind, doc=None, source=None, **props):
         obj.Source = source
     for k, v in props.items():
         setattr(obj, k, v)
+    attach_view(obj)
     return obj

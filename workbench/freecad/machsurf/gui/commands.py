@@ -35,7 +35,6 @@ class _FeatureCommand:
 
     def Activated(self):
         from ..app import features
-        from .view import attach
 
         src = _selected_face() if self.needs_face else None
         if self.needs_face and src is None:
@@ -43,8 +42,7 @@ class _FeatureCommand:
             return
         doc = FreeCAD.ActiveDocument
         doc.openTransaction(self.text)
-        obj = features.make(self.kind, doc, src)
-        attach(obj)
+        obj = features.make(self.kind, doc, src)  # with machsurf's view provider in the GUI
         doc.commitTransaction()
         doc.recompute()
         if src is not None:
