@@ -66,11 +66,11 @@ class FlankResult(Result):
     time_s: dict | None = None
     profiles: dict | None = None
     segment_envelopes: tuple = ()
-    smooth: dict | None = None
-    """The smooth minimax path beside the rule-by-rule optima (``smooth``), see ``compare_with_rule_optima``."""
     """Per continuous segment of the path: ``(segment, fit, deviation)``, or ``(segment, None, deviation,
     reason)`` where it has no envelope (fewer than 4 rules, or a folding motion whose envelope fit missed
     the tolerance): its deviation is then measured on the tool positions (None below 2 rules)."""
+    smooth: dict | None = None
+    """The smooth minimax path beside the rule-by-rule optima (``smooth``), see ``compare_with_rule_optima``."""
 
     @property
     def R(self) -> float:
@@ -248,8 +248,9 @@ def flank(
                 segs.append((seg, fit, envelope_deviation(seg, fit.surface)))
             else:
                 segs.append((seg, None, positions_deviation(seg) if len(seg.settings) >= 2 else None, why))
-        longest = max(segs, key=lambda x: len(x[0].settings))
-        env, dev = longest[1], longest[2]
+        # envelope and map of the longest segment with an envelope (else of the longest segment)
+        main = max([x for x in segs if x[1] is not None] or segs, key=lambda x: len(x[0].settings))
+        env, dev = main[1], main[2]
         segment_envelopes = tuple(segs)
         times["whole_s"] = time.perf_counter() - t1
     data = None
