@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import needs_kernel
 
 from machsurf_cad import examples
 from machsurf_cad.errors import InputError
@@ -336,6 +337,7 @@ def test_liu_optimum_where_its_contact_reaches_the_surface_edge(side, key, brack
     assert abs(interference(s, st).max_abs - error) < 1e-5
 
 
+@needs_kernel  # --whole writes the envelope as STEP
 def test_whole_liu_side_minus_one_is_checked_against_the_material_side(tmp_path):
     """An example surface is a bare sheet: with the tool on side -1 the material is on the normal's side.
     The tool-body check then finds only the cut's own interference (as the settings' along-rule error
