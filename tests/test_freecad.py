@@ -165,6 +165,9 @@ def test_gui_command_on_a_selected_face(tmp_path):
     assert r["step_bytes"] > 10000 and r["step_names"] == ["S1_guiding", "S2_orientation"]
     assert r["panel"]["untouched"] == 0.001 and r["panel"]["typed"] == 0.0005 and r["panel"]["status"] == "ok"
     assert r["reopened_view"] == {"before": "NoneType", "after": "ViewProvider"}
+    cmds = r["commands"]  # one icon per command, and tooltips that explain rather than repeat the menu text
+    assert len(cmds) == 6 and len({c["pixmap"] for c in cmds.values()}) == 6
+    assert all(os.path.isfile(c["pixmap"]) and len(c["tip"]) > len(c["menu"]) + 40 for c in cmds.values())
     import numpy as np
     from PIL import Image
 

@@ -70,6 +70,12 @@ try:
     doc.saveAs(path)
     FreeCAD.closeDocument(doc.Name)
     doc2 = FreeCAD.openDocument(path)
+    from freecad.machsurf.gui.commands import NAMES
+
+    infos = {n: Gui.Command.get(n).getInfo() for n in NAMES}
+    result["commands"] = {
+        n: {"pixmap": i["pixmap"], "menu": i["menuText"], "tip": i["toolTip"]} for n, i in infos.items()
+    }
     result["reopened_view"] = {"before": before, "after": type(doc2.getObject("Bare").ViewObject.Proxy).__name__}
     result["ok"] = True
 except Exception:

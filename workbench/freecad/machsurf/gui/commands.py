@@ -5,14 +5,24 @@ import os
 import FreeCAD
 import FreeCADGui as Gui
 
-ICON = os.path.join(os.path.dirname(os.path.dirname(__file__)), "resources", "machsurf.svg")
+RESOURCES = os.path.join(os.path.dirname(os.path.dirname(__file__)), "resources")
+ICON = os.path.join(RESOURCES, "machsurf.svg")
 NAMES = [
     "Machsurf_MachiningSurface",
     "Machsurf_EffectiveRadius",
     "Machsurf_FlankSetting",
     "Machsurf_Envelope",
+    "Machsurf_CamOperation",
     "Machsurf_ExportStep",
 ]
+
+
+def _noop(context, text):
+    return text
+
+
+# FreeCAD's marker for texts to translate (lupdate collects them); the identity where it is missing
+QT_TRANSLATE_NOOP = getattr(getattr(FreeCAD, "Qt", None), "QT_TRANSLATE_NOOP", _noop)
 
 
 def _selected_face():
@@ -25,10 +35,15 @@ def _selected_face():
 class _FeatureCommand:
     kind = ""
     text = ""
+    tip = ""
+    icon = "machsurf.svg"
     needs_face = True
 
+    def source(self):
+        return _selected_face() if self.needs_face else None
+
     def GetResources(self):
-        return {"Pixmap": ICON, "MenuText": self.text, "ToolTip": self.text}
+        return {"Pixmap": os.path.join(RESOURCES, self.icon), "MenuText": self.text, "ToolTip": self.tip}
 
     def IsActive(self):
         return FreeCAD.ActiveDocument is not None
@@ -36,7 +51,7 @@ class _FeatureCommand:
     def Activated(self):
         from ..app import features
 
-        src = _selected_face() if self.needs_face else None
+        src = self.source()
         if self.needs_face and src is None:
             FreeCAD.Console.PrintError("machsurf: select a face first\n")
             return
@@ -51,27 +66,72 @@ class _FeatureCommand:
 
 
 class MachiningSurfaceCommand(_FeatureCommand):
-    kind, text = "MachiningSurface", "Machining surfaces S1/S2 of the selected face"
+    kind = "MachiningSurface"
+    text = QT_TRANSLATE_NOOP("Machsurf_MachiningSurface", "Guiding and orientation surfaces")
+    tip = QT_TRANSLATE_NOOP(
+        "Machsurf_MachiningSurface",
+        "Select a face: the surfaces the tool centre (guiding surface, the paper's S1) and the axis "
+        "(orientation surface, S2) move on for a ball, flat or bull-nose end mill in 3 or 5 axes, fitted "
+        "as B-splines with their error measured.",
+    )
 
 
 class EffectiveRadiusCommand(_FeatureCommand):
-    kind, text = "EffectiveRadius", "Effective cutter radius map of the selected face"
+    kind, icon = "EffectiveRadius", "effective_radius.svg"
+    text = QT_TRANSLATE_NOOP("Machsurf_EffectiveRadius", "Effective cutter radius")
+    tip = QT_TRANSLATE_NOOP(
+        "Machsurf_EffectiveRadius",
+        "Select a face: the radius the surface sees of a bull-nose cutter moving in one direction "
+        "(where a torus beats a ball) and the step-over for a scallop height.",
+    )
 
 
 class FlankSettingCommand(_FeatureCommand):
-    kind, text = "FlankSetting", "Flank-milling setting on the selected ruled face"
+    kind, icon = "FlankSetting", "flank.svg"
+    text = QT_TRANSLATE_NOOP("Machsurf_FlankSetting", "Flank-milling setting")
+    tip = QT_TRANSLATE_NOOP(
+        "Machsurf_FlankSetting",
+        "Select a ruled face: the position of a cylindrical cutter along one rule (standard, optimum with "
+        "three tangencies, or minimax) and how far it cuts into or leaves material along the rule.",
+    )
 
 
 class EnvelopeCommand(_FeatureCommand):
-    kind, text, needs_face = "Envelope", "Swept envelopes of a tool (G1 passes)", False
+    kind, icon, needs_face = "Envelope", "envelope.svg", False
+    text = QT_TRANSLATE_NOOP("Machsurf_Envelope", "Swept envelopes")
+    tip = QT_TRANSLATE_NOOP(
+        "Machsurf_Envelope",
+        "The surface a rotational tool sweeps along a motion, and adjacent passes joined with continuous "
+        "tangent planes (G1).",
+    )
+
+
+class CamOperationCommand(_FeatureCommand):
+    kind, icon = "CamOperation", "cam_operation.svg"
+    text = QT_TRANSLATE_NOOP("Machsurf_CamOperation", "3-axis CAM operation")
+    tip = QT_TRANSLATE_NOOP(
+        "Machsurf_CamOperation",
+        "Select faces of a part: an exact drop-cutter raster or waterline path on them in the document's "
+        "Path Job, with the Job's tool, checked against every face of the part before it is kept.",
+    )
+
+    def source(self):
+        sel = Gui.Selection.getSelectionEx()
+        if not sel or not sel[0].SubElementNames:
+            return None
+        return [(s.Object, list(s.SubElementNames)) for s in sel if s.SubElementNames]
 
 
 class ExportStepCommand:
     def GetResources(self):
         return {
-            "Pixmap": ICON,
-            "MenuText": "Export machsurf results to STEP",
-            "ToolTip": "Write the selected (or all) machsurf results to STEP, one named object per feature",
+            "Pixmap": os.path.join(RESOURCES, "export_step.svg"),
+            "MenuText": QT_TRANSLATE_NOOP("Machsurf_ExportStep", "Export results to STEP"),
+            "ToolTip": QT_TRANSLATE_NOOP(
+                "Machsurf_ExportStep",
+                "Write every valid machsurf result to one STEP file, each face a named product "
+                "(S1_guiding, S2_orientation, pass_1, ...) that CAM systems show.",
+            ),
         }
 
     def IsActive(self):
@@ -123,4 +183,5 @@ def register():
     Gui.addCommand("Machsurf_EffectiveRadius", EffectiveRadiusCommand())
     Gui.addCommand("Machsurf_FlankSetting", FlankSettingCommand())
     Gui.addCommand("Machsurf_Envelope", EnvelopeCommand())
+    Gui.addCommand("Machsurf_CamOperation", CamOperationCommand())
     Gui.addCommand("Machsurf_ExportStep", ExportStepCommand())
