@@ -90,6 +90,9 @@ def test_features_recompute_headless(tmp_path):
     # onDocumentRestored migrates a document saved without a property: it comes back with its default
     assert ro["loops"] == "error" and ro["loops_enum"] == ["error", "flag", "trim"]
     assert ro["proxy_module"] == "freecad.machsurf.app.features"
+    pr = r["preferences"]  # defaults of new features and tool names from the preferences
+    assert pr["tolerance"] == 0.002 and pr["grid"] == 40 and pr["status"] == "ok" and pr["tool"] == "bull:D=16,r=3"
+    assert pr["unknown_status"].startswith("error: tool 'bull99' is not in the tool library")
     ds = r["deleted_source"]
     assert ds["shape_null"] and ds["max_s1"] == 0.0 and "deleted" in ds["status"] and ds["n_objects"] >= 5
 
@@ -165,6 +168,7 @@ def test_gui_command_on_a_selected_face(tmp_path):
     assert r["step_bytes"] > 10000 and r["step_names"] == ["S1_guiding", "S2_orientation"]
     assert r["panel"]["untouched"] == 0.001 and r["panel"]["typed"] == 0.0005 and r["panel"]["status"] == "ok"
     assert r["reopened_view"] == {"before": "NoneType", "after": "ViewProvider"}
+    assert r["preferences_ui"] == ["defaultGrid", "defaultTolerance", "toolLibrary"]
     cmds = r["commands"]  # one icon per command, and tooltips that explain rather than repeat the menu text
     assert len(cmds) == 6 and len({c["pixmap"] for c in cmds.values()}) == 6
     assert all(os.path.isfile(c["pixmap"]) and len(c["tip"]) > len(c["menu"]) + 40 for c in cmds.values())

@@ -61,7 +61,9 @@ try:
     panel.accept()
     result["panel"] = {"untouched": untouched, "typed": ms.Tolerance.Value, "status": ms.Status}
     # a document made without the GUI's view providers (as FreeCADCmd makes it) gets them when opened
+    from freecad.machsurf.app import features as features_module
     from freecad.machsurf.app.features import MachiningSurfaceFeature
+    from PySide2 import QtWidgets
 
     bare = doc.addObject("Part::FeaturePython", "Bare")
     MachiningSurfaceFeature(bare)
@@ -76,6 +78,12 @@ try:
     result["commands"] = {
         n: {"pixmap": i["pixmap"], "menu": i["menuText"], "tip": i["toolTip"]} for n, i in infos.items()
     }
+    ui = Gui.PySideUic.loadUi(
+        os.path.join(os.path.dirname(features_module.__file__), "..", "resources", "preferences.ui")
+    )
+    result["preferences_ui"] = sorted(
+        w.objectName() for w in ui.findChildren(QtWidgets.QWidget) if w.property("prefEntry")
+    )
     result["reopened_view"] = {"before": before, "after": type(doc2.getObject("Bare").ViewObject.Proxy).__name__}
     result["ok"] = True
 except Exception:

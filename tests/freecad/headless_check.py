@@ -176,6 +176,29 @@ try:
         status=ms2.Status,
         n_objects=len(doc2.Objects),
     )
+    # preferences (the preferences page writes them): default tolerance and grid of new features, a tool library
+    prefs = FreeCAD.ParamGet("User parameter:BaseApp/Preferences/Mod/machsurf")
+    library = os.path.join(os.path.dirname(out_path), "tools.json")
+    with open(library, "w") as fh:
+        json.dump({"bull16": "bull:D=16,r=3"}, fh)
+    prefs.SetFloat("DefaultTolerance", 0.002)
+    prefs.SetInt("DefaultGrid", 40)
+    prefs.SetString("ToolLibrary", library)
+    doc3 = FreeCAD.newDocument("prefs")
+    block = doc3.addObject("Part::Feature", "Block")
+    block.Shape = shape
+    named = features.make("MachiningSurface", doc3, (block, [fname]), Tool="bull16", Lead=10.0)
+    unknown = features.make("MachiningSurface", doc3, (block, [fname]), Tool="bull99")
+    reff = features.make("EffectiveRadius", doc3, (block, [fname]), Tool="bull16")
+    doc3.recompute()
+    step(
+        "preferences",
+        tolerance=named.Tolerance.Value,
+        grid=reff.Grid,
+        status=named.Status,
+        tool=json.loads(named.Report)["tool"]["spec"] if named.Report else "",
+        unknown_status=unknown.Status,
+    )
     result["ok"] = True
 except Exception:
     result["error"] = traceback.format_exc()

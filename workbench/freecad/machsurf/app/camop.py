@@ -22,7 +22,7 @@ ensure_core()
 from machsurf_cad.errors import InputError
 
 from ..convert import face_to_numpy
-from .features import ANGLE, LENGTH, Progress, _add, _Base, attach_view, value_of
+from .features import ANGLE, LENGTH, Progress, _add, _Base, attach_view, tool_text, value_of
 
 # the ToolBit shapes machsurf maps (FreeCAD's names), and how
 TOOLBIT_SHAPES = ("endmill", "ballend", "bullnose")
@@ -127,7 +127,7 @@ class CamOperationFeature(_Base):
             return cutter_from_toolbit(tc.Tool)
         if not obj.Tool:
             raise InputError("no tool: add a ToolController to the Job or set 'Tool' (e.g. ball:D=10)")
-        return obj.Tool
+        return tool_text(obj.Tool)
 
     def compute(self, obj):
         import machsurf_cad as ms

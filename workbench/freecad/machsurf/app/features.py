@@ -52,6 +52,36 @@ def value_of(q) -> float:
 
 
 LENGTH, DISTANCE, ANGLE = "App::PropertyLength", "App::PropertyDistance", "App::PropertyAngle"
+PREFERENCES = "User parameter:BaseApp/Preferences/Mod/machsurf"
+
+
+def preference(name, default):
+    """A machsurf preference (the preferences page writes them): float, int or str like ``default``."""
+    p = FreeCAD.ParamGet(PREFERENCES)
+    if isinstance(default, float):
+        return p.GetFloat(name, default)
+    if isinstance(default, int):
+        return p.GetInt(name, default)
+    return p.GetString(name, default)
+
+
+def tool_text(text):
+    """A feature's Tool: a cutter text (``ball:D=10``) or a name from the tool library of the preferences
+    (a JSON object of names to cutter texts)."""
+    text = str(text).strip()
+    if ":" in text or not text:
+        return text
+    path = preference("ToolLibrary", "")
+    if not path:
+        raise MachsurfError(f"tool '{text}' is not a cutter text (e.g. ball:D=10) and no tool library is set")
+    try:
+        with open(path) as fh:
+            library = json.load(fh)
+    except (OSError, ValueError) as exc:
+        raise MachsurfError(f"the tool library {path} cannot be read: {exc}") from None
+    if text not in library:
+        raise MachsurfError(f"tool '{text}' is not in the tool library {path} ({', '.join(sorted(library))})")
+    return str(library[text])
 
 
 def source_face(obj):
@@ -157,7 +187,7 @@ class MachiningSurfaceFeature(_Base):
             "Approximation",
             "Largest distance between the fitted guiding/orientation surfaces and the exact ones, measured "
             "on points the fit never saw",
-            1e-3,
+            preference("DefaultTolerance", 1e-3),
         )
         _add(
             obj,
@@ -192,7 +222,7 @@ class MachiningSurfaceFeature(_Base):
         f = face_to_numpy(source_face(obj), "F")
         ms = machining_surface(
             f,
-            obj.Tool,
+            tool_text(obj.Tool),
             axes=int(obj.Axes),
             strategy=obj.Strategy,
             lead=value_of(obj.Lead),
@@ -225,7 +255,7 @@ class EffectiveRadiusFeature(_Base):
             "Grid",
             "Strategy",
             "Samples per parameter direction (8 to 1024; 1024 needs about 1.5 GB)",
-            (64, 8, 1024, 8),
+            (min(max(preference("DefaultGrid", 64), 8), 1024), 8, 1024, 8),
         )
         _add(obj, LENGTH, "Scallop", "Strategy", "Scallop height for the step-over; 0 for none", 0.0)
         for name, kind, doc in (
@@ -245,7 +275,7 @@ class EffectiveRadiusFeature(_Base):
         f = face_to_numpy(fc, "F")
         m = reff_maps(
             f,
-            obj.Tool,
+            tool_text(obj.Tool),
             directions=[value_of(obj.Direction)],
             grid=int(obj.Grid),
             scallop=value_of(obj.Scallop) or None,
@@ -338,7 +368,7 @@ class EnvelopeFeature(_Base):
             "Tolerance",
             "Approximation",
             "Largest distance of the fitted envelopes from the exact ones",
-            1e-3,
+            preference("DefaultTolerance", 1e-3),
         )
         _add(obj, LENGTH, "MaxSeamGap", "Result", "Largest gap at a seam between passes", read_only=True)
         _add(obj, ANGLE, "MaxSeamAngle", "Result", "Largest normal angle at a seam between passes", read_only=True)
@@ -349,7 +379,7 @@ class EnvelopeFeature(_Base):
         from machsurf_cad import envelope, example
 
         res = envelope(
-            obj.Tool,
+            tool_text(obj.Tool),
             example(str(obj.Motion), "motion"),
             passes=int(obj.Passes),
             theta_deg=value_of(obj.Theta),

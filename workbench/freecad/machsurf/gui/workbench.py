@@ -1,5 +1,7 @@
 """The machsurf workbench: toolbar and menu, one command per feature, export (GUI only)."""
 
+import os
+
 import FreeCADGui as Gui
 
 from . import commands
@@ -20,3 +22,5 @@ class MachsurfWorkbench(Gui.Workbench):
 
 
 Gui.addWorkbench(MachsurfWorkbench())
+# Edit > Preferences > machsurf: default tolerance and grid of new features, the tool library
+Gui.addPreferencePage(os.path.join(commands.RESOURCES, "preferences.ui"), "machsurf")
