@@ -74,7 +74,12 @@ def test_features_recompute_headless(tmp_path):
     assert of["reff_valid"] and 2.0 <= of["reff_mean"]
     assert of["env_valid"] and of["env_faces"] == 2 and of["env_gap"] < 1e-3
     q = r["quantities"]  # lengths and angles are quantities: units shown, micrometres kept
-    assert q["half_micron"] == 0.0005 and q["tol_text"].endswith("m") and q["lead_text"].startswith("10")
+    assert (
+        q["half_micron"] == 0.0005
+        and q["tol_text"] == "500.00 nm"
+        and q["mm_text"] == "1.00 µm"
+        and q["lead_text"].startswith("10")
+    )
     assert q["types"] == ["App::PropertyLength", "App::PropertyAngle", "App::PropertyLength", "App::PropertyAngle"]
     assert q["migrated"] == ["App::PropertyLength", 0.002, "App::PropertyAngle", 7.5]
     it = r["invalid_tool"]  # nothing of the previous recompute survives an error

@@ -214,12 +214,12 @@ def flank(
     R = cutter.D / 2
     lo, hi = surf.u_range
     u_p = lo + rule * (hi - lo)
-    try:
+    if whole:  # as the whole path does on this rule: Rubio's setting where the one asked for does not exist
+        from .path import setting_or_fallback
+
+        st = setting_or_fallback(surf, u_p, R, setting, side)
+    else:
         st = tool_setting(surf, u_p, R, setting, side=side)
-    except NoAdmissibleSetting:
-        if not whole:
-            raise
-        st = tool_setting(surf, u_p, R, "standard-distributed", side=side)  # as the whole path does there
     times = {"setting_s": time.perf_counter() - t0}
     e = interference(surf, st)
     profiles = setting_profiles(surf, u_p, R, side=side)

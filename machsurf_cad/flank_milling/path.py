@@ -45,6 +45,8 @@ class FlankPath(Result):
     discontinuities: tuple = ()
     smoothness: dict | None = None
     """For a smooth minimax path: the axis turn bound and the turn rate reached (deg/mm)."""
+    rule_errors: tuple = ()
+    """Per rule: ``(max_gouge, max_undercut, worst)`` of its interference (101 samples along the rule)."""
 
     @property
     def fallback_u(self) -> np.ndarray:
@@ -63,14 +65,11 @@ class FlankPath(Result):
             return (self,)
         out = []
         for sl in self.segment_slices():
-            sets = self.settings[sl]
-            errs = [interference(self.surface, st, n_v=101) for st in sets]
-            k = int(np.argmax([e.max_abs for e in errs]))
+            errs = self.rule_errors[sl]
             out.append(
                 FlankPath(
-                    self.surface, self.R, self.kind, self.side, sets, self.u[sl], self.tip[sl], self.axis[sl],
-                    self.length, max(e.max_gouge for e in errs), max(e.max_undercut for e in errs),
-                    {**errs[k].worst(), "rule_u": sets[k].frame.u_p}, self.step_tolerance,
+                    self.surface, self.R, self.kind, self.side, self.settings[sl], self.u[sl], self.tip[sl],
+                    self.axis[sl], self.length, *_aggregate(errs), self.step_tolerance, rule_errors=errs,
                 )
             )  # fmt: skip
         return tuple(out)
@@ -211,7 +210,7 @@ def flank_path(
     sets0: list[Setting] = []
     prev = None
     for u in us:  # sweep once in order so each rule continues from the previous one
-        prev = _setting(surface, float(u), R, kind, side, prev)
+        prev = setting_or_fallback(surface, float(u), R, kind, side, prev)
         sets0.append(prev)
     n_chunks = max(1, min(int(chunks), len(us) - 1))
     cuts = np.linspace(0, len(us) - 1, n_chunks + 1).astype(int)
@@ -224,12 +223,7 @@ def flank_path(
     us = [u for p in parts for u in p[0]]
     sets = tuple(x for p in parts for x in p[1])
     jumps = [j for p in parts for j in p[2]]
-    g = max(p[3] for p in parts)
-    uc = max(p[4] for p in parts)
-    worst: dict = {}
-    for p in parts:
-        if p[5] and (not worst or abs(p[5]["e_mm"]) > abs(worst["e_mm"])):
-            worst = p[5]
+    errs = tuple(e for p in parts for e in p[3])
     tips, axes, lengths = zip(*(s.placement(overhang) for s in sets))
     return FlankPath(
         surface,
@@ -241,15 +235,26 @@ def flank_path(
         np.array(tips),
         np.array(axes),
         float(max(lengths)),
-        g,
-        uc,
-        worst,
+        *_aggregate(errs),
         float(tolerance),
         tuple(jumps),
+        rule_errors=errs,
     )
 
 
-def _setting(surface, u, R, kind, side, start):
+def rule_error(surface: RuledSurface, st: Setting) -> tuple:
+    """``(max_gouge, max_undercut, worst)`` of a setting's interference along its rule (101 samples)."""
+    e = interference(surface, st, n_v=101)
+    return e.max_gouge, e.max_undercut, {**e.worst(), "rule_u": st.frame.u_p}
+
+
+def _aggregate(errs) -> tuple[float, float, dict]:
+    """Largest gouge, largest undercut and the worst point over rules' ``rule_error`` figures."""
+    worst: dict = max((w for _, _, w in errs), key=lambda w: abs(w["e_mm"]), default={})
+    return max((g for g, _, _ in errs), default=0.0), max((u for _, u, _ in errs), default=0.0), worst
+
+
+def setting_or_fallback(surface, u, R, kind, side, start=None):
     """The setting ``kind`` on the rule at ``u``, continuing from ``start``; where it does not exist (the
     optimum beyond its existence limit), Rubio's standard-distributed setting, so that a whole surface
     always gets a path (the rules are listed in :attr:`FlankPath.fallback_u` and the report)."""
@@ -272,7 +277,7 @@ def _refine_span(surface, R, kind, side, tolerance, overhang, adaptive, budget, 
     def setting(u, near=None):
         key = float(u)
         if key not in cache:
-            cache[key] = _setting(surface, key, R, kind, side, near)
+            cache[key] = setting_or_fallback(surface, key, R, kind, side, near)
         return cache[key]
 
     jumps = []
@@ -300,15 +305,7 @@ def _refine_span(surface, R, kind, side, tolerance, overhang, adaptive, budget, 
     if drop_first:  # the previous span ends on this rule
         us = us[1:]
     sets = [setting(u) for u in us]
-    worst: dict = {}
-    g, uc = 0.0, 0.0
-    for st in sets:
-        e = interference(surface, st, n_v=101)
-        g = max(g, e.max_gouge)
-        uc = max(uc, e.max_undercut)
-        if not worst or e.max_abs > abs(worst["e_mm"]):
-            worst = {**e.worst(), "rule_u": st.frame.u_p}
-    return us, sets, jumps, g, uc, worst
+    return us, sets, jumps, [rule_error(surface, st) for st in sets]
 
 
 # ----------------------------------------------------------------------------- envelope

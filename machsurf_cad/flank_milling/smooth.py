@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .path import FlankPath
+from .path import FlankPath, _aggregate, rule_error
 from .ruled import RuledSurface
 from .settings import NoAdmissibleSetting, Setting, axis_of, interference, rule_frame, tool_setting
 
@@ -27,12 +27,16 @@ def _turn_deg(a, b) -> float:
     return math.degrees(math.acos(float(np.clip(a @ b, -1.0, 1.0))))
 
 
+def _turn_rates(axes, frames) -> np.ndarray:
+    mids = np.array([0.5 * (f.p0 + f.p1) for f in frames])
+    travel = np.linalg.norm(np.diff(mids, axis=0), axis=1)
+    turns = np.array([_turn_deg(a, b) for a, b in zip(axes[:-1], axes[1:])])
+    return turns / np.maximum(travel, 1e-12)
+
+
 def axis_turn_rates(path: FlankPath) -> np.ndarray:
     """Angle between consecutive tool axes per mm of travel of the rules' middles (deg/mm)."""
-    mids = np.array([0.5 * (s.frame.p0 + s.frame.p1) for s in path.settings])
-    travel = np.linalg.norm(np.diff(mids, axis=0), axis=1)
-    turns = np.array([_turn_deg(a, b) for a, b in zip(path.axis[:-1], path.axis[1:])])
-    return turns / np.maximum(travel, 1e-12)
+    return _turn_rates(path.axis, [s.frame for s in path.settings])
 
 
 def smooth_minimax_path(
@@ -83,7 +87,7 @@ def smooth_minimax_path(
     frames = [rule_frame(surface, float(u), side) for u in us]
     mids = np.array([0.5 * (f.p0 + f.p1) for f in frames])
     travel = np.linalg.norm(np.diff(mids, axis=0), axis=1)
-    own = np.array([_turn_deg(a.z1, b.z1) for a, b in zip(frames[:-1], frames[1:])]) / np.maximum(travel, 1e-12)
+    own = _turn_rates([f.z1 for f in frames], frames)
     bound = float(max_turn_deg_per_mm) if max_turn_deg_per_mm is not None else 1.5 * float(own.max())
 
     def make(fr, x, kind="minimax-smooth"):
@@ -126,26 +130,20 @@ def smooth_minimax_path(
         st = make(fr, best.x)
         sets.append(st)
         prev_a = st.a
-    errs = [interference(surface, st, n_v=101) for st in sets]
-    k = int(np.argmax([e.max_abs for e in errs]))
+    errs = tuple(rule_error(surface, st) for st in sets)
     tips, axes, lengths = zip(*(s.placement(overhang) for s in sets))
-    path = FlankPath(
-        surface, float(R), "minimax-smooth", side, tuple(sets), us, np.array(tips), np.array(axes),
-        float(max(lengths)), max(e.max_gouge for e in errs), max(e.max_undercut for e in errs),
-        {**errs[k].worst(), "rule_u": sets[k].frame.u_p}, float("nan"),
+    axes = np.array(axes)
+    reached = float(_turn_rates(axes, frames).max())
+    smoothness = {
+        "max_turn_bound_deg_per_mm": bound,
+        "max_turn_reached_deg_per_mm": reached,
+        "rules_own_max_turn_deg_per_mm": float(own.max()),
+        "bound_met": reached <= bound * (1 + 1e-6),
+    }
+    return FlankPath(
+        surface, float(R), "minimax-smooth", side, tuple(sets), us, np.array(tips), axes, float(max(lengths)),
+        *_aggregate(errs), float("nan"), smoothness=smoothness, rule_errors=errs,
     )  # fmt: skip
-    rates = axis_turn_rates(path)
-    return _with_turn_info(path, bound, float(rates.max()), float(own.max()))
-
-
-def _with_turn_info(path: FlankPath, bound: float, reached: float, own: float) -> FlankPath:
-    import dataclasses
-
-    jumps = () if reached <= bound * (1 + 1e-6) else ({"max_turn_deg_per_mm": reached, "bound": bound},)
-    return dataclasses.replace(path, discontinuities=(), smoothness={
-        "max_turn_bound_deg_per_mm": bound, "max_turn_reached_deg_per_mm": reached,
-        "rules_own_max_turn_deg_per_mm": own, "bound_met": not jumps,
-    })  # fmt: skip
 
 
 def compare_with_rule_optima(surface: RuledSurface, R: float, *, side: int = 1, n_rules: int = 41, **kw) -> dict:

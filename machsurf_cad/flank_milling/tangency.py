@@ -122,7 +122,9 @@ def solve(surface, frame, R: float, starts, u_range, *, warm=None, iters: int = 
     u1 = np.full(n, frame.u_p if warm is None else warm[1], float)
     active = np.ones(n, bool)
     conv = np.zeros(n, bool)
-    keep: dict = {}
+    # the contacts of each converged start, per directrix: u, distance, point, slope
+    cu, cd, cs = np.full((2, n), np.nan), np.full((2, n), np.nan), np.full((2, n), np.nan)
+    cp = np.full((2, n, 3), np.nan)
     for _ in range(iters):
         idx = np.nonzero(active)[0]
         if idx.size == 0:
@@ -135,8 +137,9 @@ def solve(surface, frame, R: float, starts, u_range, *, warm=None, iters: int = 
         u0[idx[near]], u1[idx[near]] = r0.u[near], r1.u[near]
         F0, F1 = r0.dist - R, r1.dist - R
         done = ~fail & (np.maximum(np.abs(F0), np.abs(F1)) < 1e-12 * R)
-        for j in np.nonzero(done)[0]:
-            keep[int(idx[j])] = (r0, r1, j)
+        for k, r in enumerate((r0, r1)):
+            cu[k, idx[done]], cd[k, idx[done]] = r.u[done], r.dist[done]
+            cs[k, idx[done]], cp[k, idx[done]] = r.slope[done], r.point[done]
         conv[idx[done]] = True
         active[idx[done | fail]] = False
         go = ~(done | fail)
@@ -162,15 +165,5 @@ def solve(surface, frame, R: float, starts, u_range, *, warm=None, iters: int = 
         bad |= ~(np.isfinite(h0[idx]) & np.isfinite(gam[idx])) | (np.abs(gam[idx]) > 1.5)
         active[idx[go & bad]] = False
     rows = np.nonzero(conv)[0]
-
-    def pick(which):
-        parts = [(keep[int(i)][which], keep[int(i)][2]) for i in rows]
-        return Contacts(
-            np.array([c.u[j] for c, j in parts]),
-            np.array([c.dist[j] for c, j in parts]),
-            np.array([c.point[j] for c, j in parts]).reshape(-1, 3),
-            np.array([c.slope[j] for c, j in parts]),
-            np.ones(rows.size, bool),
-        )
-
-    return Solutions(h0[rows], gam[rows], pick(0), pick(1))
+    c0, c1 = (Contacts(cu[k, rows], cd[k, rows], cp[k, rows], cs[k, rows], np.ones(rows.size, bool)) for k in (0, 1))
+    return Solutions(h0[rows], gam[rows], c0, c1)

@@ -74,7 +74,7 @@ try:
     # quantities: units shown, every digit kept (0.5 um typed stays 0.0005 mm), floats of old documents migrated
     q = features.make("MachiningSurface", doc, (part, [fname]), Tool="ball:D=10")
     q.Tolerance = "0.5 um"
-    tol_value = q.Tolerance.Value
+    tol_value, tol_text = q.Tolerance.Value, q.Tolerance.UserString
     q.Tolerance = 0.001
     old = doc.addObject("Part::FeaturePython", "OldFloats")
     old.addProperty("App::PropertyFloat", "Tolerance", "Approximation", "as saved by 0.2")
@@ -86,7 +86,8 @@ try:
         "quantities",
         half_micron=tol_value,
         types=[q.getTypeIdOfProperty(n) for n in ("Tolerance", "Lead", "MaxErrorS1", "AlphaMax")],
-        tol_text=q.Tolerance.UserString,
+        tol_text=tol_text,
+        mm_text=q.Tolerance.UserString,
         lead_text=q.Lead.UserString,
         migrated=[
             old.getTypeIdOfProperty("Tolerance"),

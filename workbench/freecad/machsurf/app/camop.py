@@ -116,13 +116,16 @@ class CamOperationFeature(_Base):
         super().clear(obj)
         obj.CutPoints = 0
 
+    def tool_controller(self, obj):
+        """The operation's ToolController, else (without a Tool text) the Job's first one, else None."""
+        if obj.ToolController is not None or obj.Tool:
+            return obj.ToolController
+        job = find_job(obj.Document, create=False)
+        tools = list(job.Tools.Group) if job is not None else []
+        return tools[0] if tools else None
+
     def cutter_text(self, obj) -> str:
-        tc = obj.ToolController
-        if tc is None:
-            job = find_job(obj.Document, create=False)
-            tools = list(job.Tools.Group) if job is not None else []
-            if tools and not obj.Tool:
-                tc = tools[0]
+        tc = self.tool_controller(obj)
         if tc is not None:
             return cutter_from_toolbit(tc.Tool)
         if not obj.Tool:
@@ -178,7 +181,7 @@ class CamOperationFeature(_Base):
         """G0 for rapids, G1 for the rest at the tool tip; feeds (mm/s, FreeCAD's unit) from the ToolController."""
         from machsurf_cad import Move
 
-        tc = obj.ToolController
+        tc = self.tool_controller(obj)
         horiz = value_of(tc.HorizFeed) if tc is not None and value_of(tc.HorizFeed) > 0 else 1000.0 / 60.0
         vert = value_of(tc.VertFeed) if tc is not None and value_of(tc.VertFeed) > 0 else 300.0 / 60.0
         cmds = [Path.Command(f"({obj.Label}: machsurf {obj.Pattern}, {obj.CutterUsed})")]
