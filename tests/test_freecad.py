@@ -135,6 +135,51 @@ def test_cam_operation_in_a_path_job(tmp_path):
     assert m["bull"] == "bull:D=10,r=2,L=20" and m["ball"] == "ball:D=6" and "not supported" in m["chamfer"]
     nt = r["no_tool"]
     assert nt["status"].startswith("error: no tool") and nt["n_commands"] == 0 and nt["cut_points"] == 0
+    # 5 axes: every move is machsurf's (tips exact, axes back from B/C within 1e-12), the path clean
+    f5 = r["five_axis"]
+    assert f5["status"] == "ok" and f5["verdict"].startswith("clean") and f5["tool"] == "ball:D=6"
+    assert f5["n_moves"] == f5["n_direct"] > 400 and f5["cut_points"] == f5["direct_cut"]
+    assert f5["tip_dev"] < 1e-9 and f5["axis_dev"] < 1e-12 and 0 < f5["max_b"] < 90
+    assert 0 < f5["surface_error"] <= 1e-3
+    fl = r["flank"]  # flank milling: machsurf's path, its gouge (the setting's own) within the tolerance given
+    assert fl["status"] == "ok" and fl["verdict"].startswith("clean") and fl["n_moves"] == fl["n_direct"] > 10
+    assert fl["tip_dev"] < 1e-9 and fl["direct_rule_gouge"] <= fl["max_gouge"] <= 0.5
+    assert r["flank_ball"]["status"].startswith("error: flank milling needs a flat end mill")
+    assert r["flank_ball"]["n_commands"] == 0
+    sim = r["simulation"]  # the material left, mapped: its largest value is MaxScallop; over the limit: a warning
+    assert sim["status"].startswith("warning: the path leaves up to") and sim["n_g1"] == op["n_g1"]
+    assert sim["map_max"] == pytest.approx(sim["max_scallop"], abs=1e-12) and 0.05 < sim["max_scallop"] < 2.5
+    assert sim["map_min"] >= -0.01 and 30_000 < sim["n_values"] < 50_000 and sim["n_quads"] > 30_000
+    assert sim["title"].startswith("material left [mm]")
+
+
+def test_colour_maps_migrations_cancel(tmp_path):
+    r = _run([FREECADCMD], tmp_path, "maps_check.py")
+    d = r["deviation_map"]  # the guiding surface's deviation: machsurf_cad's own map, point for point
+    assert d["status"] == "ok" and d["n_points"] > 10_000 and d["n_quads"] > 10_000 and d["quads_in_range"]
+    assert d["max_point_gap"] == 0.0 and d["max_value_diff"] == 0.0 and d["max_abs"] == d["direct_max_abs"]
+    assert 0 < d["max_abs"] <= 1e-3 and d["range"] == [-1e-3, 1e-3] and d["marks"] == [-1e-3, 1e-3]
+    assert d["diverging"] and d["title"] == "guiding surface deviation [mm]"
+    e = r["reff_map"]  # R_eff over the face: the feature's min/max, reff_maps' min/max, the map's range
+    assert e["status"] == "ok" and e["min"] == e["direct_min"] == e["prop_min"] == e["range"][0]
+    assert e["max"] == e["direct_max"] == e["prop_max"] == e["range"][1]
+    assert e["min"] == pytest.approx(2.0, abs=1e-6)  # the corner radius r: the torus's smallest R_eff
+    so = r["stepover_map"]
+    assert so["min"] == so["direct_min"] and so["max"] == so["direct_max"] and 0 < so["min"] < so["max"]
+    assert "0.01 mm scallop" in so["title"]
+    ws = r["stepover_without_scallop"]
+    assert ws["status"].startswith("error: the step-over map needs a scallop height") and ws["n_values"] == 0
+    assert e["memory_64"] == "about 3 MB" and r["memory_1024"] == "about 682 MB"
+    c = r["colours"]
+    assert c["div_mid"] == [0.87, 0.87, 0.87] and c["div_low"][2] > c["div_low"][0] and c["div_high"][0] > 0.7
+    assert c["clipped"] == c["seq_high"] and c["norm_div"] == [0.0, 0.5, 0.75] and c["norm_seq"] == [0, 0.5, 1]
+    mg = r["migration"]  # paper vocabulary of 0.2 documents renamed, values kept
+    assert mg["rule"] == 0.25 and mg["side"] == "opposite side" and mg["pass_turn"] == 4.0 and not mg["old_gone"]
+    assert mg["guiding_error_prop"] and mg["map_props"]
+    k = r["cancel"]  # Esc on the progress bar: the recompute stops, nothing of the previous one survives
+    assert k["before"]["valid"] and k["before"]["n_values"] > 0 and k["before"]["error"] > 0
+    assert k["status"] == "error: cancelled by the user" and k["shape_null"] and k["error"] == 0.0
+    assert k["n_values"] == 0 and k["calls"] == 2 and k["proxy_same"]
 
 
 def test_an_addon_manager_clone_loads_and_recomputes(tmp_path):
@@ -206,3 +251,21 @@ def test_freecad_imports_every_multi_face_step_we_write(tmp_path):
         assert got["faces"] == len(faces), (name, got)
         assert name[: -len(".step")] in got["labels"], got["labels"]  # the product carries our name
         assert not any("Open CASCADE" in lab for lab in got["labels"])
+
+
+@pytest.mark.skipif((FREECAD is None or XVFB is None) and not IN_CI, reason="FreeCAD GUI or xvfb-run is not installed")
+def test_colour_maps_with_legends_in_the_3d_view(tmp_path):
+    """Screenshots of the deviation, R_eff and material-left maps (looked at: tmp_path/map_*.png). The numbers
+    behind them are test_colour_maps_migrations_cancel's; here: the map is what the view shows (default mode
+    "Map", the path's map beside it), the legend's unlit bar has the scale's end colours, the map fills the view,
+    and after an error the view holds nothing."""
+    r = _run([XVFB, "-a", "-s", "-screen 0 1600x1200x24", FREECAD], tmp_path, "gui_maps_check.py")
+    for name, s in r["shots"].items():
+        assert s["status"] == "ok" and s["n_values"] > 1000, name
+        assert s["mode"] == ("beside path" if name == "scallop" else "Map"), name
+        assert max(s["legend_end_colour_error"]) < 0.02, name  # the legend's ends: the scale's colours
+        assert 0.05 < s["map_pixel_fraction"] < 0.6, name  # the coloured map fills part of the view
+    assert r["shots"]["deviation"]["title"] == "guiding surface deviation [mm]"
+    assert r["shots"]["reff"]["title"] == "effective cutter radius [mm]"
+    ae = r["after_error"]
+    assert ae["status"].startswith("error: tool 'nonsense'") and ae["n_values"] == 0 and ae["children"] == 0

@@ -26,6 +26,7 @@ def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
         compare=spec.render and spec.passes > 1,
         chordal_tolerance=spec.chordal,
         clearance=spec.clearance,
+        progress=progress,
     )
     rep = res.report()
     say(

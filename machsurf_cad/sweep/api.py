@@ -118,6 +118,7 @@ def envelope(
     compare: bool = False,
     chordal_tolerance: float = 0.01,
     clearance: float = 5.0,
+    progress=None,
 ) -> EnvelopeResult:
     """Swept envelopes of a rotational tool along a motion, chained G1 or G0 (Aranda Bassegoda, eq. (21)).
 
@@ -143,6 +144,8 @@ def envelope(
         Also build the chain with the other continuity (for a G0/G1 comparison).
     chordal_tolerance, clearance : float
         Of the tool path along the passes, mm.
+    progress : callable, optional
+        :data:`~machsurf_cad.results.Progress`, called after each refinement of a pass's fit (no total known).
 
     Returns
     -------
@@ -167,7 +170,7 @@ def envelope(
         raise InputError(f"theta needs one angle or one per new pass ({passes - 1}); got {thetas.size}")
     th = thetas.tolist() if thetas.size > 1 else float(thetas[0])
     first = make_envelope(motion, tool, side=side)
-    chain = build_chain(first, passes, continuity=continuity, theta_deg=th, tolerance=tolerance)
+    chain = build_chain(first, passes, continuity=continuity, theta_deg=th, tolerance=tolerance, progress=progress)
     other = None
     if compare and passes > 1:
         other = build_chain(

@@ -46,9 +46,10 @@ class PassChain(Result):
         }
 
 
-def fit_pass(env: Envelope, tolerance: float = 1e-3, max_poles: int = 40000) -> SurfaceFit:
-    """The pass's envelope as a B-spline face within ``tolerance`` (mm), parameterised like X(a, t)."""
-    return fit_surface(env.grid, env.bounds, tolerance=tolerance, max_poles=max_poles, name=env.name)
+def fit_pass(env: Envelope, tolerance: float = 1e-3, max_poles: int = 40000, progress=None) -> SurfaceFit:
+    """The pass's envelope as a B-spline face within ``tolerance`` (mm), parameterised like X(a, t);
+    ``progress`` is called after each refinement of the fit (see :func:`~machsurf_cad.approx.fit_surface`)."""
+    return fit_surface(env.grid, env.bounds, tolerance=tolerance, max_poles=max_poles, name=env.name, progress=progress)
 
 
 def fitted_seam(f1: SurfaceFit, f2: SurfaceFit, n: int = 401) -> dict:
@@ -78,11 +79,13 @@ def build_chain(
     tolerance: float = 1e-3,
     max_poles: int = 40000,
     kink_deg: float = 10.0,
+    progress=None,
 ) -> PassChain:
     """``n_passes`` passes from ``first``, each from the previous by :func:`next_pass`; every pass is
     fitted within ``tolerance`` and every seam measured before and after fitting.
 
-    ``theta_deg`` is one angle or one per seam; ``tools`` optionally one cutter per later pass.
+    ``theta_deg`` is one angle or one per seam; ``tools`` optionally one cutter per later pass;
+    ``progress`` (:data:`~machsurf_cad.results.Progress`) is called as the fits refine.
     """
     from ..errors import InputError
 
@@ -115,7 +118,7 @@ def build_chain(
     fits = []
     t1 = time.perf_counter()
     for e in envs:
-        fits.append(fit_pass(e, tolerance, max_poles))
+        fits.append(fit_pass(e, tolerance, max_poles, progress))
     t_fit = time.perf_counter() - t1
     seams = tuple(seam_report(a, b) for a, b in zip(envs[:-1], envs[1:]))
     seams_f = tuple(fitted_seam(a, b) for a, b in zip(fits[:-1], fits[1:]))

@@ -30,7 +30,7 @@ try:
             "core_file": machsurf_cad.__file__,
             "status": ms.Status,
             "faces": len(ms.Shape.Faces),
-            "max_s1": ms.MaxErrorS1.Value,
+            "max_s1": ms.GuidingSurfaceError.Value,
         }
     )
     result["ok"] = True

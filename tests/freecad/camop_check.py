@@ -13,10 +13,11 @@ root = os.environ["MACHSURF_ROOT"]
 result = {"ok": False}
 try:
     import FreeCAD
+    import numpy as np
     import Part
     from freecad.machsurf import features
     from freecad.machsurf.app.camop import cutter_from_toolbit, find_job
-    from freecad.machsurf.convert import face_to_numpy
+    from freecad.machsurf.convert import face_to_numpy, surface_to_part
 
     import machsurf_cad as ms
 
@@ -63,6 +64,72 @@ try:
     except Exception as exc:
         chamfer = str(exc)
     result["mapping"] = {"bull": cutter_from_toolbit(bull), "ball": cutter_from_toolbit(ball), "chamfer": chamfer}
+    # 5 axes on the guiding surface (ball D6, lead 10 deg): B/C give back machsurf's axes, tips as its path
+    five = features.make("CamOperation", doc, (part, [f"Face{top + 1}"]), Pattern="5-axis surface", StepOver=4.0,
+                         Tool="ball:D=6", Lead=10.0)  # fmt: skip
+    five.ToolController = None
+    doc.recompute()
+    m5 = ms.machining_surface(faces[top], "ball:D=6", axes=5, strategy="planes:-0,1,0", lead=10.0, tolerance=1e-3)
+    tp5 = ms.tool_paths(m5, stepover=4.0, chordal_tolerance=0.01, clearance=5.0)
+    moves = [c for c in five.Path.Commands if c.Name in ("G0", "G1")]
+    tips = np.array([[c.Parameters[k] for k in "XYZ"] for c in moves])
+    bc = np.radians([[c.Parameters["B"], c.Parameters["C"]] for c in moves])
+    axes = np.stack([np.sin(bc[:, 0]) * np.cos(bc[:, 1]), np.sin(bc[:, 0]) * np.sin(bc[:, 1]), np.cos(bc[:, 0])], 1)
+    same = len(moves) == len(tp5.tip)
+    result["five_axis"] = {
+        "status": five.Status,
+        "verdict": five.Verdict,
+        "tool": five.CutterUsed,
+        "n_moves": len(moves),
+        "n_direct": int(len(tp5.tip)),
+        "cut_points": five.CutPoints,
+        "direct_cut": int(tp5.n_cut),
+        "tip_dev": float(np.abs(tips - tp5.tip).max()) if same else None,
+        "axis_dev": float(np.abs(axes - tp5.axis).max()) if same else None,
+        "max_c_jump": float(np.degrees(np.abs(np.diff(bc[:, 1]))).max()),
+        "max_b": float(np.degrees(bc[:, 0]).max()),
+        "surface_error": five.SurfaceError.Value,
+    }
+    # flank milling of a ruled face (Liu's surface) by the D20 end mill: the same path as machsurf_cad's
+    s = ms.example("liu")
+    u0, u1, v0, v1 = s.bounds
+    ruled = doc.addObject("Part::Feature", "Ruled")
+    ruled.Shape = surface_to_part(s).toShape(u0, u1, v0, v1)
+    fl = features.make("CamOperation", doc, (ruled, ["Face1"]), Pattern="flank", Tool="flat:D=20,L=80",
+                       GougeTolerance=0.5, ChordalTolerance=0.05)  # fmt: skip
+    fl.ToolController = None
+    doc.recompute()
+    fr = ms.flank(face_to_numpy(ruled.Shape.Faces[0], "Ruled"), "cyl:D=20,L=80", whole=True, tolerance=0.05)
+    fmoves = [c for c in fl.Path.Commands if c.Name in ("G0", "G1")]
+    ftips = np.array([[c.Parameters[k] for k in "XYZ"] for c in fmoves])
+    fsame = len(fmoves) == len(fr.toolpath.tip)
+    result["flank"] = {
+        "status": fl.Status,
+        "verdict": fl.Verdict,
+        "n_moves": len(fmoves),
+        "n_direct": int(len(fr.toolpath.tip)),
+        "tip_dev": float(np.abs(ftips - fr.toolpath.tip).max()) if fsame else None,
+        "max_gouge": fl.MaxGouge.Value,
+        "direct_rule_gouge": float(fr.path.report()["max_gouge_mm"]) if fr.path is not None else None,
+    }
+    fl.Tool = "ball:D=10"  # flank needs a cylinder: a message, an empty path
+    doc.recompute()
+    result["flank_ball"] = {"status": fl.Status, "n_commands": len(fl.Path.Commands)}
+    # the material left (simulated), as a colour map: its largest value is MaxScallop; a limit under it warns
+    op.SimulateScallops = True
+    op.ScallopLimit = 0.05
+    doc.recompute()
+    vals = np.array(op.MapValues)
+    result["simulation"] = {
+        "status": op.Status,
+        "max_scallop": op.MaxScallop.Value,
+        "map_max": float(vals.max()) if vals.size else None,
+        "map_min": float(vals.min()) if vals.size else None,
+        "n_values": int(vals.size),
+        "n_quads": len(op.MapQuads) // 4,
+        "title": op.MapTitle,
+        "n_g1": sum(c.Name == "G1" for c in op.Path.Commands),
+    }
     # a Job without tools and no Tool text: one line, an empty path
     for tc in list(job.Tools.Group):
         job.Tools.removeObject(tc)

@@ -28,7 +28,7 @@ try:
         {
             "valid": ms.isValid(),
             "status": ms.Status,
-            "max_s1": ms.MaxErrorS1.Value,
+            "max_s1": ms.GuidingSurfaceError.Value,
             "faces": len(ms.Shape.Faces),
             "colours": [list(c) for c in ms.ViewObject.DiffuseColor],
         }

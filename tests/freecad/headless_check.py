@@ -44,9 +44,9 @@ try:
         "recompute",
         valid=ms.isValid(),
         status=ms.Status,
-        max_s1=ms.MaxErrorS1.Value,
-        max_s2=ms.MaxErrorS2.Value,
-        poles=ms.PolesS1,
+        max_s1=ms.GuidingSurfaceError.Value,
+        max_s2=ms.OrientationSurfaceError.Value,
+        poles=ms.GuidingSurfacePoles,
         n_faces=len(ms.Shape.Faces),
     )
     # the same computation directly through machsurf_cad, compared by sampling
@@ -68,7 +68,7 @@ try:
     step(
         "change_tool",
         valid=ms.isValid(),
-        max_s1=ms.MaxErrorS1.Value,
+        max_s1=ms.GuidingSurfaceError.Value,
         report_tool=json.loads(ms.Report)["tool"]["spec"],
     )
     # quantities: units shown, every digit kept (0.5 um typed stays 0.0005 mm), floats of old documents migrated
@@ -85,7 +85,7 @@ try:
     step(
         "quantities",
         half_micron=tol_value,
-        types=[q.getTypeIdOfProperty(n) for n in ("Tolerance", "Lead", "MaxErrorS1", "AlphaMax")],
+        types=[q.getTypeIdOfProperty(n) for n in ("Tolerance", "Lead", "GuidingSurfaceError", "AlphaMax")],
         tol_text=tol_text,
         mm_text=q.Tolerance.UserString,
         lead_text=q.Lead.UserString,
@@ -104,9 +104,9 @@ try:
     step(
         "invalid_tool",
         shape_null=ms.Shape.isNull(),
-        max_s1=ms.MaxErrorS1.Value,
+        max_s1=ms.GuidingSurfaceError.Value,
         report=ms.Report,
-        poles=ms.PolesS1,
+        poles=ms.GuidingSurfacePoles,
         status=ms.Status,
     )
     ms.Tool = "ball:D=10"
@@ -159,7 +159,7 @@ try:
     step(
         "reopen",
         valid=ms2.isValid(),
-        max_s1=ms2.MaxErrorS1.Value,
+        max_s1=ms2.GuidingSurfaceError.Value,
         n_faces=len(ms2.Shape.Faces),
         proxy=type(ms2.Proxy).__name__,
         proxy_module=type(ms2.Proxy).__module__,
@@ -173,7 +173,7 @@ try:
         "deleted_source",
         valid=ms2.isValid(),
         shape_null=ms2.Shape.isNull(),
-        max_s1=ms2.MaxErrorS1.Value,
+        max_s1=ms2.GuidingSurfaceError.Value,
         status=ms2.Status,
         n_objects=len(doc2.Objects),
     )

@@ -1,18 +1,27 @@
-"""A CAM operation in FreeCAD's Path (0.20) / CAM (1.0) Job: machsurf's 3-axis tool path as Path commands.
+"""A CAM operation in FreeCAD's Path (0.20) / CAM (1.0) Job: machsurf's tool paths as Path commands.
 
 ``features.make("CamOperation", doc, (part, ["Face3", "Face7"]), Pattern="raster", StepOver=1.0)``
 adds a ``Path::FeaturePython`` operation to the document's Job (creating one on the part if there is
 none). Its tool comes from the Job's ToolController (ToolBit shapes endmill, ballend, bullnose:
 diameter and corner radius mapped explicitly, the bull-nose's FlatRadius being D/2 - r) or, without
-one, from the ``Tool`` text. It runs machsurf's exact drop-cutter on the selected faces (raster or
-waterline), checks the tool body against every face of the part, and holds the moves as ``G0``/``G1``
-commands at the tool tip (one ``G1`` per CL point), feeds from the ToolController (FreeCAD's mm/s).
-A path that gouges beyond ``GougeTolerance`` is not written (``Verdict`` says where) unless
-``AllowGouge`` is set. No GUI import: it recomputes headless.
+one, from the ``Tool`` text. Patterns:
+
+- ``raster``, ``waterline``: machsurf's exact 3-axis drop-cutter on the selected faces, avoiding the rest;
+- ``5-axis surface``: the guiding/orientation surfaces of one face (lead, tilt) and the tool path on them;
+- ``flank``: the flank milling path of a cylindrical cutter (the end mill) along one ruled face.
+
+Every path is checked against every face of the part (``Verdict``); one that gouges beyond
+``GougeTolerance`` is not written unless ``AllowGouge`` is set. The moves are ``G0``/``G1`` commands at
+the tool tip (one ``G1`` per CL point), feeds from the ToolController (FreeCAD's mm/s); 5-axis moves add
+the tool axis as ``B`` (its angle from Z) and ``C`` (its azimuth about Z, continuous), degrees, the
+convention of a B-C head (:func:`rotary_angles`). ``SimulateScallops`` also simulates the cut and maps
+the material left (per-vertex colours in the 3D view). No GUI import: it recomputes headless.
 """
 
 import json
+import math
 
+import numpy as np
 import Path
 
 from .. import ensure_core
@@ -22,7 +31,11 @@ ensure_core()
 from machsurf_cad.errors import InputError
 
 from ..convert import face_to_numpy
-from .features import ANGLE, LENGTH, Progress, _add, _Base, attach_view, tool_text, value_of
+from . import maps
+from .features import ANGLE, LENGTH, TOOL_SIDES, _add, _Base, attach_view, tool_text, value_of
+
+PATTERNS = ("raster", "waterline", "5-axis surface", "flank")
+SIMULATION_SAMPLES = 40_000
 
 # the ToolBit shapes machsurf maps (FreeCAD's names), and how
 TOOLBIT_SHAPES = ("endmill", "ballend", "bullnose")
@@ -48,10 +61,11 @@ def cutter_from_toolbit(tool) -> str:
 
 
 def _source_faces(obj):
-    """(faces to machine as machsurf Faces, every face of the source parts) from ``obj.Source``."""
+    """(faces to machine as machsurf Faces, every other face of the source parts, the machined area in mm^2)
+    from ``obj.Source``."""
     if not obj.Source:
         raise InputError("select the faces to machine in 'Source'")
-    machined, others = [], []
+    machined, others, area = [], [], 0.0
     for src, subs in obj.Source:
         if src is None or not hasattr(src, "Shape"):
             raise InputError("a source object is gone or has no shape")
@@ -63,7 +77,8 @@ def _source_faces(obj):
         for i, f in enumerate(src.Shape.Faces):
             nf = face_to_numpy(f, f"{src.Label}.Face{i + 1}")
             (machined if i in chosen else others).append(nf)
-    return machined, others
+            area += f.Area if i in chosen else 0.0
+    return machined, others, area
 
 
 def find_job(doc, part=None, create=True):
@@ -90,17 +105,34 @@ class CamOperationFeature(_Base):
         _add(obj, "App::PropertyLinkSubList", "Source", "Nominal", "Faces to machine (the rest of the part is avoided)")
         _add(obj, "App::PropertyLink", "ToolController", "Cutter", "The Job's ToolController whose ToolBit is used")
         _add(obj, "App::PropertyString", "Tool", "Cutter", "Cutter text when there is no ToolController: ball:D=10", "")
-        _add(obj, "App::PropertyEnumeration", "Pattern", "Strategy", "Raster lines or constant-z waterlines",
-             ["raster", "waterline"])  # fmt: skip
+        _add(obj, "App::PropertyEnumeration", "Pattern", "Strategy", "3-axis raster lines or constant-z "
+             "waterlines; 5-axis on the guiding surface of one face; flank milling of one ruled face",
+             list(PATTERNS))  # fmt: skip
+        if "flank" not in obj.getEnumerationsOfProperty("Pattern"):  # migration: 3-axis patterns only before
+            current = str(obj.Pattern)
+            obj.Pattern = list(PATTERNS)
+            obj.Pattern = current
         _add(obj, LENGTH, "StepOver", "Strategy", "Distance between raster lines", 2.0)
         _add(obj, ANGLE, "Angle", "Strategy", "Raster direction, from the X axis", 0.0)
         _add(obj, LENGTH, "StepDown", "Strategy", "Distance between waterline levels", 1.0)
+        _add(obj, ANGLE, "Lead", "5-axis", "Lead angle: the axis leans towards the feed (the paper's Omega_t)", 10.0)
+        _add(obj, ANGLE, "Tilt", "5-axis", "Tilt angle: the axis turns about the normal (the paper's Omega_n)", 0.0)
+        _add(obj, LENGTH, "SurfaceTolerance", "5-axis", "Largest error of the fitted guiding and orientation "
+             "surfaces, measured on points the fit never saw", 1e-3)  # fmt: skip
+        _add(obj, "App::PropertyEnumeration", "ToolSide", "Flank", "Side of the ruled face the cutter is on: the "
+             "side its normal points to, or the opposite one (the paper's side +1 / -1)", list(TOOL_SIDES))  # fmt: skip
+        _add(obj, "App::PropertyEnumeration", "FlankSetting", "Flank", "Tool setting on each rule",
+             ["optimum", "standard-distributed", "standard-bisector", "standard-tangent"])  # fmt: skip
         _add(obj, LENGTH, "ChordalTolerance", "Accuracy", "Largest distance of the moves from the exact CL surface",
              0.01)  # fmt: skip
         _add(obj, LENGTH, "GougeTolerance", "Accuracy", "Deepest the tool body may go into the part", 0.01)
         _add(obj, "App::PropertyBool", "AllowGouge", "Accuracy", "Write a gouging path anyway (listed in Verdict)",
              False)  # fmt: skip
         _add(obj, LENGTH, "Clearance", "Linking", "Rapid height above the part, along the tool axis", 5.0)
+        _add(obj, "App::PropertyBool", "SimulateScallops", "Simulation", "Also simulate the cut and map the "
+             "material left (takes a few seconds)", False)  # fmt: skip
+        _add(obj, LENGTH, "ScallopLimit", "Simulation", "Largest material left allowed (0: no limit); over it the "
+             "Status warns", 0.0)  # fmt: skip
         _add(obj, "App::PropertyBool", "Active", "Path", "Operation is part of the program", True)
         _add(obj, "App::PropertyString", "Comment", "Path", "Comment", "machsurf exact drop-cutter")
         _add(obj, "App::PropertyString", "Verdict", "Result", "Tool body against every face of the part",
@@ -109,6 +141,10 @@ class CamOperationFeature(_Base):
         _add(obj, "App::PropertyInteger", "CutPoints", "Result", "CL points (one G1 each)", read_only=True)
         _add(obj, LENGTH, "CutLength", "Result", "Length of the cutting moves", read_only=True)
         _add(obj, "App::PropertyString", "CutterUsed", "Result", "The cutter machsurf machined with", read_only=True)
+        _add(obj, LENGTH, "MaxScallop", "Result", "Largest material left by the path (simulated)", read_only=True)
+        _add(obj, LENGTH, "SurfaceError", "Result", "Measured largest error of the guiding surface (5-axis)",
+             read_only=True)  # fmt: skip
+        maps.add_properties(obj)
         for name in ("Status", "Report"):
             _add(obj, "App::PropertyString", name, "Result", name, read_only=True)
 
@@ -135,31 +171,18 @@ class CamOperationFeature(_Base):
     def compute(self, obj):
         import machsurf_cad as ms
 
-        faces, others = _source_faces(obj)
+        faces, others, area = _source_faces(obj)
         if not faces:
             raise InputError("no face to machine in 'Source'")
         cutter = ms.parse_cutter(self.cutter_text(obj))
         gtol = value_of(obj.GougeTolerance)
-        common = dict(
-            check_faces=others,
-            chordal_tolerance_mm=value_of(obj.ChordalTolerance),
-            clearance_mm=value_of(obj.Clearance),
-            verify_tolerance_mm=gtol,
-        )
-        bar = Progress()  # FreeCAD's progress bar (the GUI's status bar, the console headless)
-        try:
-            if str(obj.Pattern) == "raster":
-                tp = ms.raster(faces, cutter, stepover_mm=value_of(obj.StepOver), angle_deg=value_of(obj.Angle),
-                               progress=bar, **common)  # fmt: skip
-            else:
-                tp = ms.waterline(faces, cutter, stepdown_mm=value_of(obj.StepDown), progress=bar, **common)
-            bar.stop()
-            v = ms.verify(faces + others, tp, tolerance=gtol, progress=bar)
-        finally:
-            bar.stop()
+        bar = self.bar  # FreeCAD's progress bar (the GUI's status bar, the console headless); Esc cancels
+        tp = self.toolpath(obj, ms, faces, others, cutter, bar)
+        bar.stop()
+        v = ms.verify(faces + others, tp, tolerance=gtol, progress=bar)
+        bar.stop()
         vr = v.report()
         rep = {"toolpath": tp.report(), "verify": v.report(), "cutter": cutter.spec()}
-        obj.Report = json.dumps(rep, default=float)
         obj.MaxGouge = float(v.max_gouge)
         obj.CutterUsed = cutter.spec()
         obj.Verdict = (
@@ -176,22 +199,97 @@ class CamOperationFeature(_Base):
         obj.Path = Path.Path(self.commands(obj, tp))
         obj.CutPoints = int(tp.n_cut)
         obj.CutLength = float(tp.report().get("cut_length_mm", 0.0))
+        note = None
+        if obj.SimulateScallops:
+            # about SIMULATION_SAMPLES nominal samples: a map FreeCAD draws and saves at ease, a few seconds
+            res = max(math.sqrt(area / SIMULATION_SAMPLES), 1e-3)
+            sim = ms.simulate(faces, tp, tolerance=gtol, resolution=res, progress=bar)
+            bar.stop()
+            maps.simulation_map(obj, sim, gtol)
+            obj.MaxScallop = sim.max_scallop
+            rep["simulation"] = sim.report()
+            limit = value_of(obj.ScallopLimit)
+            if limit > 0 and sim.max_scallop > limit:
+                note = f"the path leaves up to {sim.max_scallop:.4g} mm, over the scallop limit {limit:g} mm"
+        else:
+            maps.clear_map(obj)
+        obj.Report = json.dumps(rep, default=float)
+        return note
+
+    def toolpath(self, obj, ms, faces, others, cutter, bar):
+        """machsurf's tool path of the operation's pattern."""
+        pattern = str(obj.Pattern)
+        common = dict(
+            check_faces=others,
+            chordal_tolerance_mm=value_of(obj.ChordalTolerance),
+            clearance_mm=value_of(obj.Clearance),
+            verify_tolerance_mm=value_of(obj.GougeTolerance),
+            progress=bar,
+        )
+        if pattern == "raster":
+            return ms.raster(faces, cutter, stepover_mm=value_of(obj.StepOver), angle_deg=value_of(obj.Angle),
+                             **common)  # fmt: skip
+        if pattern == "waterline":
+            return ms.waterline(faces, cutter, stepdown_mm=value_of(obj.StepDown), **common)
+        if len(faces) != 1:
+            raise InputError(f"the {pattern} pattern machines one face: select one (got {len(faces)})")
+        if pattern == "flank":
+            spec = cutter.spec()
+            if not spec.startswith("flat:"):
+                raise InputError(f"flank milling needs a flat end mill (a cylinder), not {spec}")
+            res = ms.flank(faces[0], "cyl:" + spec[len("flat:"):], setting=str(obj.FlankSetting), whole=True,
+                           side=1 if str(obj.ToolSide) == TOOL_SIDES[0] else -1,
+                           tolerance=value_of(obj.ChordalTolerance), clearance=value_of(obj.Clearance),
+                           progress=bar)  # fmt: skip
+            obj.SurfaceError = 0.0
+            return res.toolpath
+        a = math.radians(value_of(obj.Angle))  # passes along the raster direction: planes normal to it in xy
+        m = ms.machining_surface(faces[0], cutter, axes=5, strategy=f"planes:{-math.sin(a):.12g},{math.cos(a):.12g},0",
+                                 lead=value_of(obj.Lead), tilt=value_of(obj.Tilt),
+                                 tolerance=value_of(obj.SurfaceTolerance), progress=bar)  # fmt: skip
+        obj.SurfaceError = float(m.s1_fit.max_error)
+        return ms.tool_paths(m, stepover=value_of(obj.StepOver), chordal_tolerance=value_of(obj.ChordalTolerance),
+                             clearance=value_of(obj.Clearance))  # fmt: skip
 
     def commands(self, obj, tp):
-        """G0 for rapids, G1 for the rest at the tool tip; feeds (mm/s, FreeCAD's unit) from the ToolController."""
+        """G0 for rapids, G1 for the rest at the tool tip; feeds (mm/s, FreeCAD's unit) from the ToolController;
+        B and C (degrees) when the tool axis is not +Z everywhere."""
         from machsurf_cad import Move
 
         tc = self.tool_controller(obj)
         horiz = value_of(tc.HorizFeed) if tc is not None and value_of(tc.HorizFeed) > 0 else 1000.0 / 60.0
         vert = value_of(tc.VertFeed) if tc is not None and value_of(tc.VertFeed) > 0 else 300.0 / 60.0
+        five = bool(np.any(np.abs(np.asarray(tp.axis)[:, 2] - 1.0) > 1e-12))
+        b, c = rotary_angles(tp.axis) if five else (None, None)
         cmds = [Path.Command(f"({obj.Label}: machsurf {obj.Pattern}, {obj.CutterUsed})")]
-        for p, m in zip(tp.tip, tp.move):
-            xyz = {"X": float(p[0]), "Y": float(p[1]), "Z": float(p[2])}
+        if five:
+            cmds.append(Path.Command("(B: tool axis angle from Z, C: its azimuth about Z, degrees; B-C head)"))
+        for i, (p, m) in enumerate(zip(tp.tip, tp.move)):
+            words = {"X": float(p[0]), "Y": float(p[1]), "Z": float(p[2])}
+            if five:
+                words.update(B=float(b[i]), C=float(c[i]))
             if m == Move.RAPID:
-                cmds.append(Path.Command("G0", xyz))
+                cmds.append(Path.Command("G0", words))
             else:
-                cmds.append(Path.Command("G1", {**xyz, "F": horiz if m == Move.CUT else vert}))
+                cmds.append(Path.Command("G1", {**words, "F": horiz if m == Move.CUT else vert}))
         return cmds
+
+
+def rotary_angles(axis):
+    """(B, C) in degrees of unit tool axes (n, 3) for a B-C head: axis = (sin B cos C, sin B sin C, cos B),
+    B in [0, 180]; C continuous along the path (unwrapped, no 360 deg jumps), held where the axis is
+    vertical (C is free there)."""
+    a = np.asarray(axis, float).reshape(-1, 3)
+    a = a / np.linalg.norm(a, axis=1, keepdims=True)
+    b = np.degrees(np.arccos(np.clip(a[:, 2], -1.0, 1.0)))
+    c = np.degrees(np.arctan2(a[:, 1], a[:, 0]))
+    free = np.hypot(a[:, 0], a[:, 1]) < 1e-9
+    if free.all():
+        return b, np.zeros_like(c)
+    known = np.nonzero(~free)[0]
+    c[free] = np.interp(np.nonzero(free)[0], known, c[known])  # hold: nearest defined azimuth around
+    c = np.degrees(np.unwrap(np.radians(c)))
+    return b, c
 
 
 def make_operation(doc, source, **props):

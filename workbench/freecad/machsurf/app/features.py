@@ -22,8 +22,17 @@ ensure_core()
 from machsurf_cad.errors import MachsurfError
 
 from ..convert import face_to_numpy, face_to_part, surface_to_part
+from . import maps
 
 READ_ONLY = 1
+TOOL_SIDES = ("normal side", "opposite side")  # the flank tool on the side the face normal points to, or not
+# results of version 0.2 renamed to CAM vocabulary (the paper's S1/S2 stay in the tooltips)
+RENAMED_RESULTS = (
+    ("MaxErrorS1", "GuidingSurfaceError"),
+    ("MaxErrorS2", "OrientationSurfaceError"),
+    ("PolesS1", "GuidingSurfacePoles"),
+    ("PolesS2", "OrientationSurfacePoles"),
+)
 
 
 def _add(obj, kind, name, group, doc, value=None, read_only=False):
@@ -44,6 +53,16 @@ def _add(obj, kind, name, group, doc, value=None, read_only=False):
             setattr(obj, name, value)
     if read_only:
         obj.setEditorMode(name, READ_ONLY)
+
+
+def _rename(obj, old, new):
+    """Migration of a property renamed to CAM vocabulary: remove ``old`` (when ``new`` is not there yet)
+    and return its value for the new property, else None."""
+    if old not in obj.PropertiesList or new in obj.PropertiesList:
+        return None
+    value = getattr(obj, old)
+    obj.removeProperty(old)
+    return value
 
 
 def value_of(q) -> float:
@@ -82,6 +101,15 @@ def tool_text(text):
     if text not in library:
         raise MachsurfError(f"tool '{text}' is not in the tool library {path} ({', '.join(sorted(library))})")
     return str(library[text])
+
+
+REFF_BYTES_PER_SAMPLE = 650  # measured peak of reff_maps per grid sample (grid 1024: 0.63 GB above the imports, 2.1 s)
+
+
+def reff_memory_text(grid: int) -> str:
+    """The memory an effective-radius map of ``grid`` x ``grid`` samples needs, as text."""
+    mb = grid * grid * REFF_BYTES_PER_SAMPLE / 1e6
+    return f"about {mb / 1000:.1f} GB" if mb >= 1000 else f"about {max(mb, 1):.0f} MB"
 
 
 def source_face(obj):
@@ -132,9 +160,15 @@ class _Base:
         return None
 
     def execute(self, obj):
+        self.bar = Progress()  # compute passes it to machsurf_cad: progress, and Esc cancels
         try:
-            self.compute(obj)
-            obj.Status = "ok"
+            try:
+                note = self.compute(obj)
+            finally:
+                self.bar.stop()
+            obj.Status = f"warning: {note}" if note else "ok"
+            if note:
+                FreeCAD.Console.PrintWarning(f"{obj.Label}: {note}\n")
         except Exception as exc:  # every failure: one line, the shape and results emptied, the document unharmed
             text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
             if not isinstance(exc, (MachsurfError, ValueError)):
@@ -161,6 +195,7 @@ class _Base:
                 setattr(obj, name, 0.0)
         if hasattr(self, "map"):
             del self.map
+        maps.clear_map(obj)
 
 
 class MachiningSurfaceFeature(_Base):
@@ -201,20 +236,25 @@ class MachiningSurfaceFeature(_Base):
             current = str(obj.Loops)
             obj.Loops = ["error", "flag", "trim"]
             obj.Loops = current
+        for old, new in RENAMED_RESULTS:
+            _rename(obj, old, new)
         for name, kind, doc in (
-            ("MaxErrorS1", LENGTH, "Measured largest error of the guiding surface (the paper's S1, tool centres)"),
-            ("MaxErrorS2", LENGTH, "Measured largest error of the orientation surface (the paper's S2)"),
-            ("AlphaMax", ANGLE, "Bound of the tool-axis orientation error for the measured errors"),
-        ):
+            ("GuidingSurfaceError", LENGTH, "Measured largest error of the guiding surface (tool centres; the "
+             "paper's S1), on points the fit never saw"),
+            ("OrientationSurfaceError", LENGTH, "Measured largest error of the orientation surface (a point on the "
+             "tool axis; the paper's S2)"),
+            ("AlphaMax", ANGLE, "Bound of the tool-axis orientation error for the measured errors (alpha_max)"),
+        ):  # fmt: skip
             _add(obj, kind, name, "Result", doc, read_only=True)
         for name, doc in (
-            ("PolesS1", "Poles of S1"),
-            ("PolesS2", "Poles of S2"),
+            ("GuidingSurfacePoles", "Poles of the guiding surface (S1)"),
+            ("OrientationSurfacePoles", "Poles of the orientation surface (S2)"),
             ("LoopReport", "Loops found"),
             ("Status", "Last recompute"),
             ("Report", "JSON report of the last recompute"),
         ):
             _add(obj, "App::PropertyString", name, "Result", doc, read_only=True)
+        maps.add_properties(obj)
 
     def compute(self, obj):
         from machsurf_cad import machining_surface
@@ -229,13 +269,15 @@ class MachiningSurfaceFeature(_Base):
             tilt=value_of(obj.Tilt),
             tolerance=value_of(obj.Tolerance),
             loops=str(obj.Loops),
+            progress=self.bar,
         )
         faces = [face_to_part(x) for x in ms.faces()]
         obj.Shape = Part.Compound(faces)
-        obj.MaxErrorS1 = ms.s1_fit.max_error
-        obj.PolesS1 = "x".join(str(n) for n in ms.s1_fit.surface.shape)
-        obj.MaxErrorS2 = ms.s2_fit.max_error if ms.s2_fit else 0.0
-        obj.PolesS2 = "x".join(str(n) for n in ms.s2_fit.surface.shape) if ms.s2_fit else ""
+        obj.GuidingSurfaceError = ms.s1_fit.max_error
+        obj.GuidingSurfacePoles = "x".join(str(n) for n in ms.s1_fit.surface.shape)
+        obj.OrientationSurfaceError = ms.s2_fit.max_error if ms.s2_fit else 0.0
+        obj.OrientationSurfacePoles = "x".join(str(n) for n in ms.s2_fit.surface.shape) if ms.s2_fit else ""
+        maps.deviation_map(obj, ms)
         obj.AlphaMax = ms.alpha_max_deg_measured or 0.0
         obj.LoopReport = "none" if not ms.loops.found else "; ".join(r.describe() for r in ms.loops.regions)
         obj.Report = json.dumps(ms.report(), default=float)
@@ -254,10 +296,15 @@ class EffectiveRadiusFeature(_Base):
             "App::PropertyIntegerConstraint",
             "Grid",
             "Strategy",
-            "Samples per parameter direction (8 to 1024; 1024 needs about 1.5 GB)",
+            "Samples per parameter direction (8 to 1024; 1024 needs about 0.7 GB, see MemoryNeeded)",
             (min(max(preference("DefaultGrid", 64), 8), 1024), 8, 1024, 8),
         )
+        _add(obj, "App::PropertyString", "MemoryNeeded", "Strategy", "Memory the grid needs (stated before running)",
+             read_only=True)  # fmt: skip
+        obj.MemoryNeeded = reff_memory_text(int(obj.Grid))
         _add(obj, LENGTH, "Scallop", "Strategy", "Scallop height for the step-over; 0 for none", 0.0)
+        _add(obj, "App::PropertyEnumeration", "MapShows", "Map", "What the colour map shows (step-over needs a "
+             "scallop height)", ["effective radius", "step-over"])  # fmt: skip
         for name, kind, doc in (
             ("ReffMin", LENGTH, "Smallest effective cutter radius over the face"),
             ("ReffMean", LENGTH, "Mean effective cutter radius over the face"),
@@ -267,6 +314,11 @@ class EffectiveRadiusFeature(_Base):
             _add(obj, kind, name, "Result", doc, read_only=True)
         for name in ("Status", "Report"):
             _add(obj, "App::PropertyString", name, "Result", name, read_only=True)
+        maps.add_properties(obj)
+
+    def onChanged(self, obj, prop):
+        if prop == "Grid" and "MemoryNeeded" in obj.PropertiesList:
+            obj.MemoryNeeded = reff_memory_text(int(obj.Grid))
 
     def compute(self, obj):
         from machsurf_cad import reff_maps
@@ -285,6 +337,7 @@ class EffectiveRadiusFeature(_Base):
         obj.TorusBeatsBall = d["area_fraction_torus_beats_ball"]
         obj.Report = json.dumps(m.report(), default=float)
         self.map = m
+        maps.reff_map(obj, m, str(obj.MapShows))
         obj.Shape = fc.copy()
 
 
@@ -295,13 +348,16 @@ class FlankSettingFeature(_Base):
     def properties(self, obj):
         _add(obj, "App::PropertyLinkSub", "Source", "Nominal", "Ruled face")
         _add(obj, LENGTH, "Radius", "Cutter", "Radius of the cylindrical cutter (the paper's R)", 10.0)
+        rule = _rename(obj, "Rule", "RulePosition")
+        side = _rename(obj, "Side", "ToolSide")
         _add(
             obj,
             "App::PropertyFloatConstraint",
-            "Rule",
+            "RulePosition",
             "Strategy",
-            "Where the tool sits: 0 at the face's first rule, 1 at its last (fraction of the u range)",
-            (0.5, 0.0, 1.0, 0.05),
+            "Which rule (straight line of the face) the tool touches: 0 at the face's first rule, 1 at its last "
+            "(fraction of the parameter range across the rules)",
+            (0.5 if rule is None else float(rule), 0.0, 1.0, 0.05),
         )
         _add(
             obj,
@@ -313,12 +369,15 @@ class FlankSettingFeature(_Base):
         )
         _add(
             obj,
-            "App::PropertyInteger",
-            "Side",
+            "App::PropertyEnumeration",
+            "ToolSide",
             "Strategy",
-            "Tool side: +1 on the side of the face normal, -1 the other",
-            1,
+            "Side of the face the tool is on: the side its normal points to, or the opposite one "
+            "(the paper's side +1 / -1)",
+            list(TOOL_SIDES),
         )
+        if side is not None:  # an older document's Side +1/-1
+            obj.ToolSide = TOOL_SIDES[0] if int(side) >= 0 else TOOL_SIDES[1]
         for name, kind, doc in (
             ("MaxGouge", LENGTH, "Deepest the cutter goes into the face along the rule"),
             ("MaxUndercut", LENGTH, "Thickest material left along the rule"),
@@ -334,9 +393,10 @@ class FlankSettingFeature(_Base):
         res = flank(
             face_to_numpy(source_face(obj), "F"),
             value_of(obj.Radius),
-            rule=float(obj.Rule),
+            rule=float(obj.RulePosition),
             setting=str(obj.Setting),
-            side=int(obj.Side),
+            side=1 if str(obj.ToolSide) == TOOL_SIDES[0] else -1,
+            progress=self.bar,
         )
         st, e = res.setting, res.interference
         obj.MaxGouge, obj.MaxUndercut, obj.Gamma = e.max_gouge, e.max_undercut, st.gamma_deg
@@ -361,7 +421,9 @@ class EnvelopeFeature(_Base):
         )
         _add(obj, "App::PropertyString", "Motion", "Motion", "Example motion: sine, line, helix", "sine")
         _add(obj, "App::PropertyInteger", "Passes", "Motion", "Number of passes", 2)
-        _add(obj, ANGLE, "Theta", "Motion", "Axis turn about the seam normal between passes (the paper's theta)", 0.0)
+        theta = _rename(obj, "Theta", "PassTurn")
+        _add(obj, ANGLE, "PassTurn", "Motion", "Turn of the tool axis about the seam normal from one pass to the "
+             "next (the paper's theta)", 0.0 if theta is None else value_of(theta))  # fmt: skip
         _add(
             obj,
             LENGTH,
@@ -382,8 +444,9 @@ class EnvelopeFeature(_Base):
             tool_text(obj.Tool),
             example(str(obj.Motion), "motion"),
             passes=int(obj.Passes),
-            theta_deg=value_of(obj.Theta),
+            theta_deg=value_of(obj.PassTurn),
             tolerance=value_of(obj.Tolerance),
+            progress=self.bar,
         )
         ch = res.chain
         faces = []
@@ -408,28 +471,46 @@ def attach_view(obj):
         attach(obj)
 
 
-class Progress:
-    """machsurf_cad's ``progress(done, total, message)`` on FreeCAD's progress bar (Base.ProgressIndicator)."""
+class Cancelled(MachsurfError):
+    """The user cancelled a recompute (Esc on FreeCAD's progress bar)."""
 
-    def __init__(self):
+
+class Progress:
+    """machsurf_cad's ``progress(done, total, message)`` on FreeCAD's progress bar (Base.ProgressIndicator).
+
+    A known total gives a bar, an unknown one (``total`` None: a fit refining until its tolerance) a busy
+    indicator stepped once a call. Every step lets the user cancel (Esc in the GUI): the recompute then
+    stops with :class:`Cancelled`, and the feature is emptied like after any error.
+    """
+
+    def __init__(self, indicator=None):
+        self.indicator = indicator or (lambda: FreeCAD.Base.ProgressIndicator())
         self.bar = None
         self.done = 0
+        self.total = None
 
     def __call__(self, done, total=None, message=""):
-        if not total:
-            return
-        if self.bar is None:
-            self.bar = FreeCAD.Base.ProgressIndicator()
-            self.bar.start(str(message or "machsurf"), int(total))
-        for _ in range(max(0, int(done) - self.done)):
-            self.bar.next()
+        steps = int(total) if total else 0
+        if self.bar is None or steps != self.total:
+            self.stop()
+            self.bar = self.indicator()
+            self.bar.start(str(message or "machsurf"), steps)
+            self.total = steps
+        n = max(0, int(done) - self.done) if steps else 1
+        try:
+            for _ in range(n):
+                self.bar.next(True)  # True: may be cancelled here
+        except RuntimeError:  # FreeCAD's sequencer aborts with RuntimeError("abort exception")
+            self.bar = None
+            raise Cancelled("cancelled by the user") from None
         self.done = max(self.done, int(done))
 
     def stop(self):
         if self.bar is not None:
             self.bar.stop()
-            self.bar = None
-            self.done = 0
+        self.bar = None
+        self.done = 0
+        self.total = None
 
 
 def make(kind, doc=None, source=None, **props):

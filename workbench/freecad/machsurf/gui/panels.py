@@ -5,18 +5,25 @@ Quantities (lengths, angles) are edited as text with their unit and every digit 
 0.001 mm comes back as 0.001 mm.
 """
 
+import re
+
 import FreeCADGui as Gui
 from PySide2 import QtWidgets
 
 EDITABLE = {
     "MachiningSurfaceFeature": ["Tool", "Axes", "Strategy", "Lead", "Tilt", "Tolerance", "Loops"],
-    "EffectiveRadiusFeature": ["Tool", "Direction", "Grid", "Scallop"],
-    "FlankSettingFeature": ["Radius", "Rule", "Setting", "Side"],
-    "EnvelopeFeature": ["Tool", "Motion", "Passes", "Theta", "Tolerance"],
+    "EffectiveRadiusFeature": ["Tool", "Direction", "Grid", "Scallop", "MapShows"],
+    "FlankSettingFeature": ["Radius", "RulePosition", "Setting", "ToolSide"],
+    "EnvelopeFeature": ["Tool", "Motion", "Passes", "PassTurn", "Tolerance"],
 }
 
 
 UNITS = {"App::PropertyLength": "mm", "App::PropertyDistance": "mm", "App::PropertyAngle": "deg"}
+
+
+def label(name: str) -> str:
+    """A property's name as the property editor shows it: ``RulePosition`` -> ``Rule position``."""
+    return re.sub(r"(?<=[a-z])(?=[A-Z])", " ", name).capitalize()
 
 
 def _read(w):
@@ -56,7 +63,7 @@ class FeaturePanel:
                 w.setValue(value)
             else:
                 w = QtWidgets.QLineEdit(str(value))
-            lay.addRow(name, w)
+            lay.addRow(label(name), w)
             self.fields[name] = w
             self.initial[name] = _read(w)
         self.status = QtWidgets.QLabel(getattr(obj, "Status", ""))

@@ -1,6 +1,18 @@
-"""View providers: colouring of the result faces (GUI only)."""
+"""View providers: colouring of the result faces and the per-vertex colour maps with their legend (GUI only).
+
+A feature with a map (machining surface: deviation of the guiding surface; effective radius: R_eff or
+step-over) gets the display mode "Map", its default: the map's mesh coloured per vertex and a legend.
+The other modes (Flat Lines, Shaded, ...) show the faces, coloured by their measured error. A CAM
+operation's map (material left by its path) is drawn beside the tool path.
+"""
 
 import json
+
+from pivy import coin
+
+from . import colourmap
+
+MAP_MODE = "Map"
 
 
 class ViewProvider:
@@ -9,10 +21,35 @@ class ViewProvider:
 
     def attach(self, vobj):
         self.Object = vobj.Object
+        self.map_root = coin.SoSeparator()
+        if _is_path(vobj.Object):  # beside the path's lines, shown and hidden with the path
+            self.switch = coin.SoSwitch()
+            self.switch.addChild(self.map_root)
+            self.switch.whichChild = 0 if vobj.Visibility else -1
+            vobj.RootNode.addChild(self.switch)
+        else:
+            vobj.addDisplayMode(self.map_root, MAP_MODE)
+        colourmap.fill(self.map_root, vobj.Object)
+
+    def onChanged(self, vobj, prop):
+        if prop == "Visibility" and hasattr(self, "switch"):
+            self.switch.whichChild = 0 if vobj.Visibility else -1
+
+    def getDisplayModes(self, vobj):
+        return [] if _is_path(vobj.Object) else [MAP_MODE]
+
+    def getDefaultDisplayMode(self):
+        obj = getattr(self, "Object", None)
+        return MAP_MODE if obj is not None and "MapValues" in obj.PropertiesList else "Flat Lines"
+
+    def setDisplayMode(self, mode):
+        return mode
 
     def updateData(self, obj, prop):
         if prop in ("Shape", "Report"):
             colour_result(obj)
+        if prop in ("MapValues", "MapDiverging") and hasattr(self, "map_root"):
+            colourmap.fill(self.map_root, obj)
 
     def getIcon(self):
         from .commands import ICON
@@ -55,7 +92,7 @@ def colour_result(obj):
     try:
         if obj.Proxy.__class__.__name__ == "MachiningSurfaceFeature":
             tol = max(float(obj.Tolerance), 1e-300)
-            errs = [float(obj.MaxErrorS1), float(obj.MaxErrorS2)][: len(obj.Shape.Faces)]
+            errs = [float(obj.GuidingSurfaceError), float(obj.OrientationSurfaceError)][: len(obj.Shape.Faces)]
             vobj.DiffuseColor = [_ramp(e / tol) for e in errs]
         elif obj.Proxy.__class__.__name__ == "EffectiveRadiusFeature":
             rep = json.loads(obj.Report or "{}")
@@ -65,6 +102,12 @@ def colour_result(obj):
         pass
 
 
+def _is_path(obj) -> bool:
+    return obj.TypeId.startswith("Path::")
+
+
 def attach(obj):
     ViewProvider(obj.ViewObject)
     colour_result(obj)
+    if "MapValues" in obj.PropertiesList and not _is_path(obj) and MAP_MODE in obj.ViewObject.listDisplayModes():
+        obj.ViewObject.DisplayMode = MAP_MODE

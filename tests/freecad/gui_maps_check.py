@@ -1,0 +1,83 @@
+"""Runs inside the FreeCAD GUI under Xvfb: the colour maps of the machining surface (deviation), the
+effective radius (R_eff) and the CAM operation (material left) in the 3D view, each saved as a screenshot;
+writes the display modes and the pixel figures of each picture to MACHSURF_FC_OUT."""
+
+import json
+import os
+import traceback
+
+out_path = os.environ["MACHSURF_FC_OUT"]
+root = os.environ["MACHSURF_ROOT"]
+result = {"ok": False}
+try:
+    import FreeCAD
+    import FreeCADGui as Gui
+    import numpy as np
+    import Part
+    from freecad.machsurf import features
+    from freecad.machsurf.app.maps import colour
+    from PySide2 import QtGui
+
+    Gui.activateWorkbench("MachsurfWorkbench")
+    doc = FreeCAD.newDocument("maps_gui")
+    part = doc.addObject("Part::Feature", "Block")
+    part.Shape = Part.read(os.path.join(root, "example_parts", "freeform_block.step"))
+    top = max(
+        (i for i, f in enumerate(part.Shape.Faces) if isinstance(f.Surface, Part.BSplineSurface)),
+        key=lambda i: part.Shape.Faces[i].Area,
+    )
+    src = (part, [f"Face{top + 1}"])
+    objs = {
+        "deviation": features.make("MachiningSurface", doc, src, Tool="bull:D=16,r=3", Lead=10.0, Tolerance=1e-3),
+        "reff": features.make("EffectiveRadius", doc, src, Tool="bull:D=10,r=2", Direction=30.0, Grid=96),
+        "scallop": features.make("CamOperation", doc, src, Pattern="raster", StepOver=4.0, SimulateScallops=True),
+    }
+    doc.recompute()
+    view = Gui.ActiveDocument.ActiveView
+    shots = {}
+    for name, obj in objs.items():
+        for o in doc.Objects:  # only this feature (and, for the path, nothing of the part) in the picture
+            if o.ViewObject is not None:
+                o.ViewObject.Visibility = False
+        obj.ViewObject.Visibility = True  # last: hiding the Job's group hides its operations
+        view.viewIsometric()
+        Gui.SendMsgToActiveView("ViewFit")
+        Gui.updateGui()
+        png = os.path.join(os.path.dirname(out_path), f"map_{name}.png")
+        view.saveImage(png, 1200, 900, "White")
+        img = QtGui.QImage(png)
+        w, h = img.width(), img.height()
+        arr = np.array([[QtGui.QColor(img.pixel(x, y)).getRgbF()[:3] for x in range(0, w, 3)] for y in range(0, h, 3)])
+        # the legend bar: unlit, so its colours are the scale's own; the map: lit colours off the background
+        div = bool(obj.MapDiverging)
+        ends = colour([0.0, 1.0], div)
+        legend = arr[:, : int(0.06 * arr.shape[1])]
+        near = [float(np.min(np.abs(legend - e).max(axis=-1))) for e in ends]
+        body = arr[:, int(0.15 * arr.shape[1]) :]
+        coloured = np.abs(body - 1.0).max(axis=-1) > 0.05
+        shots[name] = {
+            "png": png,
+            "size": [w, h],
+            "mode": obj.ViewObject.DisplayMode if "Map" in obj.ViewObject.listDisplayModes() else "beside path",
+            "modes": obj.ViewObject.listDisplayModes(),
+            "legend_end_colour_error": near,
+            "map_pixel_fraction": float(coloured.mean()),
+            "n_values": len(obj.MapValues),
+            "title": obj.MapTitle,
+            "status": obj.Status,
+        }
+    result["shots"] = shots
+    # after an error the map is gone from the view too (no stale colours)
+    ms = objs["deviation"]
+    ms.ViewObject.Visibility = True
+    ms.Tool = "nonsense"
+    doc.recompute()
+    result["after_error"] = {"status": ms.Status, "n_values": len(ms.MapValues),
+                             "children": ms.ViewObject.Proxy.map_root.getNumChildren()}  # fmt: skip
+    result["ok"] = True
+except Exception:
+    result["error"] = traceback.format_exc()
+finally:
+    with open(out_path, "w") as fh:
+        json.dump(result, fh, indent=1, default=str)
+    os._exit(0)
