@@ -141,6 +141,15 @@ def test_cam_operation_in_a_path_job(tmp_path):
     assert f5["n_moves"] == f5["n_direct"] > 400 and f5["cut_points"] == f5["direct_cut"]
     assert f5["tip_dev"] < 1e-9 and f5["axis_dev"] < 1e-12 and 0 < f5["max_b"] < 90
     assert 0 < f5["surface_error"] <= 1e-3
+    apt = r["apt"]  # the APT beside it (machsurf's writer, 5 decimals): same positions and axes
+    assert apt["n"] == f5["n_direct"] and apt["tip_dev"] <= 5e-6 and apt["axis_dev"] < 1e-9
+    assert apt["feed_line"].startswith("FEDRAT/")
+    bad = r["bad_input"]  # every bad value: one line, an empty path; restored, the operation recovers
+    assert len(bad["cases"]) == 7
+    for case, b in bad["cases"].items():
+        assert b["status"].startswith("error: ") and "\n" not in b["status"], case
+        assert b["n_commands"] == 0 and b["cut_points"] == 0, case
+    assert bad["recovered"] == "ok" and bad["n_g1"] > 400 and bad["objects_same"]
     fl = r["flank"]  # flank milling: machsurf's path, its gouge (the setting's own) within the tolerance given
     assert fl["status"] == "ok" and fl["verdict"].startswith("clean") and fl["n_moves"] == fl["n_direct"] > 10
     assert fl["tip_dev"] < 1e-9 and fl["direct_rule_gouge"] <= fl["max_gouge"] <= 0.5

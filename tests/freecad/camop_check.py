@@ -68,6 +68,8 @@ try:
     five = features.make("CamOperation", doc, (part, [f"Face{top + 1}"]), Pattern="5-axis surface", StepOver=4.0,
                          Tool="ball:D=6", Lead=10.0)  # fmt: skip
     five.ToolController = None
+    apt = os.path.join(os.path.dirname(out_path), "five.apt")
+    five.AptFile = apt
     doc.recompute()
     m5 = ms.machining_surface(faces[top], "ball:D=6", axes=5, strategy="planes:-0,1,0", lead=10.0, tolerance=1e-3)
     tp5 = ms.tool_paths(m5, stepover=4.0, chordal_tolerance=0.01, clearance=5.0)
@@ -90,6 +92,27 @@ try:
         "max_b": float(np.degrees(bc[:, 0]).max()),
         "surface_error": five.SurfaceError.Value,
     }
+    back = ms.read_apt(apt)  # the APT beside it: the same positions and axes
+    result["apt"] = {
+        "n": int(len(back.tip)),
+        "tip_dev": float(np.abs(back.tip - tp5.tip).max()) if len(back.tip) == len(tp5.tip) else None,
+        "axis_dev": float(np.abs(back.axis - tp5.axis).max()) if len(back.tip) == len(tp5.tip) else None,
+        "feed_line": next((ln.strip() for ln in open(apt) if ln.startswith("FEDRAT")), ""),
+    }
+    # bad input on the operation: a one-line status, an empty path, the document intact; then it recovers
+    bad = {}
+    for prop, value in (("StepOver", 0.0), ("StepOver", 1e9), ("Lead", 95.0), ("SurfaceTolerance", 0.0),
+                        ("ChordalTolerance", -1.0), ("Clearance", -5.0), ("Tool", "cone:D=0")):  # fmt: skip
+        keep = getattr(five, prop)
+        setattr(five, prop, value)
+        doc.recompute()
+        bad[f"{prop}={value}"] = {"status": five.Status, "n_commands": len(five.Path.Commands),
+                                  "cut_points": five.CutPoints}  # fmt: skip
+        setattr(five, prop, keep)
+    n_objects = len(doc.Objects)
+    doc.recompute()
+    result["bad_input"] = {"cases": bad, "recovered": five.Status, "n_g1": sum(c.Name == "G1" for c in
+                           five.Path.Commands), "objects_same": n_objects == len(doc.Objects)}  # fmt: skip
     # flank milling of a ruled face (Liu's surface) by the D20 end mill: the same path as machsurf_cad's
     s = ms.example("liu")
     u0, u1, v0, v1 = s.bounds

@@ -133,6 +133,8 @@ class CamOperationFeature(_Base):
              "material left (takes a few seconds)", False)  # fmt: skip
         _add(obj, LENGTH, "ScallopLimit", "Simulation", "Largest material left allowed (0: no limit); over it the "
              "Status warns", 0.0)  # fmt: skip
+        _add(obj, "App::PropertyFile", "AptFile", "Output", "Also write the path as APT CLDATA to this file "
+             "(machsurf's writer: GOTO with the tool axis i, j, k); empty: none", "")  # fmt: skip
         _add(obj, "App::PropertyBool", "Active", "Path", "Operation is part of the program", True)
         _add(obj, "App::PropertyString", "Comment", "Path", "Comment", "machsurf exact drop-cutter")
         _add(obj, "App::PropertyString", "Verdict", "Result", "Tool body against every face of the part",
@@ -197,6 +199,8 @@ class CamOperationFeature(_Base):
             obj.Path = Path.Path()
             raise InputError(f"the path gouges the part ({obj.Verdict}): not written (AllowGouge writes it)")
         obj.Path = Path.Path(self.commands(obj, tp))
+        if str(obj.AptFile):
+            ms.write_apt(str(obj.AptFile), tp, self.post_options(obj, ms))
         obj.CutPoints = int(tp.n_cut)
         obj.CutLength = float(tp.report().get("cut_length_mm", 0.0))
         note = None
@@ -251,14 +255,29 @@ class CamOperationFeature(_Base):
         return ms.tool_paths(m, stepover=value_of(obj.StepOver), chordal_tolerance=value_of(obj.ChordalTolerance),
                              clearance=value_of(obj.Clearance))  # fmt: skip
 
+    def feeds(self, obj):
+        """(cutting, plunge) feeds in mm/s (FreeCAD's unit) from the ToolController, else 1000 and 300 mm/min."""
+        tc = self.tool_controller(obj)
+        horiz = value_of(tc.HorizFeed) if tc is not None and value_of(tc.HorizFeed) > 0 else 1000.0 / 60.0
+        vert = value_of(tc.VertFeed) if tc is not None and value_of(tc.VertFeed) > 0 else 300.0 / 60.0
+        return horiz, vert
+
+    def post_options(self, obj, ms):
+        """machsurf's APT options with the ToolController's feeds (mm/min), speed and tool number."""
+        tc = self.tool_controller(obj)
+        horiz, vert = self.feeds(obj)
+        rpm = float(getattr(tc, "SpindleSpeed", 0) or 0) if tc is not None else 0.0
+        number = int(getattr(tc, "ToolNumber", 1) or 1) if tc is not None else 1
+        return ms.PostOptions(feed_mm_min=horiz * 60.0, plunge_mm_min=vert * 60.0,
+                              spindle_rpm=rpm if rpm > 0 else 10000.0, tool_number=number,
+                              partno=str(obj.Label).upper()[:40])  # fmt: skip
+
     def commands(self, obj, tp):
         """G0 for rapids, G1 for the rest at the tool tip; feeds (mm/s, FreeCAD's unit) from the ToolController;
         B and C (degrees) when the tool axis is not +Z everywhere."""
         from machsurf_cad import Move
 
-        tc = self.tool_controller(obj)
-        horiz = value_of(tc.HorizFeed) if tc is not None and value_of(tc.HorizFeed) > 0 else 1000.0 / 60.0
-        vert = value_of(tc.VertFeed) if tc is not None and value_of(tc.VertFeed) > 0 else 300.0 / 60.0
+        horiz, vert = self.feeds(obj)
         five = bool(np.any(np.abs(np.asarray(tp.axis)[:, 2] - 1.0) > 1e-12))
         b, c = rotary_angles(tp.axis) if five else (None, None)
         cmds = [Path.Command(f"({obj.Label}: machsurf {obj.Pattern}, {obj.CutterUsed})")]
