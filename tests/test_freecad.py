@@ -179,6 +179,13 @@ def test_colour_maps_migrations_cancel(tmp_path):
     ws = r["stepover_without_scallop"]
     assert ws["status"].startswith("error: the step-over map needs a scallop height") and ws["n_values"] == 0
     assert e["memory_64"] == "about 3 MB" and r["memory_1024"] == "about 682 MB"
+    em = r["envelope_map"]  # each pass's fit against its exact envelope, on points off the fit's samples
+    assert em["status"] == "ok" and em["n"] == 2 * 64 * 64 and 0 < em["max_abs"] <= 1e-3
+    assert em["marks"] == [-1e-3, 1e-3] and em["title"] == "envelope fit deviation [mm]"
+    fm = r["flank_map"]  # the band the interference is measured on: its lowest value is the setting's gouge
+    assert fm["status"] == "ok" and fm["n"] > 3000 and fm["undercut"] == 0.0
+    assert fm["min"] == pytest.approx(-fm["gouge"], rel=5e-3) and fm["min"] >= -fm["gouge"] - 1e-9
+    assert fm["gouge"] == pytest.approx(0.11852, abs=5e-5)  # the paper's optimum on the hyperbolic paraboloid
     c = r["colours"]
     assert c["div_mid"] == [0.87, 0.87, 0.87] and c["div_low"][2] > c["div_low"][0] and c["div_high"][0] > 0.7
     assert c["clipped"] == c["seq_high"] and c["norm_div"] == [0.0, 0.5, 0.75] and c["norm_seq"] == [0, 0.5, 1]
@@ -264,14 +271,15 @@ def test_freecad_imports_every_multi_face_step_we_write(tmp_path):
 
 @pytest.mark.skipif((FREECAD is None or XVFB is None) and not IN_CI, reason="FreeCAD GUI or xvfb-run is not installed")
 def test_colour_maps_with_legends_in_the_3d_view(tmp_path):
-    """Screenshots of the deviation, R_eff and material-left maps (looked at: tmp_path/map_*.png). The numbers
-    behind them are test_colour_maps_migrations_cancel's; here: the map is what the view shows (default mode
-    "Map", the path's map beside it), the legend's unlit bar has the scale's end colours, the map fills the view,
-    and after an error the view holds nothing."""
+    """Screenshots of every feature's map (looked at: tmp_path/map_*.png): the guiding surface's deviation, R_eff,
+    the material a path leaves, the envelope fit's deviation, the distance from a ruled face to the flank tool.
+    The numbers behind them are test_colour_maps_migrations_cancel's; here: the map is what the view shows
+    (default mode "Map"; beside the path and the placed cylinder), the legend's unlit bar has the scale's end
+    colours, the map fills part of the view, and after an error the view holds nothing."""
     r = _run([XVFB, "-a", "-s", "-screen 0 1600x1200x24", FREECAD], tmp_path, "gui_maps_check.py")
     for name, s in r["shots"].items():
         assert s["status"] == "ok" and s["n_values"] > 1000, name
-        assert s["mode"] == ("beside path" if name == "scallop" else "Map"), name
+        assert s["mode"] == ("beside" if name in ("scallop", "flank") else "Map"), name
         assert max(s["legend_end_colour_error"]) < 0.02, name  # the legend's ends: the scale's colours
         assert 0.05 < s["map_pixel_fraction"] < 0.6, name  # the coloured map fills part of the view
     assert r["shots"]["deviation"]["title"] == "guiding surface deviation [mm]"

@@ -104,6 +104,21 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
                     "open: material left there, refine --grid)"
                 )  # fmt: skip
             )
+            if i.get("scallop_target_mm") is not None:
+                say(
+                    f"scallop-driven lines: step-over {i['stepover_min_mm']:.4g}..{i['stepover_max_mm']:.4g} mm "
+                    f"(flat floor {i['stepover_flat_floor_mm']:.4g}), largest cusp planned {i['scallop_planned_max_mm']:.4g}"
+                    f" mm along the normal ({i['scallop_planned_max_vertical_mm']:.4g} vertically), target "
+                    f"{i['scallop_target_mm']:g} mm"
+                )
+                if i["n_scallop_unmet"]:
+                    w = i["scallop_unmet"][0]
+                    say(
+                        f"scallop target not met between {i['n_scallop_unmet']} pair(s) of lines at the smallest "
+                        f"step-over (the cutter does not reach there): up to {w['left_mm']:.4g} mm near "
+                        f"({w['at_xy_mm'][0]:.3f}, {w['at_xy_mm'][1]:.3f}) mm"
+                    )
+                    code = max(code, EXIT_TOLERANCE)
             rep["verify"], c2 = write_checked_toolpath(st, say, tp, faces, spec, tolerance=spec.gouge_tol, render=True)
             code = max(code, c2)
         rep["time_s"] = {"total_s": time.perf_counter() - t0}

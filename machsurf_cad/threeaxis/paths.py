@@ -19,6 +19,7 @@ from ..errors import InputError
 from ..results import Progress
 from .dropcutter import DropCutterResult, drop_cutter, machining_face_set
 from .faceset import FaceSet
+from .scallop import plan_lines
 
 
 class Pattern(Enum):
@@ -100,7 +101,10 @@ def raster(
     check_faces : sequence of Face
         Further faces the tool must not cut into (not machined: they only lift the tool).
     stepover_mm, scallop_mm : float
-        Distance between lines, or the cusp height it is computed from (:func:`scallop_stepover`).
+        Distance between lines, or the largest scallop (cusp height above the part along its normal) the
+        path may leave: then each line is placed as far from the last as the cusp between the two allows
+        (:func:`~machsurf_cad.threeaxis.scallop.plan_lines`; the flat-floor step-over of
+        :func:`scallop_stepover` is the first guess) and ``info`` holds the planned largest scallop.
     angle_deg : float
         Line direction in the tool frame's plane (0: along x).
     direction : Direction
@@ -143,11 +147,17 @@ def raster(
     if not ds > 0:
         raise InputError(f"sample step must be > 0 mm, got {ds}")
     s = np.linspace(s0, s1, max(2, math.ceil((s1 - s0) / ds) + 1))
-    S, T = np.meshgrid(s, offsets, indexing="ij")
-    pts = S.T.reshape(-1, 1) * d + T.T.reshape(-1, 1) * nrm
-    res = _drop(fs, cutter, pts, progress)
-    H = res.height.reshape(len(offsets), len(s))
-    CC = res.contact.reshape(len(offsets), len(s), 3)
+    plan_info: dict = {}
+    if scallop_mm is not None:  # each line as far from the last as the cusp between them allows
+        offsets, H, CC, plan_info = plan_lines(fs, cutter, scallop_mm, d, nrm, (offsets[0], offsets[-1]), s, _drop,
+                                               step, progress)  # fmt: skip
+        step = float(np.diff(offsets).max())
+    else:
+        S, T = np.meshgrid(s, offsets, indexing="ij")
+        pts = S.T.reshape(-1, 1) * d + T.T.reshape(-1, 1) * nrm
+        res = _drop(fs, cutter, pts, progress)
+        H = res.height.reshape(len(offsets), len(s))
+        CC = res.contact.reshape(len(offsets), len(s), 3)
     z_top = float(max(fs.sample_xyz[:, 2].max(), fs.edge_xyz[:, 2].max()))
     passes = []  # per pass: (s values, heights, contacts, line index)
     for i in range(len(offsets)):
@@ -167,7 +177,7 @@ def raster(
     tp = _link(fs, cutter, passes, d, nrm, offsets, step, z_top + clearance_mm, chordal_tolerance_mm, direction,
                info={"pattern": "raster", "direction": direction.value, "angle_deg": float(angle_deg),
                      "stepover_mm": step, "scallop_target_mm": scallop_mm, "n_lines": int(len(offsets)),
-                     "sample_step_mm": ds, "extent_mm": [float(e) for e in extent]})  # fmt: skip
+                     "sample_step_mm": ds, "extent_mm": [float(e) for e in extent], **plan_info})  # fmt: skip
     if verify_tolerance_mm is not None:
         tp = refine_gouging_moves(tp, machined + list(check_faces), cutter, fs, tolerance_mm=verify_tolerance_mm)
     return tp

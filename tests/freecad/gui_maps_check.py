@@ -31,7 +31,16 @@ try:
         "deviation": features.make("MachiningSurface", doc, src, Tool="bull:D=16,r=3", Lead=10.0, Tolerance=1e-3),
         "reff": features.make("EffectiveRadius", doc, src, Tool="bull:D=10,r=2", Direction=30.0, Grid=96),
         "scallop": features.make("CamOperation", doc, src, Pattern="raster", StepOver=4.0, SimulateScallops=True),
+        "envelope": features.make("Envelope", doc, None, Tool="cone:D=10,angle=10,L=20", Passes=2),
     }
+    import machsurf_cad as msc
+    from freecad.machsurf.convert import surface_to_part
+
+    s = msc.example("hypar")
+    u0, u1, v0, v1 = s.bounds
+    ruled = doc.addObject("Part::Feature", "Hypar")
+    ruled.Shape = surface_to_part(s).toShape(u0, u1, v0, v1)
+    objs["flank"] = features.make("FlankSetting", doc, (ruled, ["Face1"]), Radius=40.0, Setting="optimum")
     doc.recompute()
     view = Gui.ActiveDocument.ActiveView
     shots = {}
@@ -40,6 +49,10 @@ try:
             if o.ViewObject is not None:
                 o.ViewObject.Visibility = False
         obj.ViewObject.Visibility = True  # last: hiding the Job's group hides its operations
+        if name == "flank":  # the map beside the placed cylinder: the face too, half transparent
+            ruled.ViewObject.Visibility = True
+            ruled.ViewObject.Transparency = 70
+            obj.ViewObject.Transparency = 60
         view.viewIsometric()
         Gui.SendMsgToActiveView("ViewFit")
         Gui.updateGui()
@@ -58,7 +71,7 @@ try:
         shots[name] = {
             "png": png,
             "size": [w, h],
-            "mode": obj.ViewObject.DisplayMode if "Map" in obj.ViewObject.listDisplayModes() else "beside path",
+            "mode": obj.ViewObject.DisplayMode if "Map" in obj.ViewObject.listDisplayModes() else "beside",
             "modes": obj.ViewObject.listDisplayModes(),
             "legend_end_colour_error": near,
             "map_pixel_fraction": float(coloured.mean()),

@@ -100,6 +100,24 @@ try:
     er.Grid = 1024
     result["memory_1024"] = er.MemoryNeeded
 
+    # the envelope's map: each pass's fit against its exact envelope; the flank setting's: the distance from
+    # the face to the placed cylinder around the rule (its most negative value is the setting's gouge)
+    env = features.make("Envelope", doc, None, Tool="cone:D=10,angle=10,L=20", Passes=2, Tolerance=1e-3)
+    s = msc.example("hypar")
+    u0, u1, v0, v1 = s.bounds
+    from freecad.machsurf.convert import surface_to_part
+
+    ruled = doc.addObject("Part::Feature", "Hypar")
+    ruled.Shape = surface_to_part(s).toShape(u0, u1, v0, v1)
+    fl = features.make("FlankSetting", doc, (ruled, ["Face1"]), Radius=40.0, Setting="optimum")
+    doc.recompute()
+    ev = np.array(env.MapValues)
+    fv = np.array(fl.MapValues)
+    result["envelope_map"] = {"status": env.Status, "n": int(ev.size), "max_abs": float(np.abs(ev).max()),
+                              "marks": list(env.MapMarks), "title": env.MapTitle}  # fmt: skip
+    result["flank_map"] = {"status": fl.Status, "n": int(fv.size), "min": float(fv.min()), "max": float(fv.max()),
+                           "gouge": fl.MaxGouge.Value, "undercut": fl.MaxUndercut.Value, "title": fl.MapTitle}  # fmt: skip
+
     # the colour scales
     result["colours"] = {
         "div_low": maps.colour(0.0, True).tolist(),

@@ -386,12 +386,16 @@ class FlankSettingFeature(_Base):
             _add(obj, kind, name, "Result", doc, read_only=True)
         for name in ("Status", "Report"):
             _add(obj, "App::PropertyString", name, "Result", name, read_only=True)
+        maps.add_properties(obj)
+
+    MAP_BESIDE = True  # the strip's map is drawn beside the placed cylinder
 
     def compute(self, obj):
         from machsurf_cad import flank
 
+        face = face_to_numpy(source_face(obj), "F")
         res = flank(
-            face_to_numpy(source_face(obj), "F"),
+            face,
             value_of(obj.Radius),
             rule=float(obj.RulePosition),
             setting=str(obj.Setting),
@@ -402,6 +406,7 @@ class FlankSettingFeature(_Base):
         obj.MaxGouge, obj.MaxUndercut, obj.Gamma = e.max_gouge, e.max_undercut, st.gamma_deg
         obj.Report = json.dumps(res.report(), default=float)
         tip, axis, length = st.placement()
+        maps.flank_map(obj, face, res.u_p, (tip, axis, length), value_of(obj.Radius))
         obj.Shape = Part.makeCylinder(
             value_of(obj.Radius), float(length), FreeCAD.Vector(*map(float, tip)), FreeCAD.Vector(*map(float, axis))
         )
@@ -436,6 +441,7 @@ class EnvelopeFeature(_Base):
         _add(obj, ANGLE, "MaxSeamAngle", "Result", "Largest normal angle at a seam between passes", read_only=True)
         for name in ("Status", "Report"):
             _add(obj, "App::PropertyString", name, "Result", name, read_only=True)
+        maps.add_properties(obj)
 
     def compute(self, obj):
         from machsurf_cad import envelope, example
@@ -459,6 +465,7 @@ class EnvelopeFeature(_Base):
         obj.MaxSeamGap = max([s["fitted"]["max_gap_mm"] for s in rep["seams"]] or [0.0])
         obj.MaxSeamAngle = max([s["fitted"]["max_normal_angle_deg"] for s in rep["seams"]] or [0.0])
         obj.Report = json.dumps(rep, default=float)
+        maps.envelope_map(obj, ch, value_of(obj.Tolerance))
 
 
 def attach_view(obj):

@@ -178,3 +178,50 @@ def simulation_map(obj, sim, tolerance):
     store_map(obj, sim.points, value, np.asarray(sim.quads, int).reshape(-1, 4),
               title="material left [mm] (+ left, - gouge)", low=-top, high=top, marks=(-tolerance, tolerance),
               diverging=True)  # fmt: skip
+
+
+def envelope_map(obj, chain, tolerance, n: int = 64):
+    """Each pass's fitted face against its exact envelope (mm, signed along the fitted face's normal), on
+    grids off the fit's samples, all passes in one map."""
+    P, V, Q = [], [], []
+    top = tolerance
+    for env, fit in zip(chain.passes, chain.fits):
+        a0, a1, t0, t1 = env.bounds
+        w = (np.arange(n) + 0.3819660112501051) / n
+        as_, ts = a0 + (a1 - a0) * w, t0 + (t1 - t0) * w
+        d = fit.surface.derivatives_grid(as_, ts, 1)
+        normal = np.cross(d.su, d.sv)
+        normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+        diff = d.point - env.grid(as_, ts)
+        signed = np.einsum("...i,...i->...", diff, normal)
+        p, v, q = grid_map(d.point, signed)
+        Q.append(q + sum(len(x) for x in P))
+        P.append(p)
+        V.append(v)
+        top = max(top, float(np.nanmax(np.abs(signed))))
+    store_map(obj, np.concatenate(P), np.concatenate(V), np.concatenate(Q), title="envelope fit deviation [mm]",
+              low=-top, high=top, marks=(-tolerance, tolerance), diverging=True)  # fmt: skip
+
+
+def flank_map(obj, face, u_p, placement, R, n_v: int = 97, n_u: int = 41):
+    """Distance from the ruled face to the placed cylinder (mm: + outside the tool, - gouge) over the band
+    the setting's interference is measured on: ``R`` mm either side of the tool's rule along the
+    directrices. Across the band at each point of the rule its smallest value is the error along the rule
+    (the feature's MaxGouge is minus the lowest); the colour scale spans that error, larger distances
+    (the face turning away from the tool) saturate."""
+    tip, axis, length = placement
+    u0, u1, v0, v1 = face.uv_bounds
+    vs = np.linspace(v0, v1, n_v)
+    su = np.linalg.norm(face.surface.derivatives(np.full(n_v, u_p), vs, 1).su, axis=1)
+    half = R / max(float(np.median(su)), 1e-12)
+    us = np.linspace(max(u0, u_p - half), min(u1, u_p + half), n_u)
+    pts = face.surface.evaluate_grid(us, vs)
+    q = pts - np.asarray(tip, float)
+    a = np.asarray(axis, float)
+    along = q @ a
+    dist = np.linalg.norm(q - along[..., None] * a, axis=-1) - R
+    p, v, qd = grid_map(pts, dist)
+    profile = dist.min(axis=0)  # along the rule: the closest approach across the band
+    top = max(float(np.abs(profile).max()), 1e-6)
+    store_map(obj, p, v, qd, title="distance to the tool [mm] (+ outside, - gouge)", low=-top, high=top,
+              diverging=True)  # fmt: skip

@@ -1,9 +1,10 @@
 """View providers: colouring of the result faces and the per-vertex colour maps with their legend (GUI only).
 
 A feature with a map (machining surface: deviation of the guiding surface; effective radius: R_eff or
-step-over) gets the display mode "Map", its default: the map's mesh coloured per vertex and a legend.
-The other modes (Flat Lines, Shaded, ...) show the faces, coloured by their measured error. A CAM
-operation's map (material left by its path) is drawn beside the tool path.
+step-over; envelope: the fit's deviation) gets the display mode "Map", its default: the map's mesh
+coloured per vertex and a legend. The other modes (Flat Lines, Shaded, ...) show the faces, coloured by
+their measured error. A CAM operation's map (material left by its path) is drawn beside the tool path, a
+flank setting's (distance from the face to the tool around its rule) beside the placed cylinder.
 """
 
 import json
@@ -103,7 +104,9 @@ def colour_result(obj):
 
 
 def _is_path(obj) -> bool:
-    return obj.TypeId.startswith("Path::")
+    """Whether the map is drawn beside the object's own view (a path's lines, a placed tool) instead of
+    in a display mode of its own."""
+    return obj.TypeId.startswith("Path::") or getattr(getattr(obj, "Proxy", None), "MAP_BESIDE", False)
 
 
 def attach(obj):

@@ -1,0 +1,231 @@
+"""Scallop-driven raster lines: each next line of a 3-axis raster as far from the last one as the cusp the
+two leave on the part allows.
+
+Between two adjacent lines at offsets ``ta < tb`` (across the feed) the tool sweeps, along each line, a
+lower surface (:class:`SweptLine`: the lowest the tool gets over its positions on the line, ``h`` the
+cutter's lower profile, the positions the exact drop-cutter heights). The two swept surfaces cross at
+the cusp, searched by bisection between the two tools' contacts (on a slope a contact lies uphill of its
+tip, so the cusp may lie beyond the next line's tip). What is left there is the cusp's height above the
+part at its plan position (the part's height solved on the exact faces, :func:`part_heights`):
+vertically, and along the part's normal (the vertical height times the normal's axis component: the
+scallop height CAM programmers mean, and the one the target applies to). On planes at any slope this
+is the closed form (tests); on the free-form example the N-buffer simulation of the planned path finds
+no more than the target.
+
+The planner starts at the first line and tries the next one at the closed-form step-over of a flat
+floor (:func:`~machsurf_cad.threeaxis.paths.scallop_stepover`), shrinking it until the largest cusp
+along the line is within the target (down to 1/32 of that step, then the pair is reported), and grows
+the next guess where the cusp is well below the target. Material in corners narrower than the tool is
+the cutter's, not the step-over's: it is not a cusp and is left to the simulation to report.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import InputError
+from .solves import _clamp_uv, _inside, _Profile
+
+
+class SweptLine:
+    """The lower surface of the tool swept along one raster line, in the line's frame: at ``(s, t)`` (along
+    the line, across it from the line) the lowest the tool gets over all its positions on the line,
+    ``min over s' of z(s') + h(sqrt((s - s')^2 + t^2))``. The tool's positions are the line's drop-cutter
+    heights at ``s`` interpolated ``refine`` times (the path moves straight between its positions); where
+    no face lies under the tool (NaN) it does not cut."""
+
+    def __init__(self, prof: _Profile, s, z, refine: int = 4):
+        s, z = np.asarray(s, float), np.asarray(z, float)
+        self.prof, self.refine = prof, refine
+        self.ds = (s[1] - s[0]) / refine if s.size > 1 else 1.0
+        w = np.arange(refine) / refine
+        zr = (z[:-1, None] * (1 - w) + z[1:, None] * w).ravel()
+        self.z = np.append(np.where(np.isfinite(zr), zr, np.inf), z[-1] if np.isfinite(z[-1]) else np.inf)
+        self.K = int(math.ceil(prof.R / self.ds))
+        self.k = np.arange(-self.K, self.K + 1)
+
+    def __call__(self, i, t):
+        """Swept lower surface at the line's sample ``i`` (array) and offset ``t`` (array, same shape)."""
+        idx = self.refine * np.asarray(i)[:, None] + self.k[None, :]
+        inside = (idx >= 0) & (idx < self.z.size)
+        zs = np.where(inside, self.z[np.clip(idx, 0, self.z.size - 1)], np.inf)
+        rho = np.hypot(self.k[None, :] * self.ds, np.asarray(t, float)[:, None])
+        h = self.prof(rho)[0]
+        return np.min(zs + np.where(np.isfinite(h), h, np.inf), axis=1)
+
+
+def cusp_points(a: SweptLine, ta: float, b: SweptLine, tb: float, rows, lo, hi, iters: int = 40):
+    """Cusp offset ``t*`` and height ``z*`` between the swept lower surfaces of lines ``a`` (at ``ta``) and
+    ``b`` (at ``tb``) at the samples ``rows``, searched between ``lo`` and ``hi`` (the two contacts' offsets:
+    ``a`` touches the part at ``lo``, ``b`` at ``hi``): where one stops being the lower (bisection). NaN
+    where they do not cross there."""
+    rows = np.asarray(rows)
+    lo = np.array(lo, float)
+    hi = np.array(hi, float)
+
+    def f(t):
+        return np.nan_to_num(a(rows, t - ta) - b(rows, tb - t), posinf=1e300, neginf=-1e300)
+
+    crosses = (f(lo) <= 0) & (f(hi) >= 0)
+    for _ in range(iters):
+        mid = 0.5 * (lo + hi)
+        up = f(mid) > 0
+        hi = np.where(up, mid, hi)
+        lo = np.where(up, lo, mid)
+    t = 0.5 * (lo + hi)
+    z = np.maximum(a(rows, t - ta), b(rows, tb - t))
+    return np.where(crosses & np.isfinite(z), t, np.nan), np.where(crosses & np.isfinite(z), z, np.nan)
+
+
+def part_heights(fs, xy, k: int = 12, iters: int = 16):
+    """Height of the part (tool frame) and the axis component of its unit normal under the plan points
+    ``xy``: per face near each point (its nearest of the ``k`` nearest seed samples), Newton on the
+    exact surface for ``S_xy(u, v) = xy`` inside the trimmed face; the highest face wins. NaN where no
+    face lies under a point (or only a vertical one)."""
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    n_int = fs.sample_xyz.shape[0]
+    z_best = np.full(xy.shape[0], -np.inf)
+    nz_best = np.ones(xy.shape[0])
+    if xy.shape[0] == 0:
+        return z_best, nz_best
+    _, nb = fs.tree.query(xy, k=min(k, fs.tree.n))
+    nb = np.atleast_2d(nb)
+    q = np.repeat(np.arange(xy.shape[0]), nb.shape[1])
+    j = nb.ravel()
+    keep = j < n_int  # face samples (edge samples follow them in the tree)
+    q, j = q[keep], j[keep]
+    fid = fs.sample_face[j]
+    first = np.unique(q * (len(fs.faces) + 1) + fid, return_index=True)[1]  # nearest sample per (point, face)
+    q, j, fid = q[first], j[first], fid[first]
+    u, v = fs.sample_uv[j, 0].copy(), fs.sample_uv[j, 1].copy()
+    target = xy[q]
+    scale = max(fs.spacing, 1.0)
+    for _ in range(iters):
+        P, Su, Sv = fs.atlas.derivatives(fid, u, v, 1)
+        r = target - P[:, :2]
+        a, b, c, d = Su[:, 0], Sv[:, 0], Su[:, 1], Sv[:, 1]
+        det = a * d - b * c
+        ok = np.abs(det) > 1e-12 * (np.abs(a * d) + np.abs(b * c) + 1e-300)
+        det = np.where(ok, det, 1.0)
+        du = np.where(ok, (d * r[:, 0] - b * r[:, 1]) / det, 0.0)
+        dv = np.where(ok, (-c * r[:, 0] + a * r[:, 1]) / det, 0.0)
+        u, v = _clamp_uv(fs, fid, u + du, v + dv)
+    P, Su, Sv = fs.atlas.derivatives(fid, u, v, 1)
+    n = np.cross(Su, Sv)
+    nn = np.linalg.norm(n, axis=1)
+    hit = (np.linalg.norm(target - P[:, :2], axis=1) < 1e-9 * scale) & (nn > 0) & _inside(fs, fid, u, v)
+    z = np.where(hit, P[:, 2], -np.inf)
+    nz = np.abs(n[:, 2]) / np.where(nn > 0, nn, 1.0)
+    order = np.lexsort((z, q))  # per point, its highest face last
+    last = np.r_[q[order][1:] != q[order][:-1], True]
+    sel = order[last]
+    z_best[q[sel]] = z[sel]
+    nz_best[q[sel]] = nz[sel]
+    return np.where(np.isfinite(z_best), z_best, np.nan), nz_best
+
+
+def _interior(valid, margin: int):
+    """``valid`` positions at least ``margin`` samples from an invalid one or the ends."""
+    bad = np.r_[-1, np.nonzero(~valid)[0], valid.size]
+    i = np.arange(valid.size)
+    nxt = bad[np.searchsorted(bad, i)]
+    prv = bad[np.searchsorted(bad, i) - 1]
+    return valid & (i - prv > margin) & (nxt - i > margin)
+
+
+def cusp_left(fs, a: SweptLine, ta, b: SweptLine, tb, s, d, nrm, za, zb, ca, cb):
+    """Per position along the lines: (material left at the cusp along the normal, vertically, the cusp's plan
+    point); NaN where it is not measured. The cusp is where the two swept lower surfaces cross between the
+    two tools' contacts (offsets ``ca``, ``cb`` across the lines; on a slope a contact lies uphill of its
+    tip, so the cusp may lie beyond the next line's tip): from a contact to the cusp the material left under
+    one tool grows, then falls under the other, wherever the tool fits the part. Where it does not (a
+    corner narrower than the tool) the material left under one tool is the cutter's, not the step-over's:
+    no step-over removes it, so it is not measured here (the simulation reports it). Positions less than
+    the tool's radius from the end of a line (or of a stretch with a face under the tool) are not measured
+    either: the material there is the path's end."""
+    valid = np.isfinite(za) & np.isfinite(zb) & np.isfinite(ca) & np.isfinite(cb)
+    rows = np.nonzero(_interior(valid, a.K // a.refine) & (cb > ca))[0]
+    normal = np.full(s.size, np.nan)
+    vert = np.full(s.size, np.nan)
+    where = np.zeros((s.size, 2))
+    if rows.size == 0:
+        return normal, vert, where
+    tc, zc = cusp_points(a, ta, b, tb, rows, ca[rows], cb[rows])
+    ok = np.isfinite(tc)
+    rows, tc, zc = rows[ok], tc[ok], zc[ok]
+    xy = s[rows, None] * d + tc[:, None] * nrm
+    zp, nz = part_heights(fs, xy)
+    vert[rows] = zc - zp
+    normal[rows] = vert[rows] * nz
+    where[rows] = xy
+    return normal, vert, where
+
+
+def plan_lines(fs, cutter, scallop_mm: float, d, nrm, t_range, s, drop, first_step: float, progress=None):
+    """Offsets of the raster lines and their drop-cutter heights and contacts, each line as far from the
+    previous as ``scallop_mm`` (material left along the normal) allows; ``info`` with the figures."""
+    prof = _Profile(cutter)
+    t0, t1 = t_range
+    min_step = first_step / 32
+
+    def line(t):
+        r = drop(fs, cutter, s[:, None] * d + t * nrm)
+        return r.height, r.contact
+
+    def across(contact):  # a contact's offset across the lines (tool frame)
+        return fs.to_frame(contact)[:, :2] @ nrm
+
+    h, c = line(t0)
+    offsets, heights, contacts, swept = [t0], [h], [c], [SweptLine(prof, s, h)]
+    worst = {"left_mm": 0.0, "left_vertical_mm": 0.0, "at_xy_mm": None}
+    unmet = []  # pairs left over the target at the smallest step: regions the cutter cannot reach
+    guess = first_step
+    trials = 0
+    while offsets[-1] < t1 - 1e-9:
+        ta, za = offsets[-1], heights[-1]
+        step = min(guess, t1 - ta)
+        while True:
+            trials += 1
+            tb = ta + step
+            zb, cb = line(tb)
+            sb = SweptLine(prof, s, zb)
+            left, vert, xy = cusp_left(fs, swept[-1], ta, sb, tb, s, d, nrm, za, zb, across(contacts[-1]),
+                                       across(cb))  # fmt: skip
+            known = ~np.isnan(left)
+            peak = float(np.max(left[known])) if known.any() else 0.0  # inf: a strip neither tool reaches
+            if peak <= scallop_mm * (1 + 1e-9) or step <= min_step * (1 + 1e-9):
+                break
+            shrink = 0.9 * math.sqrt(scallop_mm / peak) if math.isfinite(peak) else 0.5
+            step = max(min_step, step * min(max(shrink, 0.3), 0.9))
+        k = int(np.argmax(np.where(known, left, -np.inf))) if known.any() else 0
+        if peak > scallop_mm * (1 + 1e-9):
+            unmet.append({"between_mm": [float(ta), float(tb)], "left_mm": peak, "at_xy_mm": xy[k].tolist()})
+        if known.any():
+            if left[k] > worst["left_mm"]:
+                worst = {"left_mm": float(left[k]), "left_vertical_mm": float(vert[k]), "at_xy_mm": xy[k].tolist()}
+        offsets.append(tb)
+        swept.append(sb)
+        heights.append(zb)
+        contacts.append(cb)
+        guess = step * 1.25 if peak < 0.6 * scallop_mm else step
+        guess = min(guess, 4 * first_step, 2 * prof.R * 0.95)
+        if progress is not None:
+            progress(int(1000 * (tb - t0) / max(t1 - t0, 1e-12)), 1000, "scallop-driven raster lines")
+    if len(offsets) < 2:
+        raise InputError("the raster's extent is narrower than one line")
+    gaps = np.diff(offsets)
+    info = {
+        "scallop_measure": "cusp height above the part along its normal, cross-sections of adjacent lines",
+        "scallop_planned_max_mm": worst["left_mm"],
+        "scallop_planned_max_vertical_mm": worst["left_vertical_mm"],
+        "scallop_planned_worst_xy_mm": worst["at_xy_mm"],
+        "stepover_min_mm": float(gaps.min()),
+        "stepover_max_mm": float(gaps.max()),
+        "stepover_flat_floor_mm": float(first_step),
+        "n_line_trials": trials,
+        "scallop_unmet": unmet[:20],
+        "n_scallop_unmet": len(unmet),
+    }
+    return np.array(offsets), np.array(heights), np.array(contacts), info

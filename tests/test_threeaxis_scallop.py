@@ -1,0 +1,77 @@
+"""Scallop-driven raster lines (``raster(..., scallop_mm=H)``): closed forms on planes, the N-buffer
+simulation of the planned path as the independent judge on a free-form face."""
+
+import math
+
+import numpy as np
+import pytest
+
+import machsurf_cad as ms
+from machsurf_cad import builders
+
+
+def _line_offsets(tp):
+    """The y of each raster line (lines along x): the most frequent tip y of each pass's cutting positions
+    (a pass also holds the moves linking it to the next line)."""
+    cut = tp.move == ms.Move.CUT
+    ys = []
+    for k in np.unique(tp.pass_index[cut]):
+        vals, counts = np.unique(np.round(tp.tip[cut & (tp.pass_index == k), 1], 7), return_counts=True)
+        ys.append(vals[np.argmax(counts)])
+    return np.unique(ys)
+
+
+def _plane(alpha_deg):
+    t = math.tan(math.radians(alpha_deg))
+    return builders.plane_patch((-40, -40, -40 * t), (80, 0, 0), (0, 80, 80 * t))  # z = y tan(alpha)
+
+
+@pytest.mark.parametrize(("tool", "H"), [("ball:D=10", 0.01), ("bull:D=10,r=2", 0.005)])
+def test_flat_floor_gives_the_closed_form_step(tool, H):
+    """On a flat floor every line is the closed-form step-over from the last, and the cusp is H exactly."""
+    cutter = ms.parse_cutter(tool)
+    tp = ms.raster([_plane(0.0)], cutter, scallop_mm=H, extent=(-20, 20, -20, 20))
+    i = tp.info
+    step = ms.scallop_stepover(cutter, H)
+    gaps = np.diff(_line_offsets(tp))
+    assert i["stepover_flat_floor_mm"] == step
+    assert np.abs(gaps[:-1] - step).max() < 1e-6 and gaps[-1] <= step + 1e-6  # the last line at the extent
+    assert i["scallop_planned_max_mm"] == pytest.approx(H, abs=1e-9)
+    assert i["n_scallop_unmet"] == 0
+
+
+@pytest.mark.parametrize("alpha", [30.0, 55.0])
+def test_slope_across_the_lines_is_met_along_the_normal(alpha):
+    """Plane z = y tan(alpha), lines along x: a ball's cusp along the normal for a plan step g is
+    r - sqrt(r^2 - (g / (2 cos alpha))^2); every planned step keeps it within H, and is not much smaller
+    than the largest step that does (2 cos(alpha) sqrt(2 r H - H^2))."""
+    r, H = 5.0, 0.01
+    ca = math.cos(math.radians(alpha))
+    tp = ms.raster([_plane(alpha)], ms.BallEndMill(10), scallop_mm=H, extent=(-10, 10, -10, 10))
+    gaps = np.diff(_line_offsets(tp))[:-1]  # the last line is placed at the extent
+    cusp = r - np.sqrt(r * r - (gaps / (2 * ca)) ** 2)
+    best = 2 * ca * math.sqrt(2 * r * H - H * H)
+    assert cusp.max() <= H * (1 + 1e-9)
+    assert gaps.min() >= 0.6 * best and gaps.max() <= best * (1 + 1e-6)
+    i = tp.info
+    assert i["scallop_planned_max_mm"] == pytest.approx(cusp.max(), rel=1e-6)
+    # vertical height = normal height / cos(alpha): the measure named in info
+    assert i["scallop_planned_max_vertical_mm"] == pytest.approx(i["scallop_planned_max_mm"] / ca, rel=1e-6)
+
+
+def test_free_form_face_simulation_stays_within_the_target():
+    """The bundled free-form face, ball D10, H = 0.01 mm on a 25 x 25 mm window: the N-buffer simulation of
+    the planned path (an independent measure of what the moving tool leaves) finds at most H left away
+    from the window's borders (a tool radius in: the path's ends and its first and last lines); the
+    planner used more lines than the flat-floor step-over where the face slopes."""
+    f = ms.example("bezier5")
+    ext = (5.0, 30.0, 5.0, 30.0)
+    tp = ms.raster([f], ms.BallEndMill(10), scallop_mm=0.01, extent=ext, chordal_tolerance_mm=0.002)
+    sim = ms.simulate([f], tp, resolution=0.04)
+    p = sim.points
+    inner = (p[:, 0] > ext[0] + 5) & (p[:, 0] < ext[1] - 5) & (p[:, 1] > ext[2] + 5) & (p[:, 1] < ext[3] - 5)
+    left = float(sim.value[inner & sim.reached].max())
+    assert 0.005 < left <= 0.01 * 1.02  # sampled 0.04 mm apart: the simulation's own resolution
+    i = tp.info
+    assert 0.005 < i["scallop_planned_max_mm"] <= 0.01 * (1 + 1e-9) and i["n_scallop_unmet"] == 0
+    assert i["stepover_min_mm"] < 0.9 * i["stepover_flat_floor_mm"]  # closer lines where the face slopes
