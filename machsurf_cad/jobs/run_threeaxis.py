@@ -107,8 +107,8 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
             if i.get("scallop_target_mm") is not None:
                 say(
                     f"scallop-driven lines: step-over {i['stepover_min_mm']:.4g}..{i['stepover_max_mm']:.4g} mm "
-                    f"(flat floor {i['stepover_flat_floor_mm']:.4g}), largest cusp planned {i['scallop_planned_max_mm']:.4g}"
-                    f" mm along the normal ({i['scallop_planned_max_vertical_mm']:.4g} vertically), target "
+                    f"(flat floor {i['stepover_flat_floor_mm']:.4g}), largest cusp planned "
+                    f"{i['scallop_planned_max_mm']:.4g} mm along the normal ({i['scallop_planned_max_vertical_mm']:.4g} vertically), target "
                     f"{i['scallop_target_mm']:g} mm"
                 )
                 if i["n_scallop_unmet"]:

@@ -33,8 +33,9 @@ try:
         "scallop": features.make("CamOperation", doc, src, Pattern="raster", StepOver=4.0, SimulateScallops=True),
         "envelope": features.make("Envelope", doc, None, Tool="cone:D=10,angle=10,L=20", Passes=2),
     }
-    import machsurf_cad as msc
     from freecad.machsurf.convert import surface_to_part
+
+    import machsurf_cad as msc
 
     s = msc.example("hypar")
     u0, u1, v0, v1 = s.bounds
