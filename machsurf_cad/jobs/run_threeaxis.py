@@ -108,8 +108,8 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
                 say(
                     f"scallop-driven lines: step-over {i['stepover_min_mm']:.4g}..{i['stepover_max_mm']:.4g} mm "
                     f"(flat floor {i['stepover_flat_floor_mm']:.4g}), largest cusp planned "
-                    f"{i['scallop_planned_max_mm']:.4g} mm along the normal ({i['scallop_planned_max_vertical_mm']:.4g} vertically), target "
-                    f"{i['scallop_target_mm']:g} mm"
+                    f"{i['scallop_planned_max_mm']:.4g} mm along the normal "
+                    f"({i['scallop_planned_max_vertical_mm']:.4g} vertically), target {i['scallop_target_mm']:g} mm"
                 )
                 if i["n_scallop_unmet"]:
                     w = i["scallop_unmet"][0]

@@ -116,7 +116,8 @@ try:
     result["envelope_map"] = {"status": env.Status, "n": int(ev.size), "max_abs": float(np.abs(ev).max()),
                               "marks": list(env.MapMarks), "title": env.MapTitle}  # fmt: skip
     result["flank_map"] = {"status": fl.Status, "n": int(fv.size), "min": float(fv.min()), "max": float(fv.max()),
-                           "gouge": fl.MaxGouge.Value, "undercut": fl.MaxUndercut.Value, "title": fl.MapTitle}  # fmt: skip
+                           "gouge": fl.MaxGouge.Value, "undercut": fl.MaxUndercut.Value,
+                           "title": fl.MapTitle}  # fmt: skip
 
     # the colour scales
     result["colours"] = {
