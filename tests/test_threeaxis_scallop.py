@@ -75,3 +75,19 @@ def test_free_form_face_simulation_stays_within_the_target():
     i = tp.info
     assert 0.005 < i["scallop_planned_max_mm"] <= 0.01 * (1 + 1e-9) and i["n_scallop_unmet"] == 0
     assert i["stepover_min_mm"] < 0.9 * i["stepover_flat_floor_mm"]  # closer lines where the face slopes
+
+
+def test_a_wall_is_the_cutter_limit_not_a_scallop():
+    """A 10 mm step (floor, vertical wall, top): where a cusp's material sits at the wall's foot the tool
+    placed to touch it cannot (the cutter's limit): counted, not driving the step-over to zero; on the
+    floor and the top the closed-form step-over stays."""
+    floor = builders.plane_patch((-30, -30, 0), (60, 0, 0), (0, 30, 0))
+    wall = builders.plane_patch((-30, 0, 0), (60, 0, 0), (0, 0, 10))
+    top = builders.plane_patch((-30, 0, 10), (60, 0, 0), (0, 30, 0))
+    tp = ms.raster([floor, wall, top], ms.BallEndMill(10), scallop_mm=0.01, extent=(-10, 10, -12, 12))
+    i = tp.info
+    step = ms.scallop_stepover(ms.BallEndMill(10), 0.01)
+    assert i["n_scallop_unmet"] == 0 and i["n_cusps_at_cutter_limit"] > 0
+    assert i["scallop_planned_max_mm"] <= 0.01 * (1 + 1e-9)
+    gaps = np.diff(_line_offsets(tp))
+    assert np.median(gaps) == pytest.approx(step, rel=1e-6) and i["n_lines"] <= 24 / step + 3  # no collapse

@@ -110,12 +110,18 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
                     f"(flat floor {i['stepover_flat_floor_mm']:.4g}), largest cusp planned "
                     f"{i['scallop_planned_max_mm']:.4g} mm along the normal "
                     f"({i['scallop_planned_max_vertical_mm']:.4g} vertically), target {i['scallop_target_mm']:g} mm"
+                    + (
+                        f"; {i['n_cusps_at_cutter_limit']} cusp position(s) where the tool placed right there leaves "
+                        "more (walls, corners narrower than the tool: the cutter's limit, not the step-over's)"
+                        if i["n_cusps_at_cutter_limit"]
+                        else ""
+                    )
                 )
                 if i["n_scallop_unmet"]:
                     w = i["scallop_unmet"][0]
                     say(
                         f"scallop target not met between {i['n_scallop_unmet']} pair(s) of lines at the smallest "
-                        f"step-over (the cutter does not reach there): up to {w['left_mm']:.4g} mm near "
+                        f"step-over (1/32 of the flat-floor one): up to {w['left_mm']:.4g} mm near "
                         f"({w['at_xy_mm'][0]:.3f}, {w['at_xy_mm'][1]:.3f}) mm"
                     )
                     code = max(code, EXIT_TOLERANCE)

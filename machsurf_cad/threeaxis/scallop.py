@@ -14,9 +14,10 @@ no more than the target.
 
 The planner starts at the first line and tries the next one at the closed-form step-over of a flat
 floor (:func:`~machsurf_cad.threeaxis.paths.scallop_stepover`), shrinking it until the largest cusp
-along the line is within the target (down to 1/32 of that step, then the pair is reported), and grows
-the next guess where the cusp is well below the target. Material in corners narrower than the tool is
-the cutter's, not the step-over's: it is not a cusp and is left to the simulation to report.
+along the line is within the target (down to 1/32 of that step, then the pair is reported), and aims
+the next guess at the target (the cusp grows about as the step squared; at most 25 % wider). Material
+the tool cannot reach (a wall's foot, a corner narrower than it) or that a closer line would not remove
+is the cutter's, not the step-over's: it is counted, not planned for, and the simulation reports it.
 """
 
 from __future__ import annotations
@@ -80,16 +81,16 @@ def cusp_points(a: SweptLine, ta: float, b: SweptLine, tb: float, rows, lo, hi, 
 
 
 def part_heights(fs, xy, k: int = 12, iters: int = 16):
-    """Height of the part (tool frame) and the axis component of its unit normal under the plan points
-    ``xy``: per face near each point (its nearest of the ``k`` nearest seed samples), Newton on the
+    """Height of the part (tool frame) and its unit normal (tool frame, pointing up the axis) under the plan
+    points ``xy``: per face near each point (its nearest of the ``k`` nearest seed samples), Newton on the
     exact surface for ``S_xy(u, v) = xy`` inside the trimmed face; the highest face wins. NaN where no
     face lies under a point (or only a vertical one)."""
     xy = np.asarray(xy, float).reshape(-1, 2)
     n_int = fs.sample_xyz.shape[0]
     z_best = np.full(xy.shape[0], -np.inf)
-    nz_best = np.ones(xy.shape[0])
+    n_best = np.tile([0.0, 0.0, 1.0], (xy.shape[0], 1))
     if xy.shape[0] == 0:
-        return z_best, nz_best
+        return z_best, n_best
     _, nb = fs.tree.query(xy, k=min(k, fs.tree.n))
     nb = np.atleast_2d(nb)
     q = np.repeat(np.arange(xy.shape[0]), nb.shape[1])
@@ -117,13 +118,14 @@ def part_heights(fs, xy, k: int = 12, iters: int = 16):
     nn = np.linalg.norm(n, axis=1)
     hit = (np.linalg.norm(target - P[:, :2], axis=1) < 1e-9 * scale) & (nn > 0) & _inside(fs, fid, u, v)
     z = np.where(hit, P[:, 2], -np.inf)
-    nz = np.abs(n[:, 2]) / np.where(nn > 0, nn, 1.0)
+    n = n / np.where(nn > 0, nn, 1.0)[:, None]
+    n = np.where((n[:, 2] < 0)[:, None], -n, n)
     order = np.lexsort((z, q))  # per point, its highest face last
     last = np.r_[q[order][1:] != q[order][:-1], True]
     sel = order[last]
     z_best[q[sel]] = z[sel]
-    nz_best[q[sel]] = nz[sel]
-    return np.where(np.isfinite(z_best), z_best, np.nan), nz_best
+    n_best[q[sel]] = n[sel]
+    return np.where(np.isfinite(z_best), z_best, np.nan), n_best
 
 
 def _interior(valid, margin: int):
@@ -135,15 +137,20 @@ def _interior(valid, margin: int):
     return valid & (i - prv > margin) & (nxt - i > margin)
 
 
-def cusp_left(fs, a: SweptLine, ta, b: SweptLine, tb, s, d, nrm, za, zb, ca, cb):
+def cusp_left(fs, a: SweptLine, ta, b: SweptLine, tb, s, d, nrm, za, zb, ca, cb, reach=None, target=None,
+              drop=None, cutter_of_reach=None, prof=None):
     """Per position along the lines: (material left at the cusp along the normal, vertically, the cusp's plan
     point); NaN where it is not measured. The cusp is where the two swept lower surfaces cross between the
     two tools' contacts (offsets ``ca``, ``cb`` across the lines; on a slope a contact lies uphill of its
     tip, so the cusp may lie beyond the next line's tip): from a contact to the cusp the material left under
     one tool grows, then falls under the other, wherever the tool fits the part. Where it does not (a
     corner narrower than the tool) the material left under one tool is the cutter's, not the step-over's:
-    no step-over removes it, so it is not measured here (the simulation reports it). Positions less than
-    the tool's radius from the end of a line (or of a stretch with a face under the tool) are not measured
+    no step-over removes it, so it is not measured here (the simulation reports it): with ``reach`` (the
+    drop-cutter) a cusp over ``target`` is checked by placing the tool right above it; when that leaves
+    more than ``target`` too (a wall's foot seen from its top, a pocket narrower than the tool), or when a
+    line halfway between would not lower it by a quarter, the position is not the step-over's to control
+    and is counted in the fourth value instead. Positions less than the
+    tool's radius from the end of a line (or of a stretch with a face under the tool) are not measured
     either: the material there is the path's end."""
     valid = np.isfinite(za) & np.isfinite(zb) & np.isfinite(ca) & np.isfinite(cb)
     rows = np.nonzero(_interior(valid, a.K // a.refine) & (cb > ca))[0]
@@ -151,16 +158,37 @@ def cusp_left(fs, a: SweptLine, ta, b: SweptLine, tb, s, d, nrm, za, zb, ca, cb)
     vert = np.full(s.size, np.nan)
     where = np.zeros((s.size, 2))
     if rows.size == 0:
-        return normal, vert, where
+        return normal, vert, where, 0
     tc, zc = cusp_points(a, ta, b, tb, rows, ca[rows], cb[rows])
     ok = np.isfinite(tc)
     rows, tc, zc = rows[ok], tc[ok], zc[ok]
     xy = s[rows, None] * d + tc[:, None] * nrm
-    zp, nz = part_heights(fs, xy)
+    zp, pn = part_heights(fs, xy)
+    nz = pn[:, 2]
     vert[rows] = zc - zp
     normal[rows] = vert[rows] * nz
     where[rows] = xy
-    return normal, vert, where
+    limit = 0
+    if reach is not None and target is not None:
+        over = np.nonzero(normal[rows] > target)[0]
+        if over.size:  # the tool placed to touch the part at the cusp: does it reach it?
+            single = reach(xy[over], zp[over], pn[over]) * nz[over]
+            cutter_limit = ~(single <= target)
+            # a line halfway between: if the tool there does not lower what is left at the cusp by a quarter,
+            # the step-over does not control it (e.g. a flat bottom resting on a plateau over its rounded
+            # edge: the lines beyond it machine that, not a closer line here)
+            keep = np.nonzero(~cutter_limit)[0]
+            if keep.size:
+                i = over[keep]
+                tm = 0.5 * (ta + tb)
+                swept_mid = SweptLine(prof, s, drop(fs, cutter_of_reach, s[:, None] * d + tm * nrm).height)
+                zm = swept_mid(rows[i], tc[i] - tm)
+                left_now = zc[i] - zp[i]
+                cutter_limit[keep] = ~(np.nan_to_num(zm, nan=np.inf) < zc[i] - 0.25 * left_now)
+            normal[rows[over[cutter_limit]]] = np.nan
+            vert[rows[over[cutter_limit]]] = np.nan
+            limit = int(cutter_limit.sum())
+    return normal, vert, where, limit
 
 
 def plan_lines(fs, cutter, scallop_mm: float, d, nrm, t_range, s, drop, first_step: float, progress=None):
@@ -177,12 +205,23 @@ def plan_lines(fs, cutter, scallop_mm: float, d, nrm, t_range, s, drop, first_st
     def across(contact):  # a contact's offset across the lines (tool frame)
         return fs.to_frame(contact)[:, :2] @ nrm
 
+    def reach(xy, zp, n):
+        """Vertical gap between the part at ``xy`` (height ``zp``, normal ``n``) and the tool placed to touch it
+        there: the profile point with the part's slope over it (0 wherever the tool reaches the point)."""
+        slope = np.hypot(n[:, 0], n[:, 1]) / np.maximum(n[:, 2], 1e-12)
+        rho = prof.radius_of_slope(slope)
+        horiz = np.hypot(n[:, 0], n[:, 1])
+        dxy = np.where(horiz[:, None] > 1e-12, n[:, :2] / np.maximum(horiz, 1e-300)[:, None], 0.0)
+        tip = drop(fs, cutter, xy + rho[:, None] * dxy).height
+        return tip + prof(rho)[0] - zp
+
     h, c = line(t0)
     offsets, heights, contacts, swept = [t0], [h], [c], [SweptLine(prof, s, h)]
     worst = {"left_mm": 0.0, "left_vertical_mm": 0.0, "at_xy_mm": None}
     unmet = []  # pairs left over the target at the smallest step: regions the cutter cannot reach
     guess = first_step
     trials = 0
+    at_limit = 0  # cusp positions where the tool placed right there leaves more than the target
     while offsets[-1] < t1 - 1e-9:
         ta, za = offsets[-1], heights[-1]
         step = min(guess, t1 - ta)
@@ -191,25 +230,29 @@ def plan_lines(fs, cutter, scallop_mm: float, d, nrm, t_range, s, drop, first_st
             tb = ta + step
             zb, cb = line(tb)
             sb = SweptLine(prof, s, zb)
-            left, vert, xy = cusp_left(fs, swept[-1], ta, sb, tb, s, d, nrm, za, zb, across(contacts[-1]),
-                                       across(cb))  # fmt: skip
+            left, vert, xy, limit = cusp_left(fs, swept[-1], ta, sb, tb, s, d, nrm, za, zb, across(contacts[-1]),
+                                              across(cb), reach, scallop_mm, drop, cutter, prof)  # fmt: skip
             known = ~np.isnan(left)
             peak = float(np.max(left[known])) if known.any() else 0.0  # inf: a strip neither tool reaches
             if peak <= scallop_mm * (1 + 1e-9) or step <= min_step * (1 + 1e-9):
                 break
-            shrink = 0.9 * math.sqrt(scallop_mm / peak) if math.isfinite(peak) else 0.5
-            step = max(min_step, step * min(max(shrink, 0.3), 0.9))
+            # the cusp grows about as the step squared: aim at the target, a little inside it
+            shrink = math.sqrt(scallop_mm / peak) * (1 - 1e-6) if math.isfinite(peak) else 0.5
+            step = max(min_step, step * min(max(shrink, 0.3), 1 - 1e-6))
         k = int(np.argmax(np.where(known, left, -np.inf))) if known.any() else 0
         if peak > scallop_mm * (1 + 1e-9):
             unmet.append({"between_mm": [float(ta), float(tb)], "left_mm": peak, "at_xy_mm": xy[k].tolist()})
         if known.any():
             if left[k] > worst["left_mm"]:
                 worst = {"left_mm": float(left[k]), "left_vertical_mm": float(vert[k]), "at_xy_mm": xy[k].tolist()}
+        at_limit += limit
         offsets.append(tb)
         swept.append(sb)
         heights.append(zb)
         contacts.append(cb)
-        guess = step * 1.25 if peak < 0.6 * scallop_mm else step
+        # the cusp grows about as the step squared: aim the next line at the target (at most 25 % wider)
+        grow = math.sqrt(scallop_mm / peak) * (1 - 1e-6) if 0 < peak < math.inf else 1.25
+        guess = step * min(max(grow, 1.0), 1.25)
         guess = min(guess, 4 * first_step, 2 * prof.R * 0.95)
         if progress is not None:
             progress(int(1000 * (tb - t0) / max(t1 - t0, 1e-12)), 1000, "scallop-driven raster lines")
@@ -227,5 +270,6 @@ def plan_lines(fs, cutter, scallop_mm: float, d, nrm, t_range, s, drop, first_st
         "n_line_trials": trials,
         "scallop_unmet": unmet[:20],
         "n_scallop_unmet": len(unmet),
+        "n_cusps_at_cutter_limit": at_limit,
     }
     return np.array(offsets), np.array(heights), np.array(contacts), info

@@ -71,6 +71,21 @@ class _Profile:
                     self.kinks.append((rk, float(self(np.array([rk]))[0][0])))
         self.h_min = float(table.min())
 
+    def radius_of_slope(self, slope) -> np.ndarray:
+        """Radius where the lower profile's slope ``h'`` first reaches ``slope`` (a tangent: the tool touches a
+        surface of that slope there); the rim where it never does."""
+        if not hasattr(self, "_slope_table"):
+            rho = np.linspace(0.0, self.R, 4097)
+            h1 = lower_height(self.segs, rho)[1]
+            h1 = np.maximum.accumulate(np.where(np.isfinite(h1), h1, np.inf))
+            self._slope_table = (h1, rho)
+        h1, rho = self._slope_table
+        s = np.asarray(slope, float)
+        i = np.clip(np.searchsorted(h1, s, side="left"), 1, rho.size - 1)
+        lo, hi = h1[i - 1], h1[i]
+        w = np.where(np.isfinite(hi) & (hi > lo), (s - lo) / np.where(hi > lo, hi - lo, 1.0), 1.0)
+        return np.where(s <= h1[0], 0.0, rho[i - 1] + np.clip(w, 0.0, 1.0) * (rho[i] - rho[i - 1]))
+
     def floor(self, rho) -> np.ndarray:
         """A lower bound of ``h`` on ``[rho, R]`` (``h(max(rho, 0))`` for a profile rising outwards)."""
         rho = np.asarray(rho, float)
