@@ -119,6 +119,8 @@ def test_faces_with_holes_convert_exactly(tmp_path):
     # the plate: 100 x 80 less a D20 hole (meshed at 1 um: the polygon in the hole adds < 0.01 mm2)
     assert r["round_hole"]["back_area"] == pytest.approx(8000 - 100 * math.pi, abs=0.01)
     assert r["feature"]["valid"] and r["feature"]["wires"] == [2]
+    g = r["gapped_loop"]  # a loop whose sides miss by 3e-5 mm (CATIA's) is closed: a valid 60 x 40 face
+    assert g["valid"] and g["closed"] and g["wires"] == 1 and g["area"] == pytest.approx(2400.0, abs=0.01)
 
 
 def test_cam_operation_in_a_path_job(tmp_path):

@@ -114,3 +114,37 @@ def _points_in_polygons(u, v, polys) -> np.ndarray:
     out = np.empty(uf.size, bool)
     out[order] = flips
     return out.reshape(np.shape(u))
+
+
+def close_loop(loop, rel_gap: float = 1e-3) -> tuple[list[BSplineCurve], float]:
+    """The loop with each pair of consecutive curve ends joined at their mid point in (u, v).
+
+    Only gaps smaller than ``rel_gap`` times the loop's parameter-box diagonal are closed (a
+    larger jump, e.g. across a periodic seam, is left to the kernel). Returns the curves and
+    the largest gap closed (in parameter units). Clamped B-splines pass through their end
+    poles, so moving an end pole moves the curve by at most the half gap, only near that end.
+    """
+    loop = list(loop)
+    n = len(loop)
+    if n == 0:
+        return loop, 0.0
+    ends = np.array([[c.poles[0], c.poles[-1]] for c in loop])
+    diag = float(np.linalg.norm(ends.reshape(-1, 2).max(axis=0) - ends.reshape(-1, 2).min(axis=0))) or 1.0
+    poles = [np.array(c.poles, dtype=float) for c in loop]
+    worst = 0.0
+    for i in range(n):
+        j = (i + 1) % n
+        if loop[i].periodic or loop[j].periodic:
+            continue
+        a, b = poles[i][-1], poles[j][0]
+        gap = float(np.linalg.norm(a - b))
+        if 0.0 < gap <= rel_gap * diag:
+            m = 0.5 * (a + b)
+            poles[i][-1] = m
+            poles[j][0] = m
+            worst = max(worst, gap)
+    out = [
+        c if np.array_equal(p, c.poles) else BSplineCurve(c.degree, c.knots, c.mults, p, c.weights, c.periodic)
+        for c, p in zip(loop, poles)
+    ]
+    return out, worst

@@ -137,8 +137,25 @@ def _interior(valid, margin: int):
     return valid & (i - prv > margin) & (nxt - i > margin)
 
 
-def cusp_left(fs, a: SweptLine, ta, b: SweptLine, tb, s, d, nrm, za, zb, ca, cb, reach=None, target=None,
-              drop=None, cutter_of_reach=None, prof=None):
+def cusp_left(
+    fs,
+    a: SweptLine,
+    ta,
+    b: SweptLine,
+    tb,
+    s,
+    d,
+    nrm,
+    za,
+    zb,
+    ca,
+    cb,
+    reach=None,
+    target=None,
+    drop=None,
+    cutter_of_reach=None,
+    prof=None,
+):
     """Per position along the lines: (material left at the cusp along the normal, vertically, the cusp's plan
     point); NaN where it is not measured. The cusp is where the two swept lower surfaces cross between the
     two tools' contacts (offsets ``ca``, ``cb`` across the lines; on a slope a contact lies uphill of its

@@ -75,6 +75,22 @@ try:
             "hole_points_inside": inside(in_holes),
             "material_points_inside": inside(in_material),
         }
+    # a trimming loop with gaps, as CATIA writes them (3.4e-5 mm on the propeller's face 42): a 60 x 40 square
+    # on a plane whose four sides miss each other by 3e-5; FreeCAD's wire would not close without closing them
+    from machsurf_cad.geometry import BSplineCurve, builders
+    from machsurf_cad.geometry.face import Face
+
+    plane = builders.plane_patch((0, 0, 0), (100, 0, 0), (0, 100, 0))
+    corners = np.array([[0.2, 0.3], [0.8, 0.3], [0.8, 0.7], [0.2, 0.7]])
+    gap = np.array([3e-7, -2e-7])  # parameter units: 3e-5 / 100 mm
+    sides = [
+        BSplineCurve(1, np.array([0.0, 1.0]), np.array([2, 2]), np.array([corners[i] + gap, corners[(i + 1) % 4]]))
+        for i in range(4)
+    ]
+    gapped = Face(plane, [sides], "gapped")
+    back = face_to_part(gapped)
+    result["gapped_loop"] = {"valid": bool(back.isValid()), "wires": len(back.Wires), "area": back.Area,
+                             "closed": bool(back.Wires[0].isClosed())}  # fmt: skip
     doc = FreeCAD.newDocument("holes")
     obj = doc.addObject("Part::Feature", "Plate")
     obj.Shape = plate
