@@ -135,6 +135,9 @@ def test_cam_operation_in_a_path_job(tmp_path):
     assert op["n_g1"] == c["rows"] > 500 and op["cut_points"] >= c["cut_rows"] > 500 and op["n_g0"] >= 2
     assert c["max_dev"] is not None and c["max_dev"] < 1e-6
     assert m["bull"] == "bull:D=10,r=2,L=20" and m["ball"] == "ball:D=6" and "not supported" in m["chamfer"]
+    ps = r["path_simulator"]  # FreeCAD's simulator runs every move: material removed, the part still inside
+    assert ps["applied"] == op["n_g1"] + op["n_g0"]
+    assert ps["part_volume"] < ps["left_volume"] < ps["stock_volume"] - 10_000
     nt = r["no_tool"]
     assert nt["status"].startswith("error: no tool") and nt["n_commands"] == 0 and nt["cut_points"] == 0
     # 5 axes: every move is machsurf's (tips exact, axes back from B/C within 1e-12), the path clean

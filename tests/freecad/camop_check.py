@@ -43,6 +43,23 @@ try:
         "cut_points": op.CutPoints,
         "max_gouge": op.MaxGouge.Value,
     }
+    # FreeCAD's Path simulator (its voxel engine, as the Path_Simulator command runs it) takes the operation's
+    # moves with the ToolBit's shape: material comes off the stock, and what is left still holds the part
+    import PathSimulator
+
+    stock = job.Stock.Shape
+    sim = PathSimulator.PathSim()
+    sim.BeginSimulation(stock, 0.5)
+    sim.SetToolShape(job.Tools.Group[0].Tool.Shape, 0.05)
+    pos = FreeCAD.Placement(FreeCAD.Vector(0, 0, stock.BoundBox.ZMax), FreeCAD.Rotation())
+    applied = 0
+    for c in op.Path.Commands:
+        if c.Name in ("G0", "G1"):
+            pos = sim.ApplyCommand(pos, c)
+            applied += 1
+    left = sim.GetResultMesh()[0]
+    result["path_simulator"] = {"applied": applied, "stock_volume": stock.Volume, "left_volume": left.Volume,
+                                "part_volume": part.Shape.Volume}  # fmt: skip
     # the same path from machsurf_cad directly, written as CSV: every non-rapid row is one G1, same point
     faces = [face_to_numpy(f, f"Block.Face{i + 1}") for i, f in enumerate(part.Shape.Faces)]
     rest = [f for i, f in enumerate(faces) if i != top]
