@@ -78,7 +78,7 @@ from .machining import (
     PlanesFeed,
     machining_surface,
 )
-from .machining.toolpath import tool_paths
+from .machining.toolpath import part_sphere, tool_paths
 from .measure import DeviationResult, deviation, project_points
 from .results import Progress
 from .simulation import SimulationResult, simulate
@@ -113,6 +113,7 @@ __all__ = [
     "Pattern",
     "DropCutterResult",
     "tool_paths",
+    "part_sphere",
     "reff",
     "reff_maps",
     "effective_radius",

@@ -391,14 +391,21 @@ def verify(
             best_xyz[sel[better]] = xyz[better]
     # a tool buried in the material touches no face: behind the nearest face (its outward normal) by
     # more than the sampling can explain, with no face point inside the cutting part, is a gouge too
-    _, ni = tree.query(T + A * min(L_cut, c.D) / 2, workers=-1)
-    nrm = np.empty((ni.size, 3))
-    for fi in np.unique(F[ni]):
-        k = np.nonzero(F[ni] == fi)[0]
+    # behind every one of its nearest samples: the nearest alone can be a wall facing away (a tool high
+    # above a hole's edge is "behind" the hole's wall, not in the material)
+    mid = T + A * min(L_cut, c.D) / 2
+    kn = min(8, P.shape[0])
+    _, nk = tree.query(mid, k=kn, workers=-1)
+    nk = nk.reshape(mid.shape[0], kn)
+    flat = nk.ravel()
+    nrm = np.empty((flat.size, 3))
+    for fi in np.unique(F[flat]):
+        k = np.nonzero(F[flat] == fi)[0]
         fc = faces[fi]
-        n_f = fc.surface.normals(SU[ni[k]], SV[ni[k]], check=False) * (-1.0 if fc.reversed else 1.0)
-        nrm[k] = n_f
-    behind = -np.einsum("ij,ij->i", T + A * min(L_cut, c.D) / 2 - P[ni], nrm)
+        nrm[k] = fc.surface.normals(SU[flat[k]], SV[flat[k]], check=False) * (-1.0 if fc.reversed else 1.0)
+    behind_k = -np.einsum("ij,ij->i", np.repeat(mid, kn, axis=0) - P[flat], nrm).reshape(-1, kn)
+    ni = nk[:, 0]
+    behind = np.where(np.isfinite(behind_k).all(axis=1), behind_k.min(axis=1), np.nan)
     buried = np.isfinite(behind) & (behind > h + tolerance + r_cut) & (cut_d > -tolerance)
     if np.any(buried):
         cut_d[buried] = -behind[buried]

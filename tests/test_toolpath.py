@@ -178,3 +178,34 @@ def test_bad_paths_are_refused():
     tp = ms.ToolPath.from_passes([np.zeros((2, 3))], [np.array([[0, 0, 1.0]] * 2)])
     with pytest.raises(ms.InputError, match="cutter"):
         ms.write_apt("never.apt", tp)
+
+
+def test_passes_linked_over_a_sphere_around_the_part():
+    """``safe_sphere``: between passes the tool leaves along its axis to the sphere, goes over it with the
+    axis pointing out and comes back along the next pass's axis; every such position and every chord
+    between them stays outside the sphere asked for; the cutting positions are those of the straight
+    linking; the path is clean against the face."""
+    bez = ms.example("bezier5")
+    m = ms.machining_surface(bez, "ball:D=10", axes=5, lead=10, tolerance=1e-2)
+    plain = ms.tool_paths(m, stepover=15.0, zigzag=False)
+    centre, radius = ms.part_sphere([bez], 5.0)
+    tp = ms.tool_paths(m, stepover=15.0, zigzag=False, safe_sphere=(centre, radius))
+    cut = tp.move == ms.Move.CUT
+    assert np.array_equal(tp.tip[cut], plain.tip[plain.move == ms.Move.CUT])
+    assert tp.info["safe_sphere_radius_mm"] == radius and tp.n_positions > plain.n_positions
+    d = np.linalg.norm(tp.tip - centre, axis=1)
+    link = np.zeros(tp.n_positions, bool)  # the positions between a retract and the next pass's first rapid
+    ret = np.nonzero(tp.move == ms.Move.RETRACT)[0]
+    for r in ret[:-1]:
+        k = r + 1
+        while tp.move[k + 1] == ms.Move.RAPID:
+            link[k] = True
+            k += 1
+    assert link.sum() >= 3 * (len(ret) - 1) and np.all(d[link] >= radius * (1 - 1e-12))
+    mid = 0.5 * (tp.tip[1:] + tp.tip[:-1])
+    both = link[1:] & link[:-1]
+    assert np.all(np.linalg.norm(mid[both] - centre, axis=1) >= radius * (1 - 1e-12))  # chords too
+    ax = tp.axis[link]
+    radial = (tp.tip[link] - centre) / d[link, None]
+    assert np.all(np.einsum("ij,ij->i", ax, radial) > 0)  # the axis points out: the body stays outside
+    assert ms.verify([bez], tp, tolerance=0.01).clean

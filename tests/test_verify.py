@@ -348,3 +348,23 @@ def test_the_motion_between_placements_cannot_hide_a_gouge():
     assert math.isclose(res.step_mm, math.sqrt(4 * 5 * 0.01)) and math.isclose(res.motion_bound_mm, 0.005)
     assert not res.clean and 0.02 - res.motion_bound_mm <= res.max_gouge <= 0.02 + 1e-6
     assert res.report()["motion_bound_mm"] == res.motion_bound_mm
+
+
+@needs_kernel
+def test_a_tool_high_above_a_hole_is_not_buried():
+    """The block's top has a round hole: a tool 60 mm above it, next to the hole's axis, has a sample of the
+    hole's wall as its nearest part point, whose normal faces away from it. It is not in the material:
+    clear (the buried test asks every one of the nearest samples, not the nearest alone). The same tool
+    sunk into the block is still found buried."""
+    from machsurf_cad.occ import read_step_faces
+
+    faces = read_step_faces(ROOT / "example_parts" / "freeform_block.step")
+    cutter = ms.BallEndMill(6)
+    above = ms.ToolPath(np.array([[75.2, 63.66, 109.7]]), np.array([[0.0, 0.0, 1.0]]), np.array([ms.Move.RAPID]),
+                        np.array([0]), cutter=cutter)  # fmt: skip
+    v = ms.verify(faces, above, tolerance=0.01)
+    assert v.clean and v.report()["n_collisions"] == 0
+    inside = ms.ToolPath(np.array([[65.0, 30.0, 0.0]]), np.array([[0.0, 0.0, 1.0]]), np.array([ms.Move.CUT]),
+                         np.array([0]), cutter=cutter)  # fmt: skip
+    w = ms.verify(faces, inside, tolerance=0.01)
+    assert not w.clean and w.max_gouge > 1.0  # at least this deep (a bound: the nearest tangent planes)

@@ -38,6 +38,41 @@ class Move(IntEnum):
 _AXIS_UNIT_TOL = 1e-9
 
 
+def _exit_point(p, d, centre, radius):
+    """Where the ray from ``p`` along unit ``d`` leaves the sphere (``p`` itself when outside already)."""
+    w = p - centre
+    b = float(w @ d)
+    c = float(w @ w) - radius * radius
+    if c >= 0 and b >= 0:
+        return p
+    lam = -b + np.sqrt(max(b * b - c, 0.0))
+    return p + max(lam, 0.0) * d
+
+
+def _over_sphere(p0, a0, p1, a1, sphere, step_deg: float = 5.0):
+    """Rapid positions from ``p0`` (axis ``a0``) out along the axis to the sphere, over it along the great
+    circle (axes radial, outward), back in along ``a1`` to ``p1``'s exit point: (tips, axes) without ``p1``."""
+    centre = np.asarray(sphere[0], float)
+    radius = float(sphere[1]) / np.cos(np.radians(step_deg / 2))  # the chords' sag kept outside
+    q0 = _exit_point(np.asarray(p0, float), np.asarray(a0, float), centre, radius)
+    q1 = _exit_point(np.asarray(p1, float), np.asarray(a1, float), centre, radius)
+    u0, u1 = (q0 - centre) / np.linalg.norm(q0 - centre), (q1 - centre) / np.linalg.norm(q1 - centre)
+    ang = float(np.arccos(np.clip(u0 @ u1, -1.0, 1.0)))
+    n = max(1, int(np.ceil(np.degrees(ang) / step_deg)))
+    if ang < 1e-9:
+        dirs = np.repeat(u0[None, :], n + 1, axis=0)
+    else:
+        ortho = u1 - (u0 @ u1) * u0
+        if np.linalg.norm(ortho) < 1e-12:  # opposite points: any great circle
+            ortho = np.cross(u0, [1.0, 0.0, 0.0] if abs(u0[0]) < 0.9 else [0.0, 1.0, 0.0])
+        ortho /= np.linalg.norm(ortho)
+        th = np.linspace(0.0, ang, n + 1)
+        dirs = np.cos(th)[:, None] * u0 + np.sin(th)[:, None] * ortho
+    tips = np.vstack([q0, centre + radius * dirs, q1])
+    axes = np.vstack([a0, dirs, a1])
+    return tips, axes
+
+
 @dataclass(frozen=True, eq=False)
 class ToolPath(Result):
     """Tool positions: tip (n, 3) mm, unit axis (n, 3), move kind and pass index per position.
@@ -130,6 +165,7 @@ class ToolPath(Result):
         name: str = "toolpath",
         info=None,
         linking: Sequence | None = None,
+        safe_sphere: tuple | None = None,
     ) -> ToolPath:
         """Cutting passes linked the safe way: rapid to ``clearance`` mm above each pass start along
         its tool axis, approach along the axis, cut, retract ``clearance`` mm along the axis.
@@ -147,6 +183,12 @@ class ToolPath(Result):
         linking : sequence of (start_dir, end_dir), optional
             Per pass, the unit directions to approach from and retract to instead of the tool
             axis (a flank tool lies along the surface: it leaves sideways, away from it).
+        safe_sphere : (centre, radius), optional
+            A sphere around the whole part (mm). Between passes the tool then leaves along its axis to
+            the sphere, travels over it (great-circle steps of at most 5 deg, the axis pointing out of
+            it, the radius raised by the chords' sag) and comes back along the next pass's axis: no
+            rapid crosses the part (5-axis paths on twisted or overhanging faces). Without it a rapid
+            runs straight from one pass's retract point to the next one's approach point.
 
         Examples
         --------
@@ -161,7 +203,11 @@ class ToolPath(Result):
             raise InputError("clearance must be > 0 mm")
         if len(tips) != len(axes):
             raise InputError("one axis array per pass")
-        T, A, M, P, C = [], [], [], [], []
+        T: list = []
+        A: list = []
+        M: list = []
+        P: list = []
+        C: list = []
         X: dict[str, list] = {}
         keys = sorted(extras[0]) if extras else []
         for i, (t, a) in enumerate(zip(tips, axes)):
@@ -173,6 +219,18 @@ class ToolPath(Result):
             m = t.shape[0]
             d0, d1 = (a[0], a[-1]) if linking is None else (np.asarray(x, float) for x in linking[i])
             d0, d1 = d0 / np.linalg.norm(d0), d1 / np.linalg.norm(d1)
+            if safe_sphere is not None and T:  # from the last pass's retract over the sphere to this one
+                link_t, link_a = _over_sphere(T[-1][-1], A[-1][-1], t[0] + clearance * d0, d0, safe_sphere)
+                T.append(link_t)
+                A.append(link_a)
+                M.append([Move.RAPID] * len(link_t))
+                P.append(np.full(len(link_t), P[-1][-1]))
+                if cc is not None:
+                    C.append(np.full((len(link_t), 3), np.nan))
+                for k in keys:
+                    v = np.asarray(extras[i][k])  # type: ignore[index]
+                    pad = np.full((len(link_t),) + v.shape[1:], np.nan if v.dtype.kind == "f" else -1, dtype=v.dtype)
+                    X.setdefault(k, []).append(pad)
             T += [t[:1] + clearance * d0[None, :], t, t[-1:] + clearance * d1[None, :]]
             A += [a[:1], a, a[-1:]]
             M += [[Move.RAPID, Move.APPROACH], [Move.CUT] * (m - 1), [Move.RETRACT]]
@@ -196,7 +254,8 @@ class ToolPath(Result):
             cutter,
             name,
             {k: np.concatenate(v) for k, v in X.items()},
-            dict(info or {}, clearance_mm=float(clearance)),
+            dict(info or {}, clearance_mm=float(clearance))
+            | ({} if safe_sphere is None else {"safe_sphere_radius_mm": float(safe_sphere[1])}),
         )
 
     # ------------------------------------------------------------------ views

@@ -35,6 +35,7 @@ def tool_paths(
     zigzag: bool = True,
     clearance: float = 5.0,
     max_passes: int = 5000,
+    safe_sphere: tuple | None = None,
 ) -> ToolPath:
     """Tool paths on S1: plane sections (``PlanesFeed``) or iso-parametric lines (``IsoFeed``).
 
@@ -53,6 +54,9 @@ def tool_paths(
         Approach and retract distance along the tool axis, mm.
     max_passes : int
         Work-size bound: more passes than this is refused (with the smallest admissible step-over).
+    safe_sphere : (centre, radius), optional
+        A sphere around the whole part (mm): passes are linked over it instead of by straight rapids
+        (:meth:`~machsurf_cad.cam.ToolPath.from_passes`).
 
     Returns
     -------
@@ -160,8 +164,30 @@ def tool_paths(
         "n_cut_positions": int(sum(t.shape[0] for t in tips)),
     }
     return ToolPath.from_passes(
-        tips, axes, cc=ccs, extras=extras, clearance=clearance, cutter=ms.cutter, name="machining_surface", info=info
+        tips,
+        axes,
+        cc=ccs,
+        extras=extras,
+        clearance=clearance,
+        cutter=ms.cutter,
+        name="machining_surface",
+        info=info,
+        safe_sphere=safe_sphere,
     )
+
+
+def part_sphere(faces, clearance: float = 5.0) -> tuple:
+    """(centre, radius) of a sphere holding every face (their poles' bounding box: a B-spline with positive
+    weights lies in its poles' convex hull) with ``clearance`` mm to spare: the sphere 5-axis passes are
+    linked over (``tool_paths(..., safe_sphere=...)``)."""
+    from ..geometry.face import Face
+
+    poles = [np.asarray((f.surface if isinstance(f, Face) else f).poles, float).reshape(-1, 3) for f in faces]
+    if not poles:
+        raise InputError("a sphere around the part needs at least one face")
+    pts = np.concatenate(poles)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    return 0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + float(clearance)
 
 
 def _densify(uv: np.ndarray, ms: MachiningSurface, level: float, kind: str, N) -> np.ndarray:

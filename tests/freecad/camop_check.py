@@ -89,7 +89,8 @@ try:
     five.AptFile = apt
     doc.recompute()
     m5 = ms.machining_surface(faces[top], "ball:D=6", axes=5, strategy="planes:-0,1,0", lead=10.0, tolerance=1e-3)
-    tp5 = ms.tool_paths(m5, stepover=4.0, chordal_tolerance=0.01, clearance=5.0)
+    tp5 = ms.tool_paths(m5, stepover=4.0, chordal_tolerance=0.01, clearance=5.0,
+                        safe_sphere=ms.part_sphere(faces, 5.0))  # fmt: skip
     moves = [c for c in five.Path.Commands if c.Name in ("G0", "G1")]
     tips = np.array([[c.Parameters[k] for k in "XYZ"] for c in moves])
     bc = np.radians([[c.Parameters["B"], c.Parameters["C"]] for c in moves])

@@ -7,7 +7,8 @@ diameter and corner radius mapped explicitly, the bull-nose's FlatRadius being D
 one, from the ``Tool`` text. Patterns:
 
 - ``raster``, ``waterline``: machsurf's exact 3-axis drop-cutter on the selected faces, avoiding the rest;
-- ``5-axis surface``: the guiding/orientation surfaces of one face (lead, tilt) and the tool path on them;
+- ``5-axis surface``: the guiding/orientation surfaces of one face (lead, tilt) and the tool path on them,
+  its passes linked over a sphere around the whole part (no rapid through it);
 - ``flank``: the flank milling path of a cylindrical cutter (the end mill) along one ruled face.
 
 Every path is checked against every face of the part (``Verdict``); one that gouges beyond
@@ -252,8 +253,9 @@ class CamOperationFeature(_Base):
                                  lead=value_of(obj.Lead), tilt=value_of(obj.Tilt),
                                  tolerance=value_of(obj.SurfaceTolerance), progress=bar)  # fmt: skip
         obj.SurfaceError = float(m.s1_fit.max_error)
+        sphere = ms.part_sphere(faces + others, value_of(obj.Clearance))  # passes linked over the whole part
         return ms.tool_paths(m, stepover=value_of(obj.StepOver), chordal_tolerance=value_of(obj.ChordalTolerance),
-                             clearance=value_of(obj.Clearance))  # fmt: skip
+                             clearance=value_of(obj.Clearance), safe_sphere=sphere)  # fmt: skip
 
     def feeds(self, obj):
         """(cutting, plunge) feeds in mm/s (FreeCAD's unit) from the ToolController, else 1000 and 300 mm/min."""
