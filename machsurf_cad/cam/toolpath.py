@@ -186,9 +186,11 @@ class ToolPath(Result):
         safe_sphere : (centre, radius), optional
             A sphere around the whole part (mm). Between passes the tool then leaves along its axis to
             the sphere, travels over it (great-circle steps of at most 5 deg, the axis pointing out of
-            it, the radius raised by the chords' sag) and comes back along the next pass's axis: no
-            rapid crosses the part (5-axis paths on twisted or overhanging faces). Without it a rapid
-            runs straight from one pass's retract point to the next one's approach point.
+            it, the radius raised by the chords' sag) and comes back along the next pass's axis: the
+            moves over the sphere stay clear of the part; those out and back along an axis are straight
+            and may still cross other parts of it (a propeller's next blade), which the tool-body
+            check finds. Without it a rapid runs straight from one pass's retract point to the next
+            one's approach point.
 
         Examples
         --------

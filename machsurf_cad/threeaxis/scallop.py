@@ -235,10 +235,11 @@ def plan_lines(fs, cutter, scallop_mm: float, d, nrm, t_range, s, drop, first_st
     h, c = line(t0)
     offsets, heights, contacts, swept = [t0], [h], [c], [SweptLine(prof, s, h)]
     worst = {"left_mm": 0.0, "left_vertical_mm": 0.0, "at_xy_mm": None}
-    unmet = []  # pairs left over the target at the smallest step: regions the cutter cannot reach
+    unmet = []  # pairs still over the target at the smallest step
     guess = first_step
     trials = 0
-    at_limit = 0  # cusp positions where the tool placed right there leaves more than the target
+    at_limit = 0  # cusp positions the step-over does not control (the tool cannot touch there, or a closer line
+    # would not lower them)
     while offsets[-1] < t1 - 1e-9:
         ta, za = offsets[-1], heights[-1]
         step = min(guess, t1 - ta)
@@ -277,7 +278,8 @@ def plan_lines(fs, cutter, scallop_mm: float, d, nrm, t_range, s, drop, first_st
         raise InputError("the raster's extent is narrower than one line")
     gaps = np.diff(offsets)
     info = {
-        "scallop_measure": "cusp height above the part along its normal, cross-sections of adjacent lines",
+        "scallop_measure": "cusp of the swept lower surfaces of adjacent lines, its height above the part along "
+        "the part's normal",
         "scallop_planned_max_mm": worst["left_mm"],
         "scallop_planned_max_vertical_mm": worst["left_vertical_mm"],
         "scallop_planned_worst_xy_mm": worst["at_xy_mm"],
