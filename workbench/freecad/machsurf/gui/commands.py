@@ -108,11 +108,12 @@ class EnvelopeCommand(_FeatureCommand):
 
 class CamOperationCommand(_FeatureCommand):
     kind, icon = "CamOperation", "cam_operation.svg"
-    text = QT_TRANSLATE_NOOP("Machsurf_CamOperation", "3-axis CAM operation")
+    text = QT_TRANSLATE_NOOP("Machsurf_CamOperation", "CAM operation")
     tip = QT_TRANSLATE_NOOP(
         "Machsurf_CamOperation",
-        "Select faces of a part: an exact drop-cutter raster or waterline path on them in the document's "
-        "Path Job, with the Job's tool, checked against every face of the part before it is kept.",
+        "Select faces of a part: a path on them in the document's Path Job with the Job's tool (3-axis exact "
+        "drop-cutter raster or waterline, 5-axis on one face, or flank milling of a ruled face), checked "
+        "against every face of the part before it is kept.",
     )
 
     def source(self):
