@@ -19,85 +19,120 @@ True
 (True, 'bull:D=28,r=4')
 """
 
-from ._version import __version__
-from .approx import SurfaceFit, fit_surface
-from .batchrun import BatchJob, BatchJobResult, BatchResult, batch, read_jobs
-from .cam import Move, PostOptions, ToolPath, read_apt, read_csv, write_apt, write_csv, write_json
-from .cutters import (
-    APTCutter,
-    BallEndMill,
-    BullNoseEndMill,
-    ConicalCutter,
-    Cutter,
-    DrumCutter,
-    EndMillRadii,
-    FlatEndMill,
-    Shank,
-    cutter_from_apt,
-    parse_cutter,
-)
-from .effradius import DirectionMap, ReffMaps, effective_radius, reff_maps, stepover
-from .errors import DegenerateGeometryError, InputError, MachsurfError, ToleranceError
-from .examples import EXAMPLES, example
-from .flank_milling import (
-    FlankPath,
-    FlankResult,
-    Interference,
-    NoAdmissibleSetting,
-    RuledSurface,
-    Setting,
-    compare_with_rule_optima,
-    flank,
-    flank_path,
-    smooth_minimax_path,
-)
-from .geometry import BSplineCurve, BSplineSurface, builders, local_properties
-from .geometry.face import Face
-from .gougecheck import VerifyResult, verify
-from .jobs import (
-    DemoJob,
-    EnvelopeJob,
-    FlankJob,
-    InfoJob,
-    InspectJob,
-    JobOutcome,
-    JobSpec,
-    MachiningSurfaceJob,
-    ReffJob,
-    SimulateJob,
-    VerifyJob,
-    run_job,
-)
-from .machining import (
-    AxisField,
-    FixedAxis,
-    IsoFeed,
-    LeadTilt,
-    LoopError,
-    MachiningSurface,
-    PlanesFeed,
-    machining_surface,
-)
-from .machining.toolpath import part_sphere, tool_paths
-from .measure import DeviationResult, deviation, project_points
-from .results import Progress
-from .simulation import SimulationResult, simulate
-from .sweep import Envelope, EnvelopeResult, Motion, PassChain, envelope
-from .threeaxis import (
-    Contact,
-    Direction,
-    DropCutterResult,
-    Pattern,
-    cl_surface,
-    drop_cutter,
-    raster,
-    scallop_stepover,
-    top_faces,
-    waterline,
-)
+import ast as _ast
+import importlib as _importlib
+from pathlib import Path as _Path
+from typing import TYPE_CHECKING
 
-reff = reff_maps
-"""Effective cutter radius and step-over maps over a face (the ``reff`` command); same as :func:`reff_maps`."""
+from ._version import __version__
+
+if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``import machsurf_cad`` stays light)
+    from .approx import SurfaceFit, fit_surface
+    from .batchrun import BatchJob, BatchJobResult, BatchResult, batch, read_jobs
+    from .cam import Move, PostOptions, ToolPath, read_apt, read_csv, write_apt, write_csv, write_json
+    from .cutters import (
+        APTCutter,
+        BallEndMill,
+        BullNoseEndMill,
+        ConicalCutter,
+        Cutter,
+        DrumCutter,
+        EndMillRadii,
+        FlatEndMill,
+        Shank,
+        cutter_from_apt,
+        parse_cutter,
+    )
+    from .effradius import DirectionMap, ReffMaps, effective_radius, reff_maps, stepover
+    from .errors import DegenerateGeometryError, InputError, MachsurfError, ToleranceError
+    from .examples import EXAMPLES, example
+    from .flank_milling import (
+        FlankPath,
+        FlankResult,
+        Interference,
+        NoAdmissibleSetting,
+        RuledSurface,
+        Setting,
+        compare_with_rule_optima,
+        flank,
+        flank_path,
+        smooth_minimax_path,
+    )
+    from .geometry import BSplineCurve, BSplineSurface, builders, local_properties
+    from .geometry.face import Face
+    from .gougecheck import VerifyResult, verify
+    from .jobs import (
+        DemoJob,
+        EnvelopeJob,
+        FlankJob,
+        InfoJob,
+        InspectJob,
+        JobOutcome,
+        JobSpec,
+        MachiningSurfaceJob,
+        ReffJob,
+        SimulateJob,
+        VerifyJob,
+        run_job,
+    )
+    from .machining import (
+        AxisField,
+        FixedAxis,
+        IsoFeed,
+        LeadTilt,
+        LoopError,
+        MachiningSurface,
+        PlanesFeed,
+        machining_surface,
+    )
+    from .machining.toolpath import part_sphere, tool_paths
+    from .measure import DeviationResult, deviation, project_points
+    from .results import Progress
+    from .simulation import SimulationResult, simulate
+    from .sweep import Envelope, EnvelopeResult, Motion, PassChain, envelope
+    from .threeaxis import (
+        Contact,
+        Direction,
+        DropCutterResult,
+        Pattern,
+        cl_surface,
+        drop_cutter,
+        raster,
+        scallop_stepover,
+        top_faces,
+        waterline,
+    )
+    from .effradius import reff_maps as reff
+
+
+def _lazy_names() -> dict[str, tuple[str, str]]:
+    """``name -> (module, attribute)`` read from the ``TYPE_CHECKING`` imports above (one list of names)."""
+    tree = _ast.parse(_Path(__file__).read_text())
+    block = next(n for n in tree.body if isinstance(n, _ast.If) and getattr(n.test, "id", "") == "TYPE_CHECKING")
+    out = {}
+    for node in block.body:
+        if isinstance(node, _ast.ImportFrom):
+            for a in node.names:
+                out[a.asname or a.name] = ("." * node.level + (node.module or ""), a.name)
+    return out
+
+
+_LAZY = _lazy_names()
+_SUBMODULES = ("occ", "viz", "cam", "geometry", "jobs", "threeaxis", "machining", "flank_milling", "sweep", "simulation")
+
+
+def __getattr__(name: str):
+    """Import a public name (or the ``occ``/``viz`` doors and other subpackages) on first use (PEP 562)."""
+    if name in _LAZY:
+        module, attr = _LAZY[name]
+        value = getattr(_importlib.import_module(module, __name__), attr)
+    elif name in _SUBMODULES:
+        value = _importlib.import_module(f".{name}", __name__)
+    else:
+        raise AttributeError(f"module 'machsurf_cad' has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     # entry points

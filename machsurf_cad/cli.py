@@ -390,28 +390,15 @@ _BAR_TITLES = {
 }
 
 
-class _Terminated(BaseException):
-    """SIGTERM, raised like Ctrl-C so staged outputs are removed on the way out."""
-
-
-def _on_sigterm(signum, frame):
-    raise _Terminated()
-
-
-def main(argv=None) -> int:
+def run(argv=None) -> int:
+    """Parse ``argv`` and run the command (signal handlers are :func:`machsurf_cad._start.main`'s)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "command", None):
         parser.print_help()
         return EXIT_INPUT
-    import signal
-
     from .progress import Bar
 
-    previous = previous_int = None
-    if _main_thread():
-        previous = signal.signal(signal.SIGTERM, _on_sigterm)
-        previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)  # even when started ignored
     try:
         if args.command == "batch":
             return _run_batch(args)
@@ -421,23 +408,13 @@ def main(argv=None) -> int:
     except MachsurfError as exc:
         print(f"machsurf: error: {exc}", file=sys.stderr)
         return exc.exit_code
-    except KeyboardInterrupt:
-        print("machsurf: interrupted (nothing written)", file=sys.stderr)
-        return 130
-    except _Terminated:
-        print("machsurf: terminated (nothing written)", file=sys.stderr)
-        return 143
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
-        if previous_int is not None:
-            signal.signal(signal.SIGINT, previous_int)
 
 
-def _main_thread() -> bool:
-    import threading
+def main(argv=None) -> int:
+    """``machsurf`` with Ctrl-C and SIGTERM handled (exit 130 and 143): :func:`machsurf_cad._start.main`."""
+    from ._start import main as start
 
-    return threading.current_thread() is threading.main_thread()
+    return start(argv)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -596,12 +596,26 @@ def _length(length, D) -> float:
     return x if x > 0 else 3.0 * _num("D", D)
 
 
-def cutter_from_apt(params) -> Cutter | None:
+def apt_mismatch(d: float, r: float, e: float, f: float, alpha: float, beta: float) -> float:
+    """How far (mm) the corner arc ``(e, f, r)`` is from tangent to the bottom and side lines that ``d`` defines.
+
+    The bottom line leaves the tip on the axis at the angle ``alpha``; the side line passes through the
+    point of the bottom line at radius ``d/2`` at the taper ``beta`` (degrees). Zero for a consistent set
+    (ball, bull and flat: ``d = 2(e + r)`` and ``f = r``).
+    """
+    al, be = math.radians(alpha), math.radians(beta)
+    bottom = f * math.cos(al) - e * math.sin(al) - r
+    z_d = d / 2 * math.tan(al)
+    side = (d / 2 - e) * math.cos(be) + (f - z_d) * math.sin(be) - r
+    return max(abs(bottom), abs(side))
+
+
+def cutter_from_apt(params) -> Cutter:
     """The cutter of an APT ``CUTTER/`` statement (1, 2 or 7 values, mm and degrees).
 
     Ball, flat and bull-nose end mills are recognised from the 7 parameters (the convention of
-    :meth:`Cutter.apt_parameters`), a conical cutter from ``r = 0, alpha = 0, beta != 0``; other
-    consistent sets give an :class:`APTCutter`; ``None`` when the set is not a cutter of this library.
+    :meth:`Cutter.apt_parameters`), a conical cutter from ``r = 0, alpha = 0, beta != 0``, a drum or barrel
+    from its arc spanning the height; other consistent sets give an :class:`APTCutter`.
 
     Parameters
     ----------
@@ -610,33 +624,50 @@ def cutter_from_apt(params) -> Cutter | None:
 
     Returns
     -------
-    Cutter or None
+    Cutter
+
+    Raises
+    ------
+    InputError
+        A set that is not a cutter: not 1, 2, 4, 6 or 7 finite numbers, or inconsistent (the corner arc not
+        tangent to the bottom and side lines that ``d`` defines, :func:`apt_mismatch` over 0.001 mm), or out
+        of range.
 
     Examples
     --------
     >>> cutter_from_apt([20, 4, 6, 4, 0, 0, 60]).spec()
     'bull:D=20,r=4'
     """
-    v = [float(x) for x in params]
-    if not v:
-        return None
+    try:
+        v = [float(x) for x in params]
+    except (TypeError, ValueError):
+        raise InputError(f"APT cutter parameters must be numbers, got {params!r}") from None
+    if len(v) not in (1, 2, 4, 6, 7) or not all(math.isfinite(x) for x in v):
+        raise InputError(f"APT cutter needs 1, 2, 4, 6 or 7 finite values (d, r, e, f, alpha, beta, h), got {v}")
     d = v[0]
     r = v[1] if len(v) > 1 else 0.0
     e, f = (v[2], v[3]) if len(v) >= 4 else (d / 2 - r, r)
     alpha, beta = (v[4], v[5]) if len(v) >= 6 else (0.0, 0.0)
     h = v[6] if len(v) >= 7 else 0.0
-    try:
-        if alpha == 0 and beta == 0 and abs(e - (d / 2 - r)) < 1e-9 and abs(f - r) < 1e-9:
-            if r == 0:
-                return FlatEndMill(d, h)
-            if abs(r - d / 2) < 1e-9:
-                return BallEndMill(d, h)
-            return BullNoseEndMill(d, r, h)
-        if r == 0 and alpha == 0 and abs(e - d / 2) < 1e-9 and f == 0:
-            return ConicalCutter(d, beta, h)
-        return APTCutter(d, r, e, f, alpha, beta, h)
-    except InputError:
-        return None
+    text = "CUTTER/" + ",".join(f"{x:g}" for x in v)
+    if h > 0 and alpha == 0 and beta == 0 and r > 0 and abs(f - h / 2) < 1e-3 and abs(f - r) > 1e-3:
+        if abs(abs(d / 2 - e) - r) < 1e-3:  # the arc spans the height: a drum (e < d/2) or barrel
+            return DrumCutter(d, r, h, concave=e > d / 2)
+    miss = apt_mismatch(d, r, e, f, alpha, beta)
+    if miss > 1e-3:
+        raise InputError(
+            f"{text} is inconsistent: its corner arc is {miss:.4g} mm off the bottom and side lines of the "
+            f"diameter d = {d:g} mm (a ball, bull or flat end mill has d = 2(e + r) = {2 * (e + r):g} mm and f = r)"
+        )
+    if alpha == 0 and beta == 0:
+        if r == 0:
+            return FlatEndMill(d, h)
+        if abs(r - d / 2) < 1e-9:
+            return BallEndMill(d, h)
+        return BullNoseEndMill(d, r, h)
+    if r == 0 and alpha == 0 and f == 0:
+        return ConicalCutter(d, beta, h)
+    return APTCutter(d, r, e, f, alpha, beta, h)
 
 
 # ----------------------------------------------------------------------------- strings

@@ -59,11 +59,33 @@ def json_default(o: Any) -> Any:
     raise TypeError(f"not JSON serialisable: {type(o)}")
 
 
+def json_ready(o: Any) -> Any:
+    """``o`` with numpy values as Python ones and every NaN or infinity as ``None`` (JSON's null: no value)."""
+    if isinstance(o, dict):
+        return {str(k): json_ready(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [json_ready(v) for v in o]
+    if isinstance(o, np.ndarray):
+        return json_ready(o.tolist())
+    if isinstance(o, (np.floating, np.integer, np.bool_)):
+        o = o.item()
+    if isinstance(o, float) and not np.isfinite(o):
+        return None
+    if isinstance(o, Path):
+        return str(o)
+    return o
+
+
+def strict_json(data: Any, indent: int | None = 2) -> str:
+    """Strict JSON text (RFC 8259: no NaN or Infinity, which become null), numpy values converted."""
+    return json.dumps(json_ready(data), indent=indent, allow_nan=False, default=json_default)
+
+
 def write_json(path, data: dict) -> Path:
-    """Write ``data`` as indented JSON (numpy values converted); returns the path."""
+    """Write ``data`` as indented strict JSON (numpy values converted, NaN/infinity as null)."""
     path = Path(path)
-    path.write_text(json.dumps(data, indent=2, default=json_default) + "\n")
+    path.write_text(strict_json(data) + "\n")
     return path
 
 
-__all__ = ["Progress", "readonly", "Result", "json_default", "write_json"]
+__all__ = ["Progress", "readonly", "Result", "json_default", "json_ready", "strict_json", "write_json"]

@@ -220,7 +220,7 @@ def test_local_cluster_runs_every_job_like_the_cli_and_reports_the_bad_one(tmp_p
         ms.batch(jobs[:1], tmp_path / "b", workers=1)
     assert ms.batch(jobs[:1], tmp_path / "b", workers=1, overwrite=True).exit_code == 0
     assert sorted(p.name for p in (tmp_path / "b").iterdir()) == [
-        "batch_figures.csv", "batch_report.json", "reff", "report.json"
+        ".machsurf-manifest.json", "batch_figures.csv", "batch_report.json", "reff", "report.json"
     ]  # fmt: skip
 
 

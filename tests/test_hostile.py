@@ -36,7 +36,7 @@ def test_output_folder_that_is_a_file_or_unwritable(tmp_path):
     other = tmp_path / "notours"
     other.mkdir()
     (other / "keep.txt").write_text("x")
-    _refused(run("info", BLOCK, "-o", other), "holds no machsurf report.json")
+    _refused(run("info", BLOCK, "-o", other), "holds files machsurf did not write (keep.txt)")
     assert (other / "keep.txt").is_file()
 
 
@@ -77,7 +77,7 @@ def test_reused_output_folder_holds_exactly_one_run(tmp_path):
     assert r.returncode == 0, r.stderr
     assert not (out / "toolpath.apt").exists()  # the earlier run's path is gone with its folder
     rep = json.loads((out / "report.json").read_text())
-    assert sorted(p.name for p in out.iterdir()) == sorted(rep["files"])
+    assert sorted(p.name for p in out.iterdir()) == sorted(rep["files"] + [".machsurf-manifest.json"])
     _no_partial(out)
 
 

@@ -178,7 +178,13 @@ def test_verify_command_reads_apt_and_csv_and_exits_by_the_result(tmp_path):
     assert r.returncode == 2 and "NOT clean" in r.stdout
     rep = json.loads((tmp_path / "v2" / "report.json").read_text())["verify"]
     assert rep["max_gouge_mm"] > 0.19 and rep["worst"][0]["face"] == "freeform_top"
-    r = run("verify", block, "--toolpath", bad, "-o", tmp_path / "v3")  # CSV carries no cutter
+    r = run("verify", block, "--toolpath", bad, "-o", tmp_path / "v3")  # our CSV carries its cutter
+    assert r.returncode == 2 and "tool bull:D=16,r=3" in r.stdout
+    rep3 = json.loads((tmp_path / "v3" / "report.json").read_text())["verify"]
+    assert rep3["max_gouge_mm"] == pytest.approx(rep["max_gouge_mm"], abs=1e-9)
+    plain = tmp_path / "plain.csv"  # a CSV without our comment line names no tool
+    plain.write_text("\n".join(bad.read_text().splitlines()[1:]) + "\n")
+    r = run("verify", block, "--toolpath", plain, "-o", tmp_path / "v3b")
     assert r.returncode == 1 and "give --tool" in r.stderr
     r = run("verify", block, "--toolpath", bad, "--tool", "ball:D=10", "--shank", "D=10", "-o", tmp_path / "v4")
     assert r.returncode == 1 and "needs D and L" in r.stderr

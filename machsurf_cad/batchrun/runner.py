@@ -293,6 +293,9 @@ def batch(
     names = [j.name for j in jobs]
     if len(set(names)) != len(names):
         raise InputError("duplicate job names: " + ", ".join(sorted({n for n in names if names.count(n) > 1})))
+    taken = sorted(set(names) & {"report.json", "batch_report.json", "batch_figures.csv", ".machsurf-manifest.json"})
+    if taken:
+        raise InputError(f"job name {taken[0]!r} is a file the batch writes in its output folder: rename the job")
     if int(retries) < 0:
         raise InputError(f"retries must be >= 0, got {retries}")
     out = Path(out)

@@ -20,7 +20,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ..results import Progress
-from .base import EXIT_INPUT, EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, quiet
+from .base import EXIT_INPUT, EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, check_output_folder, quiet
 from .specs import (
     SPECS,
     DemoJob,
@@ -92,7 +92,9 @@ def run_job(spec: JobSpec, out, *, say: Say = quiet, progress: Progress | None =
     >>> out.exit_code, files, out.report["directions"][0]["r_eff_max_mm"]
     (0, ('report.json',), 5.0)
     """
-    return _runner(spec)(spec, Path(out), say, progress)
+    runner = _runner(spec)
+    check_output_folder(out)  # before any work: a folder of the user's is refused, never replaced
+    return runner(spec, Path(out), say, progress)
 
 
 __all__ = [

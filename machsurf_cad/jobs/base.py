@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
 import shutil
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import InputError, MachsurfError
 from ..results import write_json
 
 Say = Callable[[str], None]
@@ -23,6 +26,115 @@ def quiet(msg: str = "") -> None:
 
 REPORT = "report.json"
 
+MANIFEST = ".machsurf-manifest.json"
+"""The list of files a run wrote (relative paths, sizes, SHA-256), kept in its output folder: a folder is
+replaced only when it holds exactly what its manifest lists."""
+
+
+def _tree(folder: Path) -> tuple[dict[str, Path], list[str]]:
+    """Files (relative POSIX path -> path) and other entries (symlinks, special files) under ``folder``."""
+    files: dict[str, Path] = {}
+    other: list[str] = []
+    for root, dirs, names in os.walk(folder, followlinks=False):
+        base = Path(root)
+        for d in list(dirs):
+            if (base / d).is_symlink():
+                other.append((base / d).relative_to(folder).as_posix())
+                dirs.remove(d)
+        for n in names:
+            p = base / n
+            rel = p.relative_to(folder).as_posix()
+            if p.is_symlink() or not p.is_file():
+                other.append(rel)
+            else:
+                files[rel] = p
+    return files, other
+
+
+def _digest(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def write_manifest(folder: Path) -> Path:
+    """Write :data:`MANIFEST` listing every file under ``folder`` (size and SHA-256)."""
+    files, _ = _tree(folder)
+    entries = {rel: {"bytes": p.stat().st_size, "sha256": _digest(p)} for rel, p in sorted(files.items())}
+    entries.pop(MANIFEST, None)
+    doc = {"written_by": "machsurf_cad", "files": entries}
+    (folder / MANIFEST).write_text(json.dumps(doc, indent=1) + "\n")
+    return folder / MANIFEST
+
+
+def foreign_files(folder: Path) -> list[str]:
+    """What in ``folder`` an earlier machsurf run did not write, as relative paths (empty: the folder holds
+    exactly one earlier run, unchanged, and may be replaced). A folder without a manifest is all foreign."""
+    files, other = _tree(folder)
+    try:
+        listed = json.loads((folder / MANIFEST).read_text())["files"]
+        if not isinstance(listed, dict):
+            raise TypeError
+    except (OSError, ValueError, KeyError, TypeError):
+        return sorted(files) + sorted(other)
+    foreign = sorted(other)
+    for rel, p in sorted(files.items()):
+        if rel == MANIFEST:
+            continue
+        entry = listed.get(rel)
+        if not isinstance(entry, dict) or entry.get("bytes") != p.stat().st_size or entry.get("sha256") != _digest(p):
+            foreign.append(rel)
+    return foreign
+
+
+def _legacy_run(folder: Path, files: list[str]) -> bool:
+    """An output folder of machsurf before 0.3 (no manifest): its report.json lists every file there."""
+    try:
+        listed = json.loads((folder / REPORT).read_text()).get("files")
+    except (OSError, ValueError, AttributeError):
+        return False
+    return isinstance(listed, list) and set(files) <= set(listed) | {REPORT}
+
+
+def _shown(names: list[str]) -> str:
+    return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+
+
+def check_output_folder(out_dir) -> Path:
+    """The real path of the output folder ``out_dir`` (symbolic links followed), or a one-line refusal.
+
+    Refused: an existing file, the current folder or one holding it, and a folder holding anything an
+    earlier machsurf run did not write (every file listed, unchanged, in its :data:`MANIFEST`; or, for
+    folders of machsurf before 0.3, in its ``report.json``). :func:`~machsurf_cad.jobs.run_job` calls it
+    before any work; :class:`Staging` again just before the swap.
+    """
+    shown = Path(out_dir)
+    real = Path(os.path.realpath(out_dir))
+    cwd = Path(os.getcwd())
+    if real == cwd or real in cwd.parents:
+        raise InputError(
+            f"output folder {shown} is the current folder or holds it: give a new folder, e.g. -o out "
+            "(machsurf replaces its output folder whole)"
+        )
+    if real.exists() and not real.is_dir():
+        raise InputError(f"output folder {shown} is an existing file: choose another -o")
+    if not real.is_dir():
+        return real
+    try:
+        foreign = foreign_files(real)
+        if foreign and not (real / MANIFEST).exists() and _legacy_run(real, foreign):
+            foreign = []
+    except OSError as exc:
+        raise InputError(f"cannot read output folder {shown}: {exc.strerror or exc}") from None
+    if foreign:
+        raise InputError(
+            f"output folder {shown} holds files machsurf did not write ({_shown(foreign)}): "
+            "choose a new or empty folder (machsurf replaces only its own output folders)"
+        )
+    return real
+
 
 class Staging:
     """Write outputs into a hidden sibling folder, then make it the output folder, whole.
@@ -30,24 +142,22 @@ class Staging:
     Use as a context manager: when the block ends normally the staged folder replaces ``out_dir``
     (an output folder holds exactly one run: files of an earlier run never mix with this one's);
     when it raises (including Ctrl-C or SIGTERM), the staged folder is removed and ``out_dir`` is
-    left as it was. ``out_dir`` must be new, empty, or an earlier machsurf output folder (it holds a
-    ``report.json``); anything else is refused rather than deleted.
+    left as it was. ``out_dir`` must be new, empty, or exactly an earlier machsurf run (every file
+    in it listed, unchanged, in that run's :data:`MANIFEST`); anything else is refused in one line and
+    never deleted - checked when the job starts and again just before the swap. A symbolic link is
+    followed (the folder it points to is replaced, the link kept); the current folder or one holding
+    it is refused. A write that fails (disk full, file too large, permissions) is reported in one
+    line with nothing half-written.
     """
 
     def __init__(self, out_dir):
-        self.out_dir = Path(out_dir)
-        if self.out_dir.exists() and not self.out_dir.is_dir():
-            raise InputError(f"output folder {self.out_dir} is an existing file: choose another -o")
-        if self.out_dir.is_dir() and any(self.out_dir.iterdir()) and not (self.out_dir / REPORT).is_file():
-            raise InputError(
-                f"output folder {self.out_dir} is not empty and holds no machsurf report.json: "
-                "choose a new or empty folder (machsurf replaces its own output folders whole)"
-            )
+        self.shown = Path(out_dir)
+        self.out_dir = check_output_folder(out_dir)
         try:
             self.out_dir.parent.mkdir(parents=True, exist_ok=True)
             self.dir = Path(tempfile.mkdtemp(prefix=f".{self.out_dir.name}.partial-", dir=str(self.out_dir.parent)))
         except OSError as exc:
-            raise InputError(f"cannot write output folder {self.out_dir}: {exc.strerror or exc}") from None
+            raise InputError(f"cannot write output folder {self.shown}: {exc.strerror or exc}") from None
         self.files: list[str] = []
 
     def path(self, name: str) -> Path:
@@ -58,6 +168,11 @@ class Staging:
 
     def commit(self) -> Path:
         """Replace ``out_dir`` by the staged folder (an earlier run's folder is removed after the swap)."""
+        check_output_folder(self.shown)  # the user may have put a file there while the job ran
+        write_manifest(self.dir)
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(self.dir, 0o777 & ~mask)  # mkdtemp's 0700 would hide the results from the user's group
         old = None
         if self.out_dir.exists():
             old = Path(tempfile.mkdtemp(prefix=f".{self.out_dir.name}.old-", dir=str(self.out_dir.parent)))
@@ -81,10 +196,26 @@ class Staging:
 
     def __exit__(self, exc_type, exc, tb):
         if exc_type is None:
-            self.commit()
-        else:
-            self.abort()
+            try:
+                self.commit()
+                return False
+            except BaseException as failed:
+                self.abort()
+                if isinstance(failed, OSError):
+                    raise self._write_error(failed) from None
+                raise
+        self.abort()
+        if isinstance(exc, OSError) and not isinstance(exc, MachsurfError):
+            raise self._write_error(exc) from None
         return False
+
+    def _write_error(self, exc: OSError) -> MachsurfError:
+        """One line for a failed write (or read) of a file, naming it and the reason."""
+        name = exc.filename or ""
+        why = exc.strerror or str(exc)
+        if not name or str(name).startswith(str(self.dir)) or str(name).startswith(str(self.out_dir)):
+            return InputError(f"cannot write output folder {self.shown}: {why} (nothing written)")
+        return InputError(f"cannot read {name}: {why}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,6 +291,8 @@ __all__ = [
     "Say",
     "quiet",
     "Staging",
+    "check_output_folder",
+    "MANIFEST",
     "JobOutcome",
     "finish",
     "face_input",

@@ -19,7 +19,6 @@ convention of a B-C head (:func:`rotary_angles`). ``SimulateScallops`` also simu
 the material left (per-vertex colours in the 3D view). No GUI import: it recomputes headless.
 """
 
-import json
 import math
 
 import numpy as np
@@ -30,6 +29,7 @@ from .. import ensure_core
 ensure_core()
 
 from machsurf_cad.errors import InputError
+from machsurf_cad.results import strict_json
 
 from ..convert import face_to_numpy
 from . import maps
@@ -218,7 +218,7 @@ class CamOperationFeature(_Base):
                 note = f"the path leaves up to {sim.max_scallop:.4g} mm, over the scallop limit {limit:g} mm"
         else:
             maps.clear_map(obj)
-        obj.Report = json.dumps(rep, default=float)
+        obj.Report = strict_json(rep, indent=None)
         return note
 
     def toolpath(self, obj, ms, faces, others, cutter, bar):

@@ -20,6 +20,7 @@ from .. import ensure_core
 ensure_core()
 
 from machsurf_cad.errors import MachsurfError
+from machsurf_cad.results import strict_json
 
 from ..convert import face_to_numpy, face_to_part, surface_to_part
 from . import maps
@@ -285,7 +286,7 @@ class MachiningSurfaceFeature(_Base):
         maps.deviation_map(obj, ms)
         obj.AlphaMax = ms.alpha_max_deg_measured or 0.0
         obj.LoopReport = "none" if not ms.loops.found else "; ".join(r.describe() for r in ms.loops.regions)
-        obj.Report = json.dumps(ms.report(), default=float)
+        obj.Report = strict_json(ms.report(), indent=None)
 
 
 class EffectiveRadiusFeature(_Base):
@@ -340,7 +341,7 @@ class EffectiveRadiusFeature(_Base):
         d = m.report()["directions"][0]
         obj.ReffMin, obj.ReffMean, obj.ReffMax = d["r_eff_min_mm"], d["r_eff_mean_mm"], d["r_eff_max_mm"]
         obj.TorusBeatsBall = d["area_fraction_torus_beats_ball"]
-        obj.Report = json.dumps(m.report(), default=float)
+        obj.Report = strict_json(m.report(), indent=None)
         self.map = m
         maps.reff_map(obj, m, str(obj.MapShows))
         obj.Shape = fc.copy()
@@ -409,7 +410,7 @@ class FlankSettingFeature(_Base):
         )
         st, e = res.setting, res.interference
         obj.MaxGouge, obj.MaxUndercut, obj.Gamma = e.max_gouge, e.max_undercut, st.gamma_deg
-        obj.Report = json.dumps(res.report(), default=float)
+        obj.Report = strict_json(res.report(), indent=None)
         tip, axis, length = st.placement()
         maps.flank_map(obj, face, res.u_p, (tip, axis, length), value_of(obj.Radius))
         obj.Shape = Part.makeCylinder(
@@ -469,7 +470,7 @@ class EnvelopeFeature(_Base):
         rep = ch.report()
         obj.MaxSeamGap = max([s["fitted"]["max_gap_mm"] for s in rep["seams"]] or [0.0])
         obj.MaxSeamAngle = max([s["fitted"]["max_normal_angle_deg"] for s in rep["seams"]] or [0.0])
-        obj.Report = json.dumps(rep, default=float)
+        obj.Report = strict_json(rep, indent=None)
         maps.envelope_map(obj, ch, value_of(obj.Tolerance))
 
 
