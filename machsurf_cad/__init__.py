@@ -44,6 +44,7 @@ if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``im
         parse_cutter,
     )
     from .effradius import DirectionMap, ReffMaps, effective_radius, reff_maps, stepover
+    from .effradius import reff_maps as reff
     from .errors import DegenerateGeometryError, InputError, MachsurfError, ToleranceError
     from .examples import EXAMPLES, example
     from .flank_milling import (
@@ -102,7 +103,6 @@ if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``im
         top_faces,
         waterline,
     )
-    from .effradius import reff_maps as reff
 
 
 def _lazy_names() -> dict[str, tuple[str, str]]:
@@ -118,7 +118,18 @@ def _lazy_names() -> dict[str, tuple[str, str]]:
 
 
 _LAZY = _lazy_names()
-_SUBMODULES = ("occ", "viz", "cam", "geometry", "jobs", "threeaxis", "machining", "flank_milling", "sweep", "simulation")
+_SUBMODULES = (
+    "occ",
+    "viz",
+    "cam",
+    "geometry",
+    "jobs",
+    "threeaxis",
+    "machining",
+    "flank_milling",
+    "sweep",
+    "simulation",
+)
 
 
 def __getattr__(name: str):

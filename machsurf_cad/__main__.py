@@ -1,5 +1,3 @@
-import sys
+from ._start import entry
 
-from ._start import main
-
-sys.exit(main())
+entry()

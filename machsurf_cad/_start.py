@@ -22,7 +22,7 @@ def _on_sigterm(signum, frame):
 
 
 def _signal_in(exc: BaseException | None) -> str | None:
-    """"interrupted" or "terminated" when ``exc`` is, or was raised from, Ctrl-C or SIGTERM (an extension
+    """ "interrupted" or "terminated" when ``exc`` is, or was raised from, Ctrl-C or SIGTERM (an extension
     module interrupted while it loads raises ImportError from the KeyboardInterrupt)."""
     seen = 0
     while exc is not None and seen < 20:
@@ -59,5 +59,22 @@ def main(argv=None) -> int:
             signal.signal(signal.SIGINT, previous_int)
 
 
+def entry() -> None:
+    """The console script and ``python -m machsurf_cad``: :func:`main`, then exit with its code.
+
+    After Ctrl-C or SIGTERM the process ends at once with 130 or 143 (stdio flushed): an interrupt that
+    landed inside an extension's start-up code can leave CPython's "unhandled interrupt" flag set, and the
+    interpreter's finalisation would then turn the exit into a kill by SIGINT.
+    """
+    code = main()
+    if code in (130, 143):
+        import os
+
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    entry()

@@ -31,6 +31,53 @@ def positive(name: str, value, unit: str = "mm") -> float:
     return x
 
 
+def index(name: str, value, *, low: int = 0) -> int:
+    """``value`` as an integer index >= ``low`` (a bool or a fractional number is refused, not rounded)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) and not hasattr(value, "__index__"):
+        raise InputError(f"{name} must be an integer, got {value!r}")
+    if isinstance(value, float) and not value.is_integer():
+        raise InputError(f"{name} must be an integer, got {value!r}")
+    i = int(value)
+    if i < low:
+        raise InputError(f"{name} must be >= {low}, got {value!r}")
+    return i
+
+
+def tool(value, name: str = "tool"):
+    """A :class:`~machsurf_cad.cutters.Cutter`, from itself or its string (``ball:D=10``)."""
+    from .cutters import Cutter, parse_cutter
+
+    if isinstance(value, Cutter):
+        return value
+    if isinstance(value, str):
+        return parse_cutter(value)
+    raise InputError(f"{name} must be a Cutter or a cutter string like ball:D=10, got {type(value).__name__}")
+
+
+def toolpath(value, name: str = "toolpath"):
+    """``value`` if it is a :class:`~machsurf_cad.cam.ToolPath`, else a one-line error."""
+    from .cam.toolpath import ToolPath
+
+    if not isinstance(value, ToolPath):
+        raise InputError(
+            f"{name} must be a ToolPath (ms.read_apt, ms.read_csv, ms.tool_paths ...), got {type(value).__name__}"
+        )
+    return value
+
+
+def points(name: str, value, dim: int):
+    """``value`` as a float array of shape (n, dim) (any array whose last axis has ``dim`` values)."""
+    import numpy as np
+
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be an array of numbers of shape (n, {dim})") from None
+    if a.ndim == 0 or a.shape[-1] != dim:
+        raise InputError(f"{name} must have shape (n, {dim}), got {a.shape}")
+    return a.reshape(-1, dim)
+
+
 def lead_tilt(lead, tilt, *, axes: int = 5) -> tuple[float, float]:
     """Lead and tilt angles (degrees), checked the same way everywhere.
 
@@ -50,4 +97,4 @@ def lead_tilt(lead, tilt, *, axes: int = 5) -> tuple[float, float]:
     return lt, tl
 
 
-__all__ = ["finite", "positive", "lead_tilt", "LEAD_LIMIT_DEG", "TILT_LIMIT_DEG"]
+__all__ = ["finite", "positive", "index", "tool", "toolpath", "points", "lead_tilt", "LEAD_LIMIT_DEG", "TILT_LIMIT_DEG"]

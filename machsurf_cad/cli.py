@@ -45,13 +45,24 @@ def _axis(text: str | None):
     return v
 
 
+def _finite(text: str) -> float:
+    """A finite number (``nan`` and ``inf`` are refused like any other non-number)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if v != v or v in (float("inf"), float("-inf")):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+    return v
+
+
 def _lead(text: str):
     """``--lead``: degrees or ``auto``."""
     if text.strip().lower() == "auto":
         return "auto"
     try:
-        return float(text)
-    except ValueError:
+        return _finite(text)
+    except argparse.ArgumentTypeError:
         raise argparse.ArgumentTypeError(f"lead must be degrees or auto, got {text!r}") from None
 
 
@@ -75,7 +86,7 @@ def _gouge(p, default: str) -> None:
     g = p.add_argument_group("tool-body check against every face of the part (before writing the path)")
     g.add_argument(
         "--gouge-tol",
-        type=float,
+        type=_finite,
         default=None if default == "--tol" else float(default),
         help=f"deepest the tool may go into the part, mm (default {default}); deeper: the path is not written, exit 2",
     )
@@ -89,15 +100,17 @@ def _gouge(p, default: str) -> None:
 
 def _post(p) -> None:
     g = p.add_argument_group("tool-path output (APT CLDATA, CSV, JSON)")
-    g.add_argument("--clearance", type=float, default=5.0, help="approach/retract along the tool axis, mm (default 5)")
-    g.add_argument("--feed", type=float, default=1000.0, help="cutting feed, mm/min (default 1000)")
-    g.add_argument("--plunge-feed", type=float, default=300.0, help="approach/retract feed, mm/min (default 300)")
-    g.add_argument("--spindle", type=float, default=10000.0, help="spindle speed, rpm (default 10000)")
+    g.add_argument(
+        "--clearance", type=_finite, default=5.0, help="approach/retract along the tool axis, mm (default 5)"
+    )
+    g.add_argument("--feed", type=_finite, default=1000.0, help="cutting feed, mm/min (default 1000)")
+    g.add_argument("--plunge-feed", type=_finite, default=300.0, help="approach/retract feed, mm/min (default 300)")
+    g.add_argument("--spindle", type=_finite, default=10000.0, help="spindle speed, rpm (default 10000)")
     g.add_argument("--tool-number", type=int, default=1, help="LOADTL tool number (default 1)")
     g.add_argument(
         "--simulate", action="store_true", help="simulate the written path on the part: scallops, gouges (exit 2)"
     )
-    g.add_argument("--simulate-resolution", type=float, default=None, help="sample spacing of --simulate, mm")
+    g.add_argument("--simulate-resolution", type=_finite, default=None, help="sample spacing of --simulate, mm")
 
 
 class _StrictParser(_Parser):
@@ -139,10 +152,10 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     n.add_argument("candidate", help="candidate STEP (.step/.stp) or mesh (.stl)")
     n.add_argument("--face", type=int, default=0, help="face index in the nominal file (default 0)")
     n.add_argument("--candidate-face", type=int, default=None, help="face index in a candidate STEP (default: --face)")
-    n.add_argument("--tol", type=float, default=None, help="tolerance, max |deviation| in mm (exit 2 if not met)")
+    n.add_argument("--tol", type=_finite, default=None, help="tolerance, max |deviation| in mm (exit 2 if not met)")
     n.add_argument("--samples", type=int, default=200, help="grid samples per direction on a STEP candidate")
     n.add_argument("--no-render", dest="render", action="store_false", help="skip the PNG/VTP (numbers only)")
-    n.add_argument("--max-memory", type=float, default=4096.0, help="memory budget, MB: bigger work is refused")
+    n.add_argument("--max-memory", type=_finite, default=4096.0, help="memory budget, MB: bigger work is refused")
     n.add_argument("-o", "--out", default="out/inspect", help="output folder (default: out/inspect)")
 
     m = sub.add_parser("machining-surface", help="guiding S1 and orientation S2 surfaces of a face (Table 1)")
@@ -151,13 +164,13 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     m.add_argument("--axes", type=int, default=5, help="3 or 5 (default 5)")
     m.add_argument("--strategy", default="planes:x", help="planes:x|y|z|a,b,c or iso:u|v (default planes:x)")
     m.add_argument("--lead", type=_lead, default=0.0, help="lead angle Omega_t, degrees, or auto (5 axes)")
-    m.add_argument("--lead-margin", type=float, default=1.0, help="--lead auto: degrees above the local need")
-    m.add_argument("--lead-min", type=float, default=0.0, help="--lead auto: smallest lead, degrees")
-    m.add_argument("--lead-rate", type=float, default=2.0, help="--lead auto: largest lead change, deg per mm")
-    m.add_argument("--tilt", type=float, default=0.0, help="tilt angle Omega_n, degrees (5 axes)")
+    m.add_argument("--lead-margin", type=_finite, default=1.0, help="--lead auto: degrees above the local need")
+    m.add_argument("--lead-min", type=_finite, default=0.0, help="--lead auto: smallest lead, degrees")
+    m.add_argument("--lead-rate", type=_finite, default=2.0, help="--lead auto: largest lead change, deg per mm")
+    m.add_argument("--tilt", type=_finite, default=0.0, help="tilt angle Omega_n, degrees (5 axes)")
     m.add_argument("--axis", default=None, help="fixed axis x,y,z for 3 axes / 3+2 (default 0,0,1)")
     m.add_argument("--tip", action="store_true", help="3 axes: S1 at the tool tip instead of the torus plane")
-    m.add_argument("--tol", type=float, default=1e-3, help="fit tolerance, max-norm mm (default 0.001)")
+    m.add_argument("--tol", type=_finite, default=1e-3, help="fit tolerance, max-norm mm (default 0.001)")
     m.add_argument("--degree", type=int, default=3, help="fit degree in u and v (default 3)")
     m.add_argument("--max-poles", type=int, default=40000, help="pole budget per surface (default 40000)")
     m.add_argument(
@@ -166,24 +179,29 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
         default="error",
         help="on loops: error (default), flag (export and report) or trim (cut interior regions away)",
     )
-    m.add_argument("--stl-deflection", type=float, default=0.01, help="STL linear deflection, mm (default 0.01)")
+    m.add_argument(
+        "--stl-deflection",
+        type=_finite,
+        default=None,
+        help="STL linear deflection, mm (default 0.01; larger where a face would need over 2 million triangles)",
+    )
     m.add_argument("--toolpath", action="store_true", help="also write the tool path (CSV, APT CLDATA, JSON)")
-    m.add_argument("--stepover", type=float, default=2.0, help="distance between passes, mm (default 2)")
+    m.add_argument("--stepover", type=_finite, default=None, help="distance between passes, mm (default 2)")
     m.add_argument(
         "--scallop",
-        type=float,
+        type=_finite,
         default=None,
         metavar="H",
         help="instead of --stepover: iso-scallop passes leaving H mm between neighbours (spacing on the surface)",
     )
     m.add_argument(
         "--overrun",
-        type=float,
+        type=_finite,
         default=None,
         help="with --scallop: passes run on past the face's edges, mm (default R)",
     )
     m.add_argument(
-        "--chordal", type=float, default=0.005, help="chordal tolerance of the positions, mm (default 0.005)"
+        "--chordal", type=_finite, default=0.005, help="chordal tolerance of the positions, mm (default 0.005)"
     )
     t = m.add_argument_group("3 axes on whole parts: exact drop-cutter on several faces (with --axes 3)")
     t.add_argument(
@@ -193,10 +211,10 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
         "--check-faces", default="rest", help="faces the tool must not cut into: rest (default) | all | none | 1,2"
     )
     t.add_argument("--pattern", choices=["raster", "waterline"], default="raster", help="tool-path pattern")
-    t.add_argument("--angle", type=float, default=0.0, help="raster direction in the plane, degrees (default 0)")
+    t.add_argument("--angle", type=_finite, default=0.0, help="raster direction in the plane, degrees (default 0)")
     t.add_argument("--direction", choices=["zigzag", "one-way"], default="zigzag", help="raster line order")
-    t.add_argument("--stepdown", type=float, default=None, help="waterline: distance between levels, mm")
-    t.add_argument("--grid", type=float, default=None, help="waterline / CL surface: plan grid of heights, mm")
+    t.add_argument("--stepdown", type=_finite, default=None, help="waterline: distance between levels, mm")
+    t.add_argument("--grid", type=_finite, default=None, help="waterline / CL surface: plan grid of heights, mm")
     t.add_argument(
         "--cl-surface", action="store_true", help="also fit the certified height-field B-spline of the tool positions"
     )
@@ -214,12 +232,12 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     e.add_argument("--compare", default="ball", help="reference cutter: ball (same D, default), a cutter string, none")
     e.add_argument("--direction", default="0", help="machining direction(s) theta in degrees: 45 | -45,0,45,90 | all")
     e.add_argument("--grid", type=int, default=256, help="samples per parameter direction (default 256)")
-    e.add_argument("--scallop", type=float, default=None, help="scallop height, mm: adds step-over maps")
+    e.add_argument("--scallop", type=_finite, default=None, help="scallop height, mm: adds step-over maps")
     e.add_argument("--axes", type=int, default=3, help="3 (axis z, default) or 5 (lead/tilt)")
-    e.add_argument("--lead", type=float, default=0.0, help="lead angle, degrees (5 axes)")
-    e.add_argument("--tilt", type=float, default=0.0, help="tilt angle, degrees (5 axes)")
+    e.add_argument("--lead", type=_finite, default=0.0, help="lead angle, degrees (5 axes)")
+    e.add_argument("--tilt", type=_finite, default=0.0, help="tilt angle, degrees (5 axes)")
     e.add_argument("--no-render", dest="render", action="store_false", help="numbers only")
-    e.add_argument("--max-memory", type=float, default=4096.0, help="memory budget, MB: bigger work is refused")
+    e.add_argument("--max-memory", type=_finite, default=4096.0, help="memory budget, MB: bigger work is refused")
     e.add_argument(
         "--chunks", type=int, default=1, help="split the directions into N groups (over the cluster in a batch)"
     )
@@ -227,9 +245,9 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
 
     f = sub.add_parser("flank", help="flank milling settings of a cylindrical cutter on a ruled surface")
     _face_input(f, "eq18 | hypar | liu (the paper's surfaces, exact)", "STEP file with a ruled face (or use --example)")
-    f.add_argument("--fit-ruled", type=float, default=None, help="accept a non-ruled face within this many mm")
+    f.add_argument("--fit-ruled", type=_finite, default=None, help="accept a non-ruled face within this many mm")
     f.add_argument("--tool", default="cyl:D=20", help="cylindrical cutter, e.g. cyl:D=80 (mm)")
-    f.add_argument("--rule", type=float, default=0.5, help="rule position as a fraction of the u range [0, 1]")
+    f.add_argument("--rule", type=_finite, default=0.5, help="rule position as a fraction of the u range [0, 1]")
     f.add_argument(
         "--setting",
         default="optimum",
@@ -239,12 +257,12 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     )
     f.add_argument("--side", type=int, default=1, help="+1: tool on the side of S_u x S_v, -1: the other")
     f.add_argument("--whole", action="store_true", help="settings on the whole surface: tool path, envelope, map")
-    f.add_argument("--tol", type=float, default=0.01, help="whole-surface tolerance and rule step criterion, mm")
-    f.add_argument("--envelope-tol", type=float, default=1e-3, help="envelope fit tolerance, mm")
+    f.add_argument("--tol", type=_finite, default=0.01, help="whole-surface tolerance and rule step criterion, mm")
+    f.add_argument("--envelope-tol", type=_finite, default=1e-3, help="envelope fit tolerance, mm")
     f.add_argument("--study", action="store_true", help="the paper's parameter study plots (figs 9 and 10)")
     f.add_argument(
         "--radius-range",
-        type=float,
+        type=_finite,
         default=None,
         metavar="TOL",
         help="smallest and largest R keeping the whole surface within TOL mm",
@@ -252,7 +270,7 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     f.add_argument(
         "--smooth",
         dest="smooth",
-        type=float,
+        type=_finite,
         nargs="?",
         const=0.0,
         default=None,
@@ -275,16 +293,16 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     w.add_argument("--shank", default=None, help="shank cylinder above the cutting length: D=..,L=.. (mm)")
     w.add_argument("--holder", default=None, help="holder cylinder above the shank: D=..,L=.. (mm)")
     w.add_argument("--faces", default="all", help="faces to check: all (default) or indices 0,3,5")
-    w.add_argument("--tol", type=float, default=0.01, help="gouge / collision tolerance, mm (default 0.01)")
+    w.add_argument("--tol", type=_finite, default=0.01, help="gouge / collision tolerance, mm (default 0.01)")
     w.add_argument(
         "--step",
-        type=float,
+        type=_finite,
         default=None,
         help="largest tip step along each move, mm (default min(1, sqrt(4 rho tol)): what the motion between two "
         "placements can cut deeper stays below tol/2, reported as motion_bound_mm)",
     )
-    w.add_argument("--step-deg", type=float, default=1.0, help="largest axis step along each move, deg (default 1)")
-    w.add_argument("--spacing", type=float, default=None, help="part sample spacing, mm (default min(1, D/8))")
+    w.add_argument("--step-deg", type=_finite, default=1.0, help="largest axis step along each move, deg (default 1)")
+    w.add_argument("--spacing", type=_finite, default=None, help="part sample spacing, mm (default min(1, D/8))")
     w.add_argument(
         "--chunks", type=int, default=1, help="split the placements into N chunks (over the cluster in a batch)"
     )
@@ -296,13 +314,17 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     s.add_argument("--toolpath", required=True, help="tool path: our CSV, or APT CLDATA (.apt, .cls)")
     s.add_argument("--tool", default=None, help="cutter, e.g. ball:D=10 (default: the APT file's CUTTER)")
     s.add_argument("--faces", default="all", help="faces to simulate: all (default) or indices 0,3,5")
-    s.add_argument("--resolution", type=float, default=None, help="nominal sample spacing, mm (default ~200k samples)")
     s.add_argument(
-        "--tol", type=float, default=0.01, help="a cut deeper than this is a gouge, mm (default 0.01); exit 2"
+        "--resolution", type=_finite, default=None, help="nominal sample spacing, mm (default ~200k samples)"
     )
-    s.add_argument("--depth", type=float, default=1.0, help="deepest gouge measured, mm (default 1)")
-    s.add_argument("--stock", type=float, default=1.0, help="thickest material measured, mm (default 1)")
-    s.add_argument("--motion-step", type=float, default=None, help="placement spacing on the motion, mm (default R/10)")
+    s.add_argument(
+        "--tol", type=_finite, default=0.01, help="a cut deeper than this is a gouge, mm (default 0.01); exit 2"
+    )
+    s.add_argument("--depth", type=_finite, default=1.0, help="deepest gouge measured, mm (default 1)")
+    s.add_argument("--stock", type=_finite, default=1.0, help="thickest material measured, mm (default 1)")
+    s.add_argument(
+        "--motion-step", type=_finite, default=None, help="placement spacing on the motion, mm (default R/10)"
+    )
     s.add_argument("--heights", default="0.001,0.002,0.005,0.01,0.02,0.05,0.1", help="area fractions above these, mm")
     s.add_argument("--max-samples", type=int, default=10_000_000, help="memory budget in samples (~400 B each)")
     s.add_argument(
@@ -324,11 +346,13 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     v.add_argument("--continuity", choices=["g0", "g1"], default="g1", help="between passes (default g1)")
     v.add_argument("--theta", default="0", help="rotation of each next axis about n1, degrees (one, or one per seam)")
     v.add_argument("--side", type=int, default=1, help="envelope sheet: +1 (side of S_a x S_t) or -1")
-    v.add_argument("--tol", type=float, default=1e-3, help="fit tolerance per pass, mm (default 0.001)")
-    v.add_argument("--chordal", type=float, default=0.01, help="chordal tolerance of the tool path, mm (default 0.01)")
+    v.add_argument("--tol", type=_finite, default=1e-3, help="fit tolerance per pass, mm (default 0.001)")
+    v.add_argument(
+        "--chordal", type=_finite, default=0.01, help="chordal tolerance of the tool path, mm (default 0.01)"
+    )
     v.add_argument(
         "--seam-angle-tol",
-        type=float,
+        type=_finite,
         default=0.05,
         help="G1 is claimed only when the written faces meet within this normal angle, deg (default 0.05); else exit 2",
     )
@@ -349,7 +373,7 @@ def _batch_parser(sub) -> None:
     b.add_argument("--scheduler", default=None, help="address of a running Dask scheduler, tcp://host:port")
     b.add_argument("--workers", type=int, default=None, help="local cluster: worker processes (default one per core)")
     b.add_argument("--retries", type=int, default=2, help="runs again of a job whose task failed (default 2)")
-    b.add_argument("--timeout", type=float, default=10.0, help="time to reach --scheduler, s (default 10)")
+    b.add_argument("--timeout", type=_finite, default=10.0, help="time to reach --scheduler, s (default 10)")
     b.add_argument("--overwrite", action="store_true", help="replace an earlier batch in the output folder")
     b.add_argument("-o", "--out", default="out/batch", help="output folder: <name>/ per job, batch_report.json")
 

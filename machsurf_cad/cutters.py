@@ -709,6 +709,8 @@ def parse_cutter(text: str) -> Cutter:
     >>> parse_cutter("cone:D=10,angle=6").spec()
     'cone:D=10,angle=6'
     """
+    if not isinstance(text, str):
+        raise InputError(f"a cutter string like ball:D=10 is text, got {type(text).__name__}")
     m = re.fullmatch(r"\s*([A-Za-z]+)\s*:(.*)", text or "")
     if not m:
         raise InputError(f"cutter string {text!r} is not of the form kind:K=V,... (e.g. ball:D=10)")

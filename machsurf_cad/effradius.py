@@ -393,21 +393,20 @@ def reff_maps(
     t0 = time.perf_counter()
     timings = {}
     face = _as_face(face)
-    cutter = parse_cutter(tool) if isinstance(tool, str) else tool
+    from . import checks
+
+    cutter = checks.tool(tool)
     R = cutter.end_mill_radii(_PURPOSE).R
     comp = None
     if compare is not None:
-        comp = (
-            parse_cutter(f"ball:D={cutter.D:g}")
-            if compare == "ball"
-            else (parse_cutter(compare) if isinstance(compare, str) else compare)
-        )
+        comp = parse_cutter(f"ball:D={cutter.D:g}") if compare == "ball" else checks.tool(compare, "compare")
         comp.end_mill_radii(_PURPOSE)
     if axes not in (3, 5):
         raise InputError("axes must be 3 or 5")
     from .checks import lead_tilt
 
     lead, tilt = lead_tilt(lead, tilt, axes=axes)
+    grid = checks.index("grid", grid)
     if not 2 <= grid <= 4096:
         raise InputError("grid must be between 2 and 4096")
     dirs = parse_directions(directions)

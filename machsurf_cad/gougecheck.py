@@ -327,10 +327,13 @@ def verify(
     import time
 
     t0 = time.perf_counter()
-    c = cutter if cutter is not None else toolpath.cutter
+    from . import checks
+    from .checks import positive
+
+    toolpath = checks.toolpath(toolpath)
+    c = checks.tool(cutter) if cutter is not None else toolpath.cutter
     if c is None:
         raise InputError("verify needs the tool: give --tool (the tool path carries none)")
-    from .checks import positive
 
     tolerance = positive("tolerance", tolerance)
     rho_motion = motion_radius(c)

@@ -1,8 +1,10 @@
 """Signed deviation of a candidate (surface, mesh or point set) from a reference surface.
 
-The distance of each candidate point is measured to its closest point on the reference
-(orthogonal projection, found by a vectorised Newton iteration seeded from a k-d tree of
-dense reference samples, with the parameter box as constraint). The sign is that of
+The distance of each candidate point is measured to its closest point on the reference face,
+trimming honoured (:func:`~machsurf_cad.geometry.closest.closest_points`: every basin of the
+distance seeded from a grid of surface samples and refined by Newton's method, feet outside the
+trimming loops dropped, the loops' 3-D curves searched too; closed directions are searched across
+their seam). The sign is that of
 ``(p - foot) . n``, ``n`` the reference's outward normal (``su x sv`` for a surface; the
 face's outward normal for a :class:`~machsurf_cad.geometry.face.Face`). All lengths in mm.
 
@@ -25,6 +27,7 @@ from scipy.spatial import cKDTree
 
 from .errors import InputError
 from .geometry.bspline import BSplineSurface
+from .geometry.closest import closest_points, inside_face
 from .geometry.face import Face
 from .results import Result
 
@@ -142,7 +145,9 @@ def project_points(
     >>> pr.uv.round(12).tolist(), pr.foot.round(12).tolist()
     ([[0.3, 0.4]], [[30.0, 40.0, 0.0]])
     """
-    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    from .checks import points as _points
+
+    p = _points("points", points, 3)
     if not np.all(np.isfinite(p)):
         raise InputError("candidate points must be finite")
     u0, u1, v0, v1 = surface.bounds
@@ -314,21 +319,21 @@ def deviation(
         grid_shape = (samples, samples)
         if isinstance(candidate, Face) and candidate.is_trimmed:
             uu, vv = np.meshgrid(us, vs, indexing="ij")
-            keep = candidate.contains_uv(uu.ravel(), vv.ravel())
+            keep = inside_face(candidate, np.stack([uu.ravel(), vv.ravel()], axis=1))  # polygons to 2e-5 mm
             grid_points, grid_index = pts, np.nonzero(keep)[0]
             pts = pts[keep]
     else:
-        pts = np.asarray(candidate, dtype=float).reshape(-1, 3)
+        from .checks import points
+
+        pts = points("candidate (a surface, a Face or points (n, 3))", candidate, 3)
     if pts.shape[0] == 0:
-        raise InputError("candidate has no points to measure")
-    proj = project_points(ref_surface, pts, progress=progress)
-    outside = None
-    if isinstance(reference, Face) and reference.is_trimmed:
-        # the closest point of a trimmed face: the surface's where that lies inside the trimmed
-        # region, else a point of a boundary edge (the face is a subset of its surface)
-        outside = ~reference.contains_uv(proj.uv[:, 0], proj.uv[:, 1])
-        if outside.any():
-            proj = _to_boundary(reference, pts, proj, outside)
+        more = f": none of its {samples} x {samples} samples lies inside its trimming loops; give more samples"
+        raise InputError("candidate has no points to measure" + (more if grid_shape is not None else ""))
+    # the closest point of the (trimmed) face: every basin of |S - p| searched, feet outside the
+    # trimming loops dropped, the loops' 3-D curves searched where they could be nearer
+    cp = closest_points(reference, pts, progress=progress)
+    proj = Projection(cp.uv, cp.foot, cp.normal, cp.on_boundary, cp.converged)
+    outside = cp.on_trim if isinstance(reference, Face) and reference.is_trimmed else None
     signed = signed_distances(pts, proj, flip)
     stats = deviation_stats(signed, pts, proj.uv, proj.on_boundary, proj.converged)
     if outside is not None:
@@ -348,54 +353,6 @@ def deviation(
         grid_index,
         outside,
     )
-
-
-def _to_boundary(face: Face, pts: np.ndarray, proj: Projection, outside: np.ndarray, n: int = 256) -> Projection:
-    """Closest points on the trimming loops' 3-D curves ``S(c(t))`` for the points whose surface foot
-    lies outside the trimmed region: dense samples, nearest by k-d tree, then golden-section search
-    on the curve parameter between the neighbouring samples (to 1e-12 of the curve's range)."""
-    s = face.surface
-    curves = [c for loop in face.loops for c in loop]
-    ts = [np.linspace(*c.bounds, n) for c in curves]
-    xyz = np.concatenate([s.evaluate(*c.evaluate(t).T) for c, t in zip(curves, ts)])
-    cid = np.repeat(np.arange(len(curves)), n)
-    k = np.arange(len(curves) * n) % n
-    idx = np.nonzero(outside)[0]
-    q = pts[idx]
-    near = cKDTree(xyz).query(q)[1]
-    uv = proj.uv.copy()
-    for ci, (c, t) in enumerate(zip(curves, ts)):
-        sel = np.nonzero(cid[near] == ci)[0]
-        if sel.size == 0:
-            continue
-        kk = k[near[sel]]
-        a = t[np.maximum(kk - 1, 0)]
-        b = t[np.minimum(kk + 1, n - 1)]
-        p = q[sel]
-
-        def f(tt, c=c, p=p):
-            w = s.evaluate(*c.evaluate(tt).T) - p
-            return np.einsum("ij,ij->i", w, w)
-
-        g = (np.sqrt(5.0) - 1) / 2
-        x1, x2 = b - g * (b - a), a + g * (b - a)
-        f1, f2 = f(x1), f(x2)
-        for _ in range(60):
-            left = f1 < f2
-            b = np.where(left, x2, b)
-            a = np.where(left, a, x1)
-            x2n = np.where(left, x1, a + g * (b - a))
-            x1n = np.where(left, b - g * (b - a), x2)
-            x1, x2 = x1n, x2n
-            f1, f2 = f(x1), f(x2)
-            if np.max(b - a) <= 1e-12 * (t[-1] - t[0]):
-                break
-        uv[idx[sel]] = c.evaluate(0.5 * (a + b))
-    d = s.derivatives(uv[:, 0], uv[:, 1], 1)
-    nrm = np.cross(d.su, d.sv)
-    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
-    on_b = proj.on_boundary | outside
-    return Projection(uv, d.point, nrm, on_b, proj.converged)
 
 
 def signed_distances(pts: np.ndarray, proj: Projection, flip: float = 1.0) -> np.ndarray:

@@ -2,6 +2,7 @@
 traceback, a half-written folder, unbounded work or a silently wrong result."""
 
 import json
+import re
 import signal
 import subprocess
 import sys
@@ -9,7 +10,7 @@ import time
 
 import pytest
 from conftest import ROOT, needs_kernel
-from helpers import run, run_process
+from helpers import assert_points_close, run, run_process
 
 BLOCK = ROOT / "example_parts" / "freeform_block.step"
 
@@ -140,7 +141,8 @@ def test_inspect_sample_counts(tmp_path):
     o = tmp_path / "o"
     _refused(run("inspect", BLOCK, BLOCK, "--samples", "1", "-o", o), "samples must be >= 2")
     _refused(run("inspect", BLOCK, BLOCK, "--samples", "100000", "-o", o), "GiB, over the", "at most")
-    r = run("inspect", BLOCK, BLOCK, "--samples", "2", "--no-render", "-o", o)
+    _refused(run("inspect", BLOCK, BLOCK, "--samples", "2", "-o", o), "none of its 2 x 2 samples lies inside")
+    r = run("inspect", BLOCK, BLOCK, "--samples", "3", "--no-render", "-o", o)
     assert r.returncode == 0, r.stderr
 
 
@@ -284,3 +286,311 @@ def test_api_refusals():
 def test_subprocess_exit_codes_stay_honest(tmp_path):
     r = run_process("machining-surface", "--example", "bezier5", "--tool", "ball:D=10,D=12", "-o", tmp_path / "o")
     _refused(r, "given twice")
+
+
+# ----------------------------------------------------------------------------- issue 25: trust
+def _strict(text: str):
+    """JSON as RFC 8259 has it: NaN and Infinity refused."""
+
+    def no(c):
+        raise ValueError(f"not strict JSON: {c}")
+
+    return json.loads(text, parse_constant=no)
+
+
+def _plane_path(tmp_path, **kw):
+    """A small clean 3-axis path on the bezier5 example (and the face)."""
+    import machsurf_cad as ms
+
+    face = ms.example("bezier5")
+    res = ms.machining_surface(face, "ball:D=10", axes=3, tolerance=1e-2)
+    return face, ms.tool_paths(res, stepover=20.0, **kw)
+
+
+@needs_kernel
+def test_a_users_file_beside_an_old_report_is_never_deleted(tmp_path):
+    out = tmp_path / "F"
+    assert run("info", BLOCK, "-o", out).returncode == 0
+    (out / "thesis.txt").write_text("three years of work")
+    r = run("info", BLOCK, "-o", out)
+    _refused(r, "holds files machsurf did not write (thesis.txt)")
+    assert r.stdout == ""  # refused before any work
+    assert (out / "thesis.txt").read_text() == "three years of work" and (out / "report.json").is_file()
+    (out / "thesis.txt").unlink()
+    (out / "report.json").write_text((out / "report.json").read_text() + " ")  # edited by the user: theirs now
+    _refused(run("info", BLOCK, "-o", out), "(report.json)")
+    _no_partial(out)
+
+
+@needs_kernel
+def test_output_folder_dot_symlink_and_a_failed_write(tmp_path):
+    work = tmp_path / "w"
+    work.mkdir()
+    (work / "keep.txt").write_text("x")
+    r = run_process("info", BLOCK, "-o", ".", cwd=work)
+    _refused(r, "is the current folder")
+    assert sorted(p.name for p in work.iterdir()) == ["keep.txt"]
+    real = tmp_path / "real"
+    assert run("info", BLOCK, "-o", real).returncode == 0
+    link = tmp_path / "link"
+    link.symlink_to(real)
+    assert run("info", BLOCK, "-o", link).returncode == 0
+    assert link.is_symlink() and (real / "report.json").is_file()  # the folder replaced, the link kept
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "real", "w"]  # no .old-* or .partial-* left
+    # a write that fails (a file-size limit: the same error path as a full disk) is one line, nothing written
+    import resource
+
+    def limit():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (2000, 2000))
+
+    r = subprocess.run([sys.executable, "-m", "machsurf_cad", "info", str(BLOCK), "-o", str(tmp_path / "big")],
+                       capture_output=True, text=True, preexec_fn=limit, stdin=subprocess.DEVNULL, timeout=300,
+                       env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
+    _refused(r, "cannot write output folder", "File too large")
+    assert not (tmp_path / "big").exists()
+    _no_partial(tmp_path / "big")
+
+
+def test_foreign_cldata_is_read_as_a_cam_system_reads_it(tmp_path):
+    import machsurf_cad as ms
+
+    nx = tmp_path / "nx.cls"  # NX: 6-value GOTOs without MULTAX, TLDATA, PAINT, END-OF-PATH
+    nx.write_text("TOOL PATH/FIXED_CONTOUR,TOOL,BALL10\nTLDATA/MILL,10.0000,5.0000,75.0000,0.0000,0.0000\n"
+                  "MSYS/0.0,0.0,0.0,1.0,0.0,0.0,0.0,1.0,0.0\nPAINT/PATH\nFEDRAT/MMPM,250.0\n"
+                  "GOTO/10.0,0.0,5.0,0.0,0.6,0.8\nGOTO/20.0,0.0,5.0,0.0,0.6,0.8\nEND-OF-PATH\n")  # fmt: skip
+    tp = ms.read_apt(nx)
+    assert_points_close(tp.axis, [[0, 0.6, 0.8]] * 2, atol=1e-15)  # not +Z
+    assert tp.cutter == ms.BallEndMill(10, 75.0) and tp.feed[1] == 250.0
+    catia = tmp_path / "catia.aptsource"  # CATIA: spaces, TLAXIS for 3-value GOTOs, a non-identity MSYS
+    catia.write_text("$$ CATIA\nPARTNO/PART1\nMULTAX\nUNITS/MM\nINTOL/0.01\n"
+                     "CUTTER/  10.000000,   5.000000,   0.000000,   5.000000,   0.000000,   0.000000,  50.000000\n"
+                     "TLAXIS/ 0.000000, 1.000000, 0.000000\nRAPID\nGOTO  /   1.00000,   2.00000,   3.00000\n"
+                     "GOTO  /   4.00000,   2.00000,   3.00000\nMSYS/10,0,0,0,1,0,-1,0,0\n"
+                     "GOTO/1,0,0\nFINI\n")  # fmt: skip
+    tp = ms.read_apt(catia)
+    assert_points_close(tp.axis[:2], [[0, 1.0, 0]] * 2, atol=0)  # TLAXIS/0,1,0 honoured, not +Z
+    assert_points_close(tp.tip[2], [10.0, 1.0, 0.0], atol=1e-12)  # MSYS: origin + x axis (0, 1, 0)
+    assert_points_close(tp.axis[2], [-1.0, 0, 0], atol=1e-12)  # the axis turned with the frame
+    fusion = tmp_path / "fusion.apt"  # Fusion-style: PPRINT, word-first FEDRAT, MULTAX/ON, an unknown statement
+    fusion.write_text(
+        "PARTNO 'P'\nUNITS/MM\nMULTAX/ON\nCUTTER/6,0,3,0,0,0,20\nPPRINT/'OP1'\nSPINDL/RPM,5000,CLW\n"
+        "RAPID\nGOTO/0,0,10,0,0,1\nFEDRAT/MMPM,800\nGOTO/0,0,0,0,0,1\nGOTO/5,0,0,0,0,1\nWOBBLE/3\nFINI\n"
+    )
+    with pytest.warns(UserWarning, match="WOBBLE x1"):
+        tp = ms.read_apt(fusion)
+    assert tp.cutter == ms.FlatEndMill(6, 20.0) and tp.info["skipped_statements"] == {"WOBBLE": 1}
+    for bad, words in (("CUTTER/1e6,3,5,3,0,0,30", "d = 2(e + r) = 16"), ("CUTTER/10,0,50,0,0,0,50", "inconsistent"),
+                       ("TRACUT/1,0,0,5,0,1,0,0,0,0,1,0", "TRACUT changes the tool path's geometry"),
+                       ("GOTO/1,2", "3 or 6 values"), ("UNITS/FURLONG", "unknown units")):  # fmt: skip
+        f = tmp_path / "bad.apt"
+        f.write_text(f"UNITS/MM\n{bad}\nGOTO/0,0,0\nFINI\n")
+        with pytest.raises(ms.InputError, match=re.escape(words)):
+            ms.read_apt(f)
+    with pytest.raises(ms.InputError, match="is not a text file"):
+        (tmp_path / "g.apt").write_bytes(bytes(range(256)) * 4)
+        ms.read_apt(tmp_path / "g.apt")
+
+
+def test_spreadsheet_csv_and_our_csv_carrying_its_tool(tmp_path):
+    import machsurf_cad as ms
+
+    face, tp = _plane_path(tmp_path)
+    ours = ms.write_csv(tmp_path / "ours.csv", tp)
+    back = ms.read_csv(ours)
+    assert back.cutter == ms.BallEndMill(10) and back.info["assumed"] == []
+    assert_points_close(back.tip, tp.tip, atol=1e-6)  # 6 decimals per coordinate
+    # a spreadsheet's: BOM, CRLF, ';' with decimal commas, other column order, no move or pass
+    (tmp_path / "s.csv").write_bytes("\ufeffK;J;I;Z;Y;X\r\n1;0;0;3,5;2;1,25\r\n1;0;0;3,5;2;2,25\r\n".encode())
+    s = ms.read_csv(tmp_path / "s.csv")
+    assert_points_close(s.tip, [[1.25, 2, 3.5], [2.25, 2, 3.5]], atol=0)
+    assert s.n_passes == 1 and "every move a cut (no move column)" in s.info["assumed"]
+    (tmp_path / "u.csv").write_text("tip_z,tip_y,tip_x\n3,2,1\n", encoding="utf-16")
+    u = ms.read_csv(tmp_path / "u.csv")
+    assert_points_close(u.tip, [[1, 2, 3]], atol=0) and "axis +Z (no i,j,k columns)" in u.info["assumed"]
+    for text, words in (("a,b\n1,2\n", "no tip columns"), ("x,y,z,i,j\n1,2,3,0,0\n", "only i, j"),
+                        ("x,y,z\n1,,3\n", "row 1 has an empty"),
+                        ("x,y,z,i,j,k\n1,2,3,0,0,0\n", "zero tool axis")):  # fmt: skip
+        (tmp_path / "b.csv").write_text(text)
+        with pytest.raises(ms.InputError, match=re.escape(words)):
+            ms.read_csv(tmp_path / "b.csv")
+
+
+@needs_kernel
+def test_verify_and_simulate_read_the_tool_from_our_csv(tmp_path):
+    import machsurf_cad as ms
+
+    face, tp = _plane_path(tmp_path)
+    csv = ms.write_csv(tmp_path / "p.csv", tp)
+    ms.occ.write_step(tmp_path / "part.step", [ms.Face(face)])
+    r = run("simulate", tmp_path / "part.step", "--toolpath", csv, "--resolution", "1", "-o", tmp_path / "s")
+    assert r.returncode in (0, 2) and "names no usable CUTTER" not in r.stderr, r.stderr
+    assert _strict((tmp_path / "s" / "report.json").read_text())["tool"]["kind"] == "ball"
+
+
+def test_reports_are_strict_json():
+    import math
+
+    import numpy as np
+
+    from machsurf_cad.results import strict_json
+
+    doc = {"a_mm": float("nan"), "b": [np.inf, 1.5, np.float64("-inf")], "c": np.array([np.nan, 2.0])}
+    assert _strict(strict_json(doc)) == {"a_mm": None, "b": [None, 1.5, None], "c": [None, 2.0]}
+    assert not math.isnan(_strict(strict_json({"x": np.float32(2.5)}))["x"])
+
+
+@pytest.mark.parametrize("delay", [0.25, 0.4, 0.8, 1.2])
+def test_ctrl_c_and_sigterm_during_start_up(tmp_path, delay):
+    for sig, code, word in ((signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")):
+        p = subprocess.Popen([sys.executable, "-m", "machsurf_cad", "machining-surface", "--example", "bezier5",
+                              "--tool", "ball:D=10", "--axes", "3", "--tol", "0.01", "-o", str(tmp_path / "o")],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL,
+                             env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
+        time.sleep(delay)
+        p.send_signal(sig)
+        out, err = p.communicate(timeout=60)
+        if p.returncode == 0:  # finished before the signal: nothing to check at this delay
+            continue
+        assert p.returncode == code and "Traceback" not in err and word in err, (delay, p.returncode, err[-800:])
+        assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (
+            [
+                "machining-surface",
+                "--example",
+                "bezier5",
+                "--tool",
+                "ball:D=10",
+                "--axes",
+                "3",
+                "--faces",
+                "",
+                "--toolpath",
+            ],
+            "names no face",
+        ),
+        (
+            [
+                "machining-surface",
+                "--example",
+                "bezier5",
+                "--tool",
+                "ball:D=10",
+                "--toolpath",
+                "--stepover",
+                "7",
+                "--scallop",
+                "0.01",
+            ],
+            "not both",
+        ),
+        (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--scallop", "0.01"], "add --toolpath"),
+        (
+            [
+                "machining-surface",
+                "--example",
+                "bezier5",
+                "--tool",
+                "ball:D=10",
+                "--axes",
+                "5",
+                "--pattern",
+                "waterline",
+            ],
+            "add --faces",
+        ),
+        (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--angle", "nan"], "finite number"),
+        (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--tol", "inf"], "finite number"),
+    ],
+)
+def test_ignored_option_combinations_are_refused(tmp_path, argv, words):
+    r = run(*argv, "-o", tmp_path / "o")
+    assert r.returncode == 1 and "Traceback" not in r.stderr, r.stderr
+    assert words in r.stderr
+    assert not (tmp_path / "o").exists()
+
+
+def test_batch_workers_zero_and_a_job_named_like_the_batch_report(tmp_path):
+    import machsurf_cad as ms
+
+    job = {"name": "r", "argv": ["reff", "--example", "bezier5", "--tool", "ball:D=10", "--grid", "8"]}
+    with pytest.raises(ms.InputError, match="workers must be an integer >= 1, got 0"):
+        ms.batch([job], tmp_path / "b", workers=0)
+    with pytest.raises(ms.InputError, match="'report.json' is a file the batch writes"):
+        ms.batch([{**job, "name": "report.json"}], tmp_path / "b", workers=1)
+    assert not (tmp_path / "b").exists()
+
+
+def _wrong_types():
+    import numpy as np
+
+    import machsurf_cad as ms
+
+    face = ms.example("bezier5")
+    res = ms.machining_surface(face, "ball:D=10", axes=3, tolerance=1e-2)
+    tp = ms.tool_paths(res, stepover=20.0)
+    return {
+        "machining_surface strategy=42": lambda: ms.machining_surface(face, "ball:D=10", axes=3, strategy=42),
+        "machining_surface tool=123": lambda: ms.machining_surface(face, 123),
+        "machining_surface tolerance='a'": lambda: ms.machining_surface(face, "ball:D=10", tolerance="a"),
+        "verify toolpath=None": lambda: ms.verify(face, None),
+        "simulate resolution='abc'": lambda: ms.simulate(face, tp, resolution="abc"),
+        "simulate toolpath=None": lambda: ms.simulate(face, None),
+        "drop_cutter xy='abc'": lambda: ms.drop_cutter([face], ms.BallEndMill(10), "abc"),
+        "raster stepover='a'": lambda: ms.raster([face], "ball:D=10", stepover_mm="a"),
+        "raster stepover=1e-4": lambda: ms.raster([face], "ball:D=10", stepover_mm=1e-4),
+        "tool_paths ms='x'": lambda: ms.tool_paths("x", stepover=1),
+        "tool_paths stepover='a'": lambda: ms.tool_paths(res, stepover="a"),
+        "reff tool=42": lambda: ms.reff(face, 42),
+        "reff grid='a'": lambda: ms.reff(face, "ball:D=10", grid="a"),
+        "envelope motion=None": lambda: ms.envelope("cyl:D=10", None),
+        "parse_cutter 1": lambda: ms.parse_cutter(1),
+        "cutter_from_apt [10, 20]": lambda: ms.cutter_from_apt([10, 20]),
+        "write_apt None": lambda: ms.write_apt("/nonexistent/x.apt", None),
+        "write_csv 'a'": lambda: ms.write_csv("/nonexistent/x.csv", "a"),
+        "read_apt None": lambda: ms.read_apt(None),
+        "run_job 'x'": lambda: ms.run_job("x", "/nonexistent/o"),
+        "Face(None)": lambda: ms.Face(None),
+        "top_faces None": lambda: ms.top_faces(None),
+        "local_properties None": lambda: ms.local_properties(None, 0, 0),
+        "drop_cutter 0 points": lambda: ms.drop_cutter([face], "ball:D=10", np.zeros((0, 3))),
+    }
+
+
+def test_the_public_api_refuses_wrong_types_in_one_line():
+    import machsurf_cad as ms
+
+    for what, call in _wrong_types().items():
+        with pytest.raises(ms.InputError) as e:
+            call()
+        assert "\n" not in str(e.value), what
+
+
+def test_a_raster_that_would_run_for_hours_is_refused_with_its_figure():
+    import machsurf_cad as ms
+
+    t = time.perf_counter()
+    with pytest.raises(ms.InputError, match=r"needs about .* drop-cutter points .* give a larger step-over"):
+        ms.raster([ms.example("bezier5")], "ball:D=10", stepover_mm=1e-4)
+    assert time.perf_counter() - t < 10
+
+
+@needs_kernel
+def test_a_face_no_tool_position_can_touch_is_refused_by_name(tmp_path):
+    import cadquery as cq
+
+    cq.exporters.export(cq.Workplane().box(40, 30, 20), str(tmp_path / "box.step"))
+    faces = {}
+    for i in range(6):
+        faces[i] = run("machining-surface", tmp_path / "box.step", "--faces", i, "--axes", "3", "--tool", "ball:D=10",
+                       "--toolpath", "--stepover", "5", "-o", tmp_path / f"o{i}")  # fmt: skip
+    bottom = [i for i, r in faces.items() if "faces away from +Z" in r.stderr]
+    walls = [i for i, r in faces.items() if "parallel to the tool axis" in r.stderr]
+    top = [i for i, r in faces.items() if r.returncode == 0]
+    assert len(bottom) == 1 and len(walls) == 4 and len(top) == 1, {i: r.stderr for i, r in faces.items()}
+    _refused(faces[bottom[0]], f"face {bottom[0]} faces away from +Z")

@@ -208,16 +208,38 @@ def _worker_name() -> str | None:
         return None
 
 
+def _connect(Client, scheduler: str, timeout_s: float):
+    """A Dask client of ``scheduler`` within ``timeout_s`` (in a thread: a server that is no Dask scheduler,
+    e.g. one that answers HTTP, can keep the handshake waiting or announce an absurd message size)."""
+    import threading
+
+    box: dict = {}
+
+    def connect():
+        try:
+            box["client"] = Client(scheduler, timeout=f"{timeout_s}s")
+        except BaseException as exc:  # reported below, in the caller's thread
+            box["error"] = exc
+
+    t = threading.Thread(target=connect, daemon=True, name="machsurf-dask-connect")
+    t.start()
+    t.join(timeout_s + 2.0)
+    if t.is_alive() or "error" in box:
+        exc = box.get("error")
+        why = f"{type(exc).__name__}: {exc}" if exc is not None else "no answer"
+        if isinstance(exc, MemoryError):
+            why = "it does not answer as a Dask scheduler"
+        raise InputError(f"cannot reach the Dask scheduler at {scheduler} within {timeout_s:g} s: {why}"[:400])
+    return box["client"]
+
+
 def _client(scheduler: str | None, workers: int | None, timeout_s: float):
     try:
         from distributed import Client, LocalCluster
     except ImportError:
         raise InputError("batch runs need Dask: pip install 'machsurf_cad[batch]'") from None
     if scheduler:
-        try:
-            client = Client(scheduler, timeout=f"{float(timeout_s)}s")
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise InputError(f"cannot reach the Dask scheduler at {scheduler} within {timeout_s:g} s: {exc}") from None
+        client = _connect(Client, scheduler, float(timeout_s))
         try:  # a scheduler without workers would keep the jobs waiting for ever
             client.wait_for_workers(1, timeout=float(timeout_s))
         except (OSError, TimeoutError) as exc:
@@ -226,7 +248,7 @@ def _client(scheduler: str | None, workers: int | None, timeout_s: float):
         return client, None
     import logging
 
-    n = int(workers) if workers else (os.cpu_count() or 1)
+    n = int(workers) if workers is not None else (os.cpu_count() or 1)
     if n < 1:
         raise InputError(f"workers must be >= 1, got {workers}")
     # Dask starts workers with one BLAS thread; a least-squares fit then rounds differently in the last
@@ -296,6 +318,10 @@ def batch(
     taken = sorted(set(names) & {"report.json", "batch_report.json", "batch_figures.csv", ".machsurf-manifest.json"})
     if taken:
         raise InputError(f"job name {taken[0]!r} is a file the batch writes in its output folder: rename the job")
+    if workers is not None and not (isinstance(workers, int) and workers >= 1):
+        raise InputError(f"workers must be an integer >= 1, got {workers!r}")
+    if not (isinstance(timeout_s, (int, float)) and 0 < timeout_s < 1e6):
+        raise InputError(f"timeout_s must be > 0 s, got {timeout_s!r}")
     if int(retries) < 0:
         raise InputError(f"retries must be >= 0, got {retries}")
     out = Path(out)

@@ -79,6 +79,7 @@ def write_csv(path, tp: ToolPath) -> Path:
         The file written; read it back with :func:`read_csv`.
     """
     path = Path(path)
+    _check_toolpath(tp)
     extra_cols, extra_data = [], []
     for k, v in tp.extras.items():
         a = np.asarray(v).reshape(tp.n_positions, -1)
@@ -152,6 +153,7 @@ def write_json(path, tp: ToolPath) -> Path:
         The file written.
     """
     path = Path(path)
+    _check_toolpath(tp)
     data = {
         "report": tp.report(),
         "tip_mm": tp.tip,
@@ -171,8 +173,16 @@ def _nan_to_none(a: np.ndarray) -> list:
     return np.where(np.isnan(a), np.array(None, dtype=object), a.astype(object)).tolist()
 
 
+def _check_toolpath(tp) -> None:
+    if not isinstance(tp, ToolPath):
+        raise InputError(f"a ToolPath is written, got {type(tp).__name__}")
+
+
 def apt_lines(tp: ToolPath, options: PostOptions = PostOptions()) -> list[str]:
     """The APT CLDATA statements of ``tp`` (see the module docstring)."""
+    _check_toolpath(tp)
+    if not isinstance(options, PostOptions):
+        raise InputError(f"options must be PostOptions, got {type(options).__name__}")
     if tp.cutter is None:
         raise InputError("APT output needs the tool path's cutter (CUTTER/ statement)")
     multax = tp.is_multiaxis

@@ -87,6 +87,12 @@ def _unit(v, where: str) -> np.ndarray:
     return a / n
 
 
+def _path(path) -> Path:
+    if not isinstance(path, (str, Path)):
+        raise InputError(f"a tool-path file is a path, got {type(path).__name__}")
+    return Path(path)
+
+
 def _read_text(p: Path) -> str:
     """The file's text: UTF-8 (with or without BOM) or UTF-16 (with BOM); anything else is refused."""
     data = p.read_bytes()
@@ -274,12 +280,12 @@ def read_apt(path, *, name: str | None = None) -> ToolPath:
     """
     from ..cutters import cutter_from_apt
 
-    p = Path(path)
+    p = _path(path)
     if not p.is_file():
         raise InputError(f"APT file not found: {p}")
     state = _AptState()
     for no, st in _statements(_read_text(p)):
-        word, _, rest = st.partition("/")
+        word, _, rest = st.partition("/") if "/" in st else (st.split()[0], "", "")
         if not _statement(state, word.strip().upper(), rest, f"line {no} ({st[:40]!r})"):
             break
     if state.skipped:
@@ -386,7 +392,7 @@ def read_csv(path) -> ToolPath:
     """
     from ..cutters import parse_cutter
 
-    p = Path(path)
+    p = _path(path)
     if not p.is_file():
         raise InputError(f"CSV tool path not found: {p}")
     head, body, tool = _csv_rows(_read_text(p), p)

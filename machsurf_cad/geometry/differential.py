@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import InputError
 from ..results import Result
 from .bspline import BSplineSurface
 from .normals import _cross, unit_normals
@@ -105,6 +106,8 @@ def local_properties(surface: BSplineSurface, u, v, *, check: bool = True) -> Lo
     >>> round(float(p.k1 * 50), 9), round(float(p.k2 * 50), 9)
     (1.0, 1.0)
     """
+    if not isinstance(surface, BSplineSurface):
+        raise InputError(f"local_properties needs a BSplineSurface, got {type(surface).__name__}")
     u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
     _check_domain(surface, u, v)
     d = surface.derivatives(u, v, 2)
@@ -167,8 +170,6 @@ def _check_domain(surface: BSplineSurface, u, v, rel: float = 1e-9) -> None:
         tol = rel * (v1 - v0)
         bad |= (v < v0 - tol) | (v > v1 + tol)
     if np.any(bad) or not (np.all(np.isfinite(u)) and np.all(np.isfinite(v))):
-        from ..errors import InputError
-
         i = int(np.argmax(bad)) if np.any(bad) else 0
         raise InputError(
             f"(u, v) outside the surface's domain [{u0:g}, {u1:g}] x [{v0:g}, {v1:g}] (or not finite), "

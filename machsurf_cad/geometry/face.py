@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import InputError
 from .bspline import BSplineCurve, BSplineSurface
 
 
@@ -44,6 +45,10 @@ class Face:
     area: float = float("nan")
 
     def __post_init__(self):
+        from .bspline import BSplineSurface as _Surface
+
+        if not isinstance(self.surface, _Surface):
+            raise InputError(f"a Face needs a BSplineSurface, got {type(self.surface).__name__}")
         loops = tuple(tuple(loop) for loop in self.loops)
         for loop in loops:
             for c in loop:

@@ -19,6 +19,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
+from ..errors import InputError
 from ..results import Progress
 from .base import EXIT_INPUT, EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, check_output_folder, quiet
 from .specs import (
@@ -52,7 +53,7 @@ def _runner(spec: JobSpec) -> Callable:
     import importlib
 
     if not isinstance(spec, JobSpec) or spec.command not in _RUNNERS:
-        raise TypeError(f"not a job spec: {spec!r}")
+        raise InputError(f"run_job needs a job spec (InfoJob, MachiningSurfaceJob, ...), got {type(spec).__name__}")
     module, name = _RUNNERS[spec.command]
     return getattr(importlib.import_module(f"{__name__}.{module}"), name)
 

@@ -20,6 +20,10 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
     t0 = time.perf_counter()
     cutter = parse_cutter(spec.tool)
     face, desc = face_input(spec.part, spec.example, spec.face)
+    from ..geometry.meshsize import check_mesh_size, default_deflection
+
+    stl_deflection = spec.stl_deflection or default_deflection([face])
+    check_mesh_size([face], stl_deflection, 5.0, what="S1/S2 for the STL")  # before the fit: S1, S2 ~ the face
     faces_of_part: list = []
 
     def part():
@@ -85,7 +89,8 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
 
         write_step(st.path("machining_surface.step"), ms.faces())
         for f in ms.faces():
-            write_stl(st.path(f"{f.name}.stl"), [f], linear_deflection=spec.stl_deflection)
+            write_stl(st.path(f"{f.name}.stl"), [f], linear_deflection=stl_deflection)
+        rep["stl_deflection_mm"] = stl_deflection
         dev = fit_deviation(ms, "S1")
         loops_pts = [(r.xyz, "magenta", f"{r.kind} loop ({r.surface})") for r in ms.loops.regions]
         render_deviation(
@@ -117,7 +122,7 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
                     "would gouge)"
                 )
             else:
-                tp = tool_paths(ms, stepover=spec.stepover, chordal_tolerance=spec.chordal, clearance=spec.clearance)
+                tp = tool_paths(ms, stepover=spec.stepover_mm, chordal_tolerance=spec.chordal, clearance=spec.clearance)
             rep["toolpath"] = tp.report()
             say(
                 f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions ({tp.n_positions} with approach and "

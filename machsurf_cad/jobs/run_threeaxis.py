@@ -49,6 +49,15 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
         checked = [i for i in range(len(faces)) if i not in machined]
     else:
         checked = [i for i in select_faces(faces, chk, axis=axis, what="--check-faces") if i not in machined]
+    if spec.pattern == "raster" and (spec.faces or "all").strip().lower() not in ("all", "top"):
+        from ..threeaxis.select import faces_away
+
+        vertical = [i for i in machined if faces_away(faces[i], axis, below=0.01)]
+        if vertical and len(vertical) == len(machined):
+            raise InputError(
+                f"face {vertical[0]} is parallel to the tool axis: a raster along it touches the face only at its "
+                "edges; use --pattern waterline (or another --axis)"
+            )
     mf = [faces[i] for i in machined]
     cf = [faces[i] for i in checked]
     rep: dict = {
@@ -80,7 +89,7 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
                 tp = raster(
                     mf,
                     cutter,
-                    stepover_mm=None if spec.scallop is not None else spec.stepover,
+                    stepover_mm=None if spec.scallop is not None else spec.stepover_mm,
                     scallop_mm=spec.scallop,
                     angle_deg=spec.angle,
                     direction=spec.direction,
@@ -88,7 +97,7 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
                     **common,
                 )
             else:
-                tp = waterline(mf, cutter, stepdown_mm=spec.stepdown or spec.stepover, grid_mm=spec.grid,
+                tp = waterline(mf, cutter, stepdown_mm=spec.stepdown or spec.stepover_mm, grid_mm=spec.grid,
                                verify_tolerance_mm=spec.gouge_tol, **common)  # fmt: skip
             i = tp.info
             rep["toolpath"] = tp.report()

@@ -126,9 +126,11 @@ class MachiningSurfaceJob(_Post, JobSpec):
     degree: int = 3
     max_poles: int = 40000
     loops: LoopPolicy = "error"
-    stl_deflection: float = 0.01
+    stl_deflection: float | None = None
+    """STL chordal deflection, mm (default 0.01, larger on faces that would need over 2 million triangles)."""
     toolpath: bool = False
-    stepover: float = 2.0
+    stepover: float | None = None
+    """Distance between passes, mm (default 2; not with ``scallop``)."""
     chordal: float = 0.005
     scallop: float | None = None
     overrun: float | None = None
@@ -152,6 +154,9 @@ class MachiningSurfaceJob(_Post, JobSpec):
         _choice("axes", self.axes, (3, 5))
         if self.faces is not None and self.axes != 3:
             raise InputError("--faces (exact drop-cutter on several faces) needs --axes 3")
+        if self.faces is not None and not str(self.faces).strip():
+            raise InputError("--faces names no face: give all, top or indices like 0,3")
+        self._check_combinations()
         _choice("pattern", self.pattern, ("raster", "waterline"))
         _choice("direction", self.direction, ("zigzag", "one-way"))
         _positive("stepdown (mm)", self.stepdown, allow_none=True)
@@ -160,11 +165,38 @@ class MachiningSurfaceJob(_Post, JobSpec):
         _positive("scallop (mm)", self.scallop, allow_none=True)
         if self.overrun is not None and not self.overrun >= 0:
             raise InputError(f"overrun must be >= 0 mm, got {self.overrun!r}")
-        for n in ("tol", "stl_deflection", "stepover", "chordal"):
+        for n in ("tol", "chordal"):
             _positive(n + " (mm)", getattr(self, n))
+        _positive("stl_deflection (mm)", self.stl_deflection, allow_none=True)
+        _positive("stepover (mm)", self.stepover, allow_none=True)
         if self.axis is not None and len(self.axis) != 3:
             raise InputError("axis must be x,y,z")
         self._check_post()
+
+    def _check_combinations(self) -> None:
+        """Refuse options that the chosen route would ignore (each names what it needs)."""
+        if self.scallop is not None and self.stepover is not None:
+            raise InputError("give --stepover or --scallop, not both (--scallop sets the distance between passes)")
+        if (self.scallop is not None or self.stepover is not None) and not self.toolpath:
+            raise InputError(
+                f"--{'scallop' if self.scallop is not None else 'stepover'} applies to a tool path: add --toolpath"
+            )
+        if self.faces is None:  # the options of the whole-part 3-axis engine
+            given = [
+                name for name, value, default in (
+                    ("--pattern", self.pattern, "raster"), ("--angle", self.angle, 0.0),
+                    ("--direction", self.direction, "zigzag"), ("--stepdown", self.stepdown, None),
+                    ("--grid", self.grid, None), ("--cl-surface", self.cl_surface, False),
+                    ("--check-faces", self.check_faces, "rest"),
+                ) if value != default
+            ]  # fmt: skip
+            if given:
+                raise InputError(f"{given[0]} applies to the whole-part 3-axis engine: add --faces (e.g. --faces top)")
+
+    @property
+    def stepover_mm(self) -> float:
+        """The distance between passes, mm (2 when neither it nor ``scallop`` is given)."""
+        return 2.0 if self.stepover is None else float(self.stepover)
 
 
 @dataclass(frozen=True)

@@ -177,6 +177,15 @@ class AxisField:
         return cls(lambda u, v: surf.evaluate(u, v), None, label)
 
 
+def as_feed(strategy):
+    """The feed of ``strategy``: a :class:`PlanesFeed` or :class:`IsoFeed`, or its text (:func:`parse_strategy`)."""
+    if isinstance(strategy, str):
+        return parse_strategy(strategy)
+    if isinstance(strategy, (PlanesFeed, IsoFeed)):
+        return strategy
+    raise InputError(f"strategy must be text like planes:x or iso:u, or a PlanesFeed/IsoFeed; got {strategy!r}")
+
+
 def parse_strategy(text: str):
     """Feed from its CLI form: ``planes:x|y|z|a,b,c`` or ``iso:u|iso:v``."""
     kind, _, arg = (text or "").partition(":")

@@ -28,8 +28,10 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .. import checks
 from ..approx import SurfaceFit, fit_surface
-from ..cutters import Cutter, parse_cutter
+from ..checks import positive
+from ..cutters import Cutter
 from ..errors import DegenerateGeometryError, InputError
 from ..geometry.bspline import BSplineSurface
 from ..geometry.differential import local_properties_grid
@@ -37,7 +39,7 @@ from ..geometry.face import Face
 from ..geometry.normals import unit_normals
 from ..results import Result
 from .loops import LoopError, LoopReport, fold_mask, region_from_mask
-from .strategies import AxisField, FixedAxis, IsoFeed, LeadTilt, LocalFrame, PlanesFeed, parse_strategy
+from .strategies import AxisField, FixedAxis, IsoFeed, LeadTilt, LocalFrame, PlanesFeed, as_feed
 
 _SIN_MIN_AXIS_TO_NORMAL = 1e-6  # |u x n| below this: v undefined (axis along the normal)
 _MIN_AXIS_ELEVATION_DEG = 1.0  # the axis must stay this far above the tangent plane
@@ -278,9 +280,9 @@ def _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field):
     if axis_field is not None:
         if axes != 5:
             raise InputError("an axis field needs axes=5")
-        feed = parse_strategy(strategy) if isinstance(strategy, str) else strategy
+        feed = as_feed(strategy)
         return axis_field if isinstance(axis_field, AxisField) else AxisField(axis_field, feed)
-    feed = parse_strategy(strategy) if isinstance(strategy, str) else strategy
+    feed = as_feed(strategy)
     if axes == 3:
         from ..checks import lead_tilt
 
@@ -380,7 +382,8 @@ def machining_surface(
         raise InputError("loops must be 'error', 'flag' or 'trim'")
     if tip and axes != 3:
         raise InputError("tip=True is for 3-axis machining (5-axis S1 is the offset F + r n)")
-    cutter = parse_cutter(tool) if isinstance(tool, str) else tool
+    cutter = checks.tool(tool)
+    positive("tolerance (mm)", tolerance)
     em = cutter.end_mill_radii(_PURPOSE)
     Rt = em.R_t
     face = _as_face(face)
@@ -391,7 +394,7 @@ def machining_surface(
             raise InputError("lead='auto' is a 5-axis lead field without tilt, fixed axis or axis field")
         from .autolead import auto_lead
 
-        feed = parse_strategy(strategy) if isinstance(strategy, str) else strategy
+        feed = as_feed(strategy)
         strat, _ = auto_lead(
             face,
             cutter,

@@ -81,9 +81,16 @@ def tool_paths(
     >>> np.unique(lv[~np.isnan(lv)]).tolist()[:3], tp.info["chordal_error_measured_mm"] <= 0.01
     ([0.0, 10.0, 20.0], True)
     """
-    if not stepover > 0 or not chordal_tolerance > 0:
-        raise InputError("stepover and chordal tolerance must be > 0 mm")
-    feed = strategy if strategy is not None else getattr(ms.strategy, "feed", None)
+    from .. import checks
+    from .strategies import as_feed
+
+    if not isinstance(ms, MachiningSurface):
+        raise InputError(f"tool_paths needs a MachiningSurface (ms.machining_surface), got {type(ms).__name__}")
+    stepover = checks.positive("stepover", stepover)
+    checks.positive("chordal tolerance", chordal_tolerance)
+    checks.positive("clearance", clearance)
+    grid = checks.index("grid", grid, low=3)
+    feed = as_feed(strategy) if strategy is not None else getattr(ms.strategy, "feed", None)
     if feed is None:
         feed = IsoFeed("u")
     s1 = ms.s1.surface

@@ -49,9 +49,17 @@ def triangulate_face(face: Face, *, linear_deflection: float = 0.05, angular_def
 
 
 def write_stl(path, faces: list[Face], *, linear_deflection: float = 0.01, angular_deflection: float = 5.0) -> Path:
-    """Write faces as one binary STL meshed with the stated deflections (mm, degrees)."""
+    """Write faces as one binary STL meshed with the stated deflections (mm, degrees).
+
+    Refused in one line, before meshing, when the mesh would exceed
+    :data:`~machsurf_cad.geometry.meshsize.MAX_TRIANGLES` triangles (estimated from the faces' area and
+    curvature), with a deflection that fits.
+    """
+    from ..geometry.meshsize import check_mesh_size
+
     if not linear_deflection > 0:
         raise InputError("linear deflection must be > 0 mm")
+    check_mesh_size(faces, linear_deflection, angular_deflection, what=f"{len(faces)} face(s) for {Path(path).name}")
     path = Path(path)
     comp, _ = _compound(faces)
     BRepMesh_IncrementalMesh(comp, linear_deflection, False, math.radians(angular_deflection), True)

@@ -157,9 +157,10 @@ def read_step_faces(path, indices=None) -> list[Face]:
     With ``indices`` only those faces are converted (conversion is the costly part: a cylinder
     with 200 edges takes seconds); an index out of range raises with the face count.
     """
+    from ..checks import index
+
     named = _named_faces(path)
-    if indices is None:
-        indices = range(len(named))
+    indices = range(len(named)) if indices is None else [index("face index", i) for i in indices]
     out = []
     for i in indices:
         if not 0 <= int(i) < len(named):

@@ -158,9 +158,18 @@ def envelope(
     >>> res.chain.fits[0].max_error <= 1e-3, res.toolpath.n_passes
     (True, 1)
     """
+    from .. import checks
+
     t0 = time.perf_counter()
-    if passes < 1:
-        raise InputError("passes must be >= 1")
+    if not isinstance(motion, Motion):
+        raise InputError(
+            f"envelope needs a Motion (ms.example(name, 'motion') or a path file), got {type(motion).__name__}"
+        )
+    tool = checks.tool(tool)
+    passes = checks.index("passes", passes, low=1)
+    checks.positive("tolerance", tolerance)
+    checks.positive("chordal tolerance", chordal_tolerance)
+    checks.positive("clearance", clearance)
     if continuity not in ("g0", "g1"):
         raise InputError("continuity must be 'g0' or 'g1'")
     thetas = np.atleast_1d(np.asarray(theta_deg, float))

@@ -388,8 +388,8 @@ def drop_cutter(
     ----------
     faces : sequence of Face or BSplineSurface
         The faces the tool must not cut into (trimmed regions respected).
-    cutter : Cutter
-        Any profile cutter (ball, flat, bull, cone, drum, APT).
+    cutter : Cutter or str
+        Any profile cutter (ball, flat, bull, cone, drum, APT), or its string (``ball:D=10``).
     xy : array_like (n, 2)
         Query points in the tool frame (for ``axis = +z``: world x, y), mm.
     axis : 3-vector
@@ -417,11 +417,16 @@ def drop_cutter(
     >>> round(float(r.height[0]), 9)
     0.0
     """
+    from .. import checks
+
     t0 = time.perf_counter()
-    xy = np.asarray(xy, float)
-    if xy.ndim != 2 or xy.shape[1] != 2 or not np.all(np.isfinite(xy)):
+    cutter = checks.tool(cutter)
+    xy = checks.points("drop-cutter query points (x, y in mm)", xy, 2)
+    if not np.all(np.isfinite(xy)):
         raise InputError("drop-cutter query points must be a finite (n, 2) array of x, y in mm")
-    spacing = default_seed_spacing(cutter) if seed_spacing_mm is None else float(seed_spacing_mm)
+    spacing = (
+        default_seed_spacing(cutter) if seed_spacing_mm is None else checks.positive("seed spacing", seed_spacing_mm)
+    )
     fs = face_set_ if face_set_ is not None else face_set(faces, axis=axis, spacing=spacing)
     t1 = time.perf_counter()
     prof = _Profile(cutter)

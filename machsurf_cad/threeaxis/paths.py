@@ -13,6 +13,7 @@ from enum import Enum
 
 import numpy as np
 
+from .. import checks
 from ..cam.chordal import douglas_peucker
 from ..cam.toolpath import Move, ToolPath
 from ..errors import InputError
@@ -72,6 +73,10 @@ def _drop(fs, cutter, xy, progress=None) -> DropCutterResult:
     return drop_cutter(None, cutter, xy, face_set_=fs, progress=progress)
 
 
+MAX_DROP_POINTS = 20_000_000
+"""Most drop-cutter points a raster or waterline plans before it refuses (about 1 ms a point: hours)."""
+
+
 def raster(
     faces,
     cutter,
@@ -129,14 +134,15 @@ def raster(
     ToolPath
         ``info`` holds the step-over, the chordal error measured, the numbers of lines and links.
     """
+    cutter = checks.tool(cutter)
     for name, val in (("chordal tolerance", chordal_tolerance_mm), ("clearance", clearance_mm)):
-        if not (val > 0 and math.isfinite(val)):
-            raise InputError(f"{name} must be > 0 mm, got {val}")
+        checks.positive(name, val)
     if (stepover_mm is None) == (scallop_mm is None):
         raise InputError("give a step-over or a scallop height (one of them)")
-    step = scallop_stepover(cutter, scallop_mm) if scallop_mm is not None else float(stepover_mm)
-    if not (step > 0 and math.isfinite(step)):
-        raise InputError(f"step-over must be > 0 mm, got {step}")
+    if scallop_mm is not None:
+        step = scallop_stepover(cutter, checks.positive("scallop height", scallop_mm))
+    else:
+        step = checks.positive("step-over", stepover_mm)
     direction = Direction(direction)
     machined = list(faces)
     fs, box = machining_face_set(machined, check_faces, cutter, axis=axis, seed_spacing_mm=seed_spacing_mm,
@@ -146,6 +152,13 @@ def raster(
     ds = float(sample_step_mm) if sample_step_mm is not None else min(0.25, cutter.D / 20)
     if not ds > 0:
         raise InputError(f"sample step must be > 0 mm, got {ds}")
+    n_lines = (s1 - s0) / ds * (abs(offsets[-1] - offsets[0]) / step + 1)
+    if n_lines > MAX_DROP_POINTS:
+        raise InputError(
+            f"this raster needs about {n_lines:.3g} drop-cutter points (step-over {step:g} mm, sample step {ds:g} mm "
+            f"over {s1 - s0:.4g} x {abs(offsets[-1] - offsets[0]):.4g} mm), more than {MAX_DROP_POINTS:,}: "
+            "give a larger step-over (or scallop height) or machine fewer faces"
+        )
     s = np.linspace(s0, s1, max(2, math.ceil((s1 - s0) / ds) + 1))
     plan_info: dict = {}
     if scallop_mm is not None:  # each line as far from the last as the cusp between them allows
@@ -505,21 +518,26 @@ def waterline(
     """
     import contourpy
 
+    cutter = checks.tool(cutter)
     for name, val in (
         ("chordal tolerance", chordal_tolerance_mm),
         ("clearance", clearance_mm),
         ("step-down", stepdown_mm),
     ):
-        if not (val > 0 and math.isfinite(val)):
-            raise InputError(f"{name} must be > 0 mm, got {val}")
+        checks.positive(name, val)
     fs, (x0, x1, y0, y1) = machining_face_set(faces, check_faces, cutter, axis=axis,
                                                seed_spacing_mm=seed_spacing_mm, what="a waterline path")  # fmt: skip
     R = float(cutter.profile_points(16)[:, 0].max())
     if extent is None:
         extent = (x0 - R, x1 + R, y0 - R, y1 + R)
-    g = float(grid_mm) if grid_mm is not None else min(1.0, cutter.D / 10)
-    if not g > 0:
-        raise InputError(f"grid must be > 0 mm, got {g}")
+    g = checks.positive("grid", grid_mm) if grid_mm is not None else min(1.0, cutter.D / 10)
+    n_grid = ((extent[1] - extent[0]) / g + 1) * ((extent[3] - extent[2]) / g + 1)
+    if n_grid > MAX_DROP_POINTS:
+        raise InputError(
+            f"this waterline needs about {n_grid:.3g} drop-cutter points (grid {g:g} mm over "
+            f"{extent[1] - extent[0]:.4g} x {extent[3] - extent[2]:.4g} mm), more than {MAX_DROP_POINTS:,}: "
+            "give a larger grid"
+        )
     xs = np.linspace(extent[0], extent[1], max(3, math.ceil((extent[1] - extent[0]) / g) + 1))
     ys = np.linspace(extent[2], extent[3], max(3, math.ceil((extent[3] - extent[2]) / g) + 1))
     X, Y = np.meshgrid(xs, ys, indexing="xy")

@@ -24,6 +24,18 @@ def _normals(face: Face, n: int = 12):
     return d.point[ok], (-nrm if face.reversed else nrm)
 
 
+def _as_faces(faces) -> list[Face]:
+    if isinstance(faces, Face):
+        return [faces]
+    try:
+        out = list(faces)
+    except TypeError:
+        raise InputError(f"faces must be a sequence of Face, got {type(faces).__name__}") from None
+    if not out or not all(isinstance(f, Face) for f in out):
+        raise InputError("faces must be a non-empty sequence of Face")
+    return out
+
+
 def top_faces(faces, *, axis=(0.0, 0.0, 1.0), min_fraction: float = 0.05) -> list[int]:
     """Indices of the faces seen from above along ``axis``: at least ``min_fraction`` of a face's samples
     face the axis (outward normal . axis > 0.01) and have no other face above them along the axis
@@ -31,6 +43,7 @@ def top_faces(faces, *, axis=(0.0, 0.0, 1.0), min_fraction: float = 0.05) -> lis
     from ..cutters import BallEndMill
     from .dropcutter import drop_cutter
 
+    faces = _as_faces(faces)
     a = axis_frame(axis)[2]
     pts, owner = [], []
     for i, f in enumerate(faces):
@@ -77,4 +90,29 @@ def select_faces(faces, text: str, *, axis=(0.0, 0.0, 1.0), what: str = "--faces
         raise InputError(f"{what}: face {bad[0]} does not exist (the part has {n} faces, 0..{n - 1})")
     if not idx:
         raise InputError(f"{what} names no face")
+    if what == "--faces":
+        for i in idx:
+            if faces_away(faces[i], axis):
+                raise InputError(
+                    f"face {i} faces away from {_axis_text(axis)} (its outward normal points against the tool axis "
+                    "everywhere): no tool position along this axis touches it; give another --axis or other --faces"
+                )
     return sorted(set(idx))
+
+
+def faces_away(face: Face, axis, n: int = 24, *, below: float = -1e-6) -> bool:
+    """Whether ``face``'s outward normal . ``axis`` is under ``below`` at every sample of an ``n x n`` trimmed
+    grid (with the default, a tool coming down the axis touches such a face nowhere but on edges it shares
+    with others; with ``below=0.01``, the face is also vertical where it does not face away)."""
+    a = axis_frame(axis)[2]
+    _, nrm = _normals(face, n)
+    return nrm.shape[0] > 0 and float((nrm @ a).max()) < below
+
+
+def _axis_text(axis) -> str:
+    a = np.asarray(axis, float) / np.linalg.norm(axis)
+    for name, v in (("+Z", (0, 0, 1)), ("-Z", (0, 0, -1)), ("+X", (1, 0, 0)), ("-X", (-1, 0, 0)),
+                    ("+Y", (0, 1, 0)), ("-Y", (0, -1, 0))):  # fmt: skip
+        if np.allclose(a, v, atol=1e-12):
+            return name
+    return "the axis (" + ", ".join(f"{x:.4g}" for x in a) + ")"
