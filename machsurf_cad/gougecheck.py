@@ -176,6 +176,37 @@ def motion_radius(cutter) -> float:
     return float(min(rs + [float(cutter.radius)]))
 
 
+MAX_PLACEMENTS = 20_000_000
+"""Most tool placements verify checks before it refuses (about 10 us each in the sampled pass)."""
+
+
+def _auto_spacing(faces, c, max_samples: int) -> float:
+    """The part's sample spacing when none is given: min(1, D/8) mm, or larger where the faces' parameter
+    boxes would hold more than 80 % of ``max_samples`` (large faces are checked, not refused: every close
+    approach is refined on the exact surfaces whatever the spacing)."""
+    h = min(1.0, c.D / 8.0)
+    sizes = np.array([face_size(f) for f in faces], float).reshape(-1, 2)
+    for _ in range(40):
+        n = np.clip(np.ceil(sizes / h) + 1, 8, 3000).prod(axis=1).sum()
+        if n <= 0.8 * max_samples:
+            return h
+        h *= 1.25
+    return h
+
+
+def _check_placements(tp: ToolPath, step_mm: float, step_deg: float) -> None:
+    """Refuse, with the figure and the option that lowers it, a path whose motion sampling is too dense."""
+    seg = np.linalg.norm(np.diff(tp.tip, axis=0), axis=1)
+    ang = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", tp.axis[:-1], tp.axis[1:]), -1.0, 1.0)))
+    n = float(np.maximum(np.maximum(np.ceil(seg / step_mm), np.ceil(ang / step_deg)), 1).sum()) + 1
+    if n > MAX_PLACEMENTS:
+        raise InputError(
+            f"checking this path every {step_mm:g} mm and {step_deg:g} deg needs {n:.3g} tool placements "
+            f"({tp.n_positions:,} positions, {float(seg.sum()):.4g} mm of motion), more than {MAX_PLACEMENTS:,}: "
+            "give a larger step (--step, --step-deg)"
+        )
+
+
 def _placements(tp: ToolPath, step_mm: float, step_deg: float):
     """Tips, axes and owning position of every checked placement (positions and the motion between)."""
     tips, axes, owner = [tp.tip[:1]], [tp.axis[:1]], [np.array([0])]
@@ -340,7 +371,8 @@ def verify(
     step_mm = min(1.0, math.sqrt(4.0 * rho_motion * tolerance)) if step_mm is None else positive("step_mm", step_mm)
     step_deg = positive("step_deg", step_deg, "deg")
     faces = _faces(part)
-    h = positive("spacing_mm", spacing_mm) if spacing_mm is not None else min(1.0, c.D / 8.0)
+    h = positive("spacing_mm", spacing_mm) if spacing_mm is not None else _auto_spacing(faces, c, max_samples)
+    _check_placements(toolpath, step_mm, step_deg)
     pts, fid, us, vs, dus, dvs = [], [], [], [], [], []
     total = 0
     for i, f in enumerate(faces):

@@ -282,6 +282,14 @@ def iso_scallop_paths(
         new = _front(nxt[:, 1 - k], nxt[:, k], grid, sign)
         # every point advances (never back)
         new = np.where(sign * (new - level) > 0, new, level + sign * 1e-9 * abs(hi_k - lo_k))
+        if len(passes_uv) == 1:  # the first step tells how many passes the face needs: refuse before planning them
+            step = float(np.median(np.abs(new - level)))
+            need = abs(hi_k - lo_k) / max(step, 1e-300)
+            if need > max_passes:
+                raise InputError(
+                    f"scallop {scallop:g} mm needs about {need:.3g} passes on this face (the first step is "
+                    f"{float(np.median(w)):.3g} mm), more than {max_passes}: give a larger scallop height"
+                )
         spacings.append(w[was_in])
         level = np.where(was_in, new, level)
         inside = sign * (end - level) > 0

@@ -125,6 +125,41 @@ class DropCutterResult(Result):
 
 
 # ----------------------------------------------------------------------------- the query
+MAX_PAIRS_PER_CHUNK = 4_000_000
+"""(query, sample) pairs solved at once (about 200 bytes each across the seed arrays: under 1 GB)."""
+MAX_PAIRS = 500_000_000
+"""Most (query, sample) pairs a drop-cutter call takes on before it refuses (measured about 6.5 us a pair on
+this 2-core machine, bezier5 and a D200 ball: about an hour)."""
+SECONDS_PER_PAIR = 6.5e-6
+
+
+def _chunk_size(fs: FaceSet, prof: _Profile, n: int, chunk: int) -> int:
+    """Queries per batch so that a batch's pairs fit :data:`MAX_PAIRS_PER_CHUNK`; a call whose pairs exceed
+    :data:`MAX_PAIRS` (a tool much larger than the part's sample spacing: every query sees every sample)
+    is refused with the figure."""
+    xyz = np.concatenate([fs.sample_xyz, fs.edge_xyz]) if fs.edge_xyz.size else fs.sample_xyz
+    if xyz.shape[0] == 0 or n == 0:
+        return max(1, chunk)
+    lo, hi = xyz[:, :2].min(axis=0), xyz[:, :2].max(axis=0)
+    size = float(np.linalg.norm(np.ptp(xyz, axis=0)))
+    if 2 * prof.R > 10 * max(size, 1e-9):
+        raise InputError(
+            f"the tool (D = {2 * prof.R:g} mm) is more than 10 times the part's size ({size:.4g} mm across): "
+            "check the units of the tool and the part"
+        )
+    reach = prof.R + fs.spacing
+    box = float(np.prod(np.maximum(hi - lo, 0) + 2 * reach))
+    per_query = min(float(xyz.shape[0]), xyz.shape[0] * math.pi * reach * reach / box)
+    if per_query * n > MAX_PAIRS:
+        raise InputError(
+            f"drop-cutter: about {per_query * n:.3g} (point, part sample) pairs ({n:,} points, the tool's disc of "
+            f"radius {prof.R:g} mm over about {per_query:.3g} samples each; about "
+            f"{per_query * n * SECONDS_PER_PAIR / 60:.0f} min), more than {MAX_PAIRS:.3g}: "
+            "use fewer points or a tool closer to the part's size (check the units)"
+        )
+    return int(max(1, min(chunk, MAX_PAIRS_PER_CHUNK // max(per_query, 1.0))))
+
+
 def _seeds(fs: FaceSet, prof: _Profile, C: np.ndarray):
     """Pairs (query, sample) within the tool's disc (plus a margin), the best feasible sample per query,
     and per (query, face or edge, sector) the best sample as a seed."""
@@ -435,6 +470,7 @@ def drop_cutter(
     kind = np.zeros(n, np.int8)
     face = np.full(n, -1)
     point = np.full((n, 3), np.nan)
+    chunk = _chunk_size(fs, prof, n, int(chunk))
     for s in range(0, n, chunk):
         e = min(n, s + chunk)
         height[s:e], kind[s:e], face[s:e], point[s:e] = _drop_chunk(fs, prof, xy[s:e])
