@@ -69,6 +69,8 @@ class VerifyResult(Result):
     warnings: tuple = ()
     time_s: dict | None = None
     motion_bound_mm: float = 0.0
+    clearance_mm: float | None = None
+    """Least distance of rapids, shank and holder from the part (mm); ``None``: the tolerance."""
 
     @property
     def gouge_depth(self) -> np.ndarray:
@@ -117,6 +119,7 @@ class VerifyResult(Result):
             "motion_step_deg": self.step_deg,
             "motion_bound_mm": self.motion_bound_mm,
             "tolerance_mm": self.tolerance,
+            "clearance_mm": self.tolerance if self.clearance_mm is None else self.clearance_mm,
             "n_gouging_positions": int(np.count_nonzero(self.status == GOUGE)),
             "max_gouge_mm": self.max_gouge,
             "n_collisions": int(np.count_nonzero(self.status == COLLISION)),
@@ -300,6 +303,7 @@ def verify(
     max_samples: int = 20_000_000,
     chunks: int = 1,
     map_chunks=None,
+    clearance_mm: float | None = None,
 ) -> VerifyResult:
     """Gouges and collisions of a tool path's tool body against every face of a part.
 
@@ -312,8 +316,10 @@ def verify(
     cutter : Cutter, optional
         The tool with its shank and holder.
     tolerance : float
-        A part point deeper than this inside the cutting part is a gouge (mm); shank or holder
-        within it of the part, or a rapid move's cutting part inside it, is a collision.
+        A part point deeper than this inside the cutting part is a gouge (mm).
+    clearance_mm : float, optional
+        Shank or holder closer than this to the part, or a rapid move's cutting part, is a collision (mm;
+        default ``tolerance``).
     step_mm, step_deg : float
         Largest step of the tip (mm) and of the axis (degrees) between checked placements along
         each linear move. Between two placements the swept tool can reach deeper than both by up to
@@ -367,6 +373,7 @@ def verify(
         raise InputError("verify needs the tool: give --tool (the tool path carries none)")
 
     tolerance = positive("tolerance", tolerance)
+    clear = tolerance if clearance_mm is None else checks.finite("clearance_mm", clearance_mm)
     rho_motion = motion_radius(c)
     step_mm = min(1.0, math.sqrt(4.0 * rho_motion * tolerance)) if step_mm is None else positive("step_mm", step_mm)
     step_deg = positive("step_deg", step_deg, "deg")
@@ -465,10 +472,10 @@ def verify(
     status = np.full(n, CLEAR, np.int8)
     rapid = toolpath.move == Move.RAPID
     status[(~rapid) & (pos_cut < -tolerance)] = GOUGE
-    status[rapid & (pos_cut < tolerance)] = COLLISION
-    status[pos_hold < tolerance] = COLLISION
+    status[rapid & (pos_cut < clear)] = COLLISION
+    status[pos_hold < clear] = COLLISION
     # where shank or holder collide and the cutting part does not gouge: their part point
-    hold_pos = np.nonzero((pos_hold < tolerance) & (pos_cut >= -tolerance))[0]
+    hold_pos = np.nonzero((pos_hold < clear) & (pos_cut >= -tolerance))[0]
     if hold_pos.size:
         order_h = np.lexsort((hold_d, owner))
         wh = order_h[np.r_[True, owner[order_h][1:] != owner[order_h][:-1]]]
@@ -505,6 +512,7 @@ def verify(
         tuple(warns),
         times,
         float(step_mm) ** 2 / (8.0 * rho_motion),
+        float(clear),
     )
 
 

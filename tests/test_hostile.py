@@ -594,3 +594,12 @@ def test_a_face_no_tool_position_can_touch_is_refused_by_name(tmp_path):
     top = [i for i, r in faces.items() if r.returncode == 0]
     assert len(bottom) == 1 and len(walls) == 4 and len(top) == 1, {i: r.stderr for i, r in faces.items()}
     _refused(faces[bottom[0]], f"face {bottom[0]} faces away from +Z")
+
+
+def test_a_large_gouge_tolerance_is_not_a_clearance_the_rapids_must_keep(tmp_path):
+    out = tmp_path / "f"
+    r = run("flank", "--example", "hypar", "--tool", "cyl:D=20", "--whole", "--tol", "1e3", "--no-render", "-o", out)
+    assert r.returncode == 0, r.stdout[-800:] + r.stderr
+    v = _strict((out / "report.json").read_text())["whole"]["verify"]
+    assert v["n_collisions"] == 0 and v["clearance_mm"] == 0.01 and v["min_clearance_mm"] > 4.4
+    assert (out / "toolpath.apt").is_file() and "mm into" not in r.stdout

@@ -45,6 +45,11 @@ def part_faces(part: str, faces: str = "all"):
     return read_step_faces(part, idx)
 
 
+COLLISION_CLEARANCE_MM = 0.01
+"""The least distance rapids, shank and holder keep from the part in the jobs (or the gouge tolerance when
+smaller): a large gouge tolerance (flank's interference ``--tol``) is not a clearance."""
+
+
 def check_path(
     st: Staging,
     say: Say,
@@ -77,6 +82,7 @@ def check_path(
         progress=progress,
         chunks=int(chunks),
         map_chunks=map_chunks,
+        clearance_mm=min(tolerance, COLLISION_CLEARANCE_MM),
     )
     rep = res.report()
     say(
@@ -88,8 +94,12 @@ def check_path(
         + (f", min clearance {rep['min_clearance_mm']:.4g} mm" if rep["min_clearance_mm"] is not None else "")
     )
     for w in rep["worst"][:3]:
+        d = w["depth_mm"]
+        where = (
+            f"{d:.4g} mm into" if d >= 0 else f"{-d:.4g} mm from (closer than the {res.clearance_mm:g} mm clearance)"
+        )
         say(
-            f"  {w['status']} at position {w['index']} (pass {w['pass']}, {w['move']}): {w['depth_mm']:.4g} mm into "
+            f"  {w['status']} at position {w['index']} (pass {w['pass']}, {w['move']}): {where} "
             f"face {w['face_index']} '{w['face']}' near ({', '.join(f'{x:.3f}' for x in w['part_point_mm'])})"
         )
     for w in rep["warnings"]:
@@ -133,7 +143,7 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
             cut = clear_runs(tp, res, clearance=clearance)
             if cut is None:
                 break
-            again = verify(faces, cut, tolerance=tolerance)
+            again = verify(faces, cut, tolerance=tolerance, clearance_mm=min(tolerance, COLLISION_CLEARANCE_MM))
             if again.clean:
                 n0, n1 = tp.n_cut, cut.n_cut
                 say(

@@ -61,24 +61,68 @@ def write_stl(path, faces: list[Face], *, linear_deflection: float = 0.01, angul
         raise InputError("linear deflection must be > 0 mm")
     check_mesh_size(faces, linear_deflection, angular_deflection, what=f"{len(faces)} face(s) for {Path(path).name}")
     path = Path(path)
-    comp, _ = _compound(faces)
-    BRepMesh_IncrementalMesh(comp, linear_deflection, False, math.radians(angular_deflection), True)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(suffix=".stl", dir=str(path.parent))
     os.close(fd)
     try:
-        w = StlAPI_Writer()
-        w.ASCIIMode = False
-        with quiet_occt():
-            ok = w.Write(comp, tmp)
-        if not ok:
-            raise InputError(f"OCCT failed to write STL file {path}")
+        err = _stoppable(_mesh_and_write, faces, linear_deflection, angular_deflection, tmp)
+        if err:
+            raise InputError(f"OCCT failed to write STL file {path}: {err}")
         os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
     return path
+
+
+def _mesh_and_write(faces, linear_deflection: float, angular_deflection: float, tmp: str) -> str:
+    """Mesh the faces and write the binary STL ``tmp``; an error text, empty on success."""
+    comp, _ = _compound(faces)
+    BRepMesh_IncrementalMesh(comp, linear_deflection, False, math.radians(angular_deflection), True)
+    w = StlAPI_Writer()
+    w.ASCIIMode = False
+    with quiet_occt():
+        ok = w.Write(comp, tmp)
+    return "" if ok else "the writer failed"
+
+
+def _stoppable(fn, *args) -> str:
+    """Run ``fn(*args)`` (which returns an error text) in a forked child, so that Ctrl-C or SIGTERM stop it
+    at once: a long OCCT call holds the interpreter and would delay Python's signal handlers until it ends.
+    Inline where forking is not safe (not the main thread, no ``fork``)."""
+    import threading
+
+    if not hasattr(os, "fork") or threading.current_thread() is not threading.main_thread():
+        return fn(*args)
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: no Python handler of the parent's (the parent kills it on a signal)
+        code = 1
+        try:
+            os.close(r)
+            msg = fn(*args)
+            os.write(w, msg.encode()[:4000])
+            code = 0
+        except BaseException as exc:  # reported to the parent through the pipe
+            os.write(w, f"{type(exc).__name__}: {exc}".encode()[:4000])
+        finally:
+            os._exit(code)
+    os.close(w)
+    try:
+        _, status = os.waitpid(pid, 0)
+    except BaseException:
+        import signal
+
+        os.kill(pid, signal.SIGKILL)
+        os.waitpid(pid, 0)
+        os.close(r)
+        raise
+    with os.fdopen(r, "rb") as fh:
+        msg = fh.read().decode(errors="replace")
+    if os.waitstatus_to_exitcode(status) != 0 and not msg:
+        msg = f"the meshing process ended with status {os.waitstatus_to_exitcode(status)}"
+    return msg
 
 
 def read_stl(path):
