@@ -47,7 +47,7 @@ def batch_rows(quick=False):
 
     import machsurf_cad as ms
     from machsurf_cad.batchrun import dask_map
-    from machsurf_cad.cli import spec_from_argv
+    from machsurf_cad.cliargs import spec_from_argv
 
     jobs = _jobs()[: 4 if quick else 8]
     rows = []

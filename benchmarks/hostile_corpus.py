@@ -50,7 +50,7 @@ MUST_REFUSE = {"nan", "inf", "-inf", "abc", "???"}
 
 def _options():
     """(command, option, kind) for every option of every command, from the CLI's parser."""
-    from machsurf_cad.cli import build_parser
+    from machsurf_cad.cliargs import build_parser
 
     parser = build_parser()
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))

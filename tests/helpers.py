@@ -58,7 +58,7 @@ def run(*args):
     import io
     from types import SimpleNamespace
 
-    from machsurf_cad.cli import main
+    from machsurf_cad._start import main
 
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):

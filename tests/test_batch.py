@@ -210,7 +210,7 @@ def test_local_cluster_runs_every_job_like_the_cli_and_reports_the_bad_one(tmp_p
     # the same figures as direct runs (reff, simulation and check split in 3 over the cluster, direct in one)
     direct_argv = {k: [a for a in argvs[k] if a not in ("--chunks", "3")] for k in ("sim", "check", "reff", "flank")}
     for name in ("reff", "surface", "sim", "check", "flank"):
-        from machsurf_cad.cli import spec_from_argv
+        from machsurf_cad.cliargs import spec_from_argv
 
         d = ms.run_job(spec_from_argv(direct_argv.get(name, argvs[name])), tmp_path / "direct" / name)
         got = json.loads((tmp_path / "b" / name / "report.json").read_text())

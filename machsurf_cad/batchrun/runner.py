@@ -97,7 +97,7 @@ def _sha256(path) -> str:
 
 def prepare(job: BatchJob):
     """The job's spec (parsed as the CLI would) and its input files ``{field: (absolute path, sha256)}``."""
-    from ..cli import spec_from_argv
+    from ..cliargs import spec_from_argv
 
     spec = spec_from_argv(job.argv)
     inputs = {}

@@ -89,7 +89,7 @@ def write_csv(path, tp: ToolPath) -> Path:
     cc = tp.cc if tp.cc is not None else np.full((tp.n_positions, 3), np.nan)
     feed = tp.feed if tp.feed is not None else np.full(tp.n_positions, np.nan)
     counter: dict[int, int] = {}
-    from .. import __version__
+    from .._version import __version__
 
     tool = f", tool {tp.cutter.spec()}" if tp.cutter is not None else ""
     with open(path, "w", newline="") as fh:
@@ -186,7 +186,7 @@ def apt_lines(tp: ToolPath, options: PostOptions = PostOptions()) -> list[str]:
     if tp.cutter is None:
         raise InputError("APT output needs the tool path's cutter (CUTTER/ statement)")
     multax = tp.is_multiaxis
-    from .. import __version__
+    from .._version import __version__
 
     params = tp.cutter.apt_parameters()
     lines = [

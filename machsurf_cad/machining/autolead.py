@@ -127,12 +127,15 @@ def auto_lead(
     check_tolerance: float = 0.01,
     bump_deg: float = 1.0,
     max_rounds: int = 6,
+    gouging=None,
 ) -> tuple[LeadField, dict]:
     """The gouge-free lead field of a bull-nose (or flat) end mill on ``face`` for ``feed`` (see module doc).
 
     Returns the field and a report: the lead range used, the local need's range, the rate bound, and
     the points where no lead avoids a local gouge (across-feed concavity tighter than r, or along the
-    feed tighter than R_t + r).
+    feed tighter than R_t + r). With ``check_faces``, ``gouging(field, us, vs, inside, check_faces,
+    tolerance)`` gives the grid placements where the whole tool still gouges and how deep (the caller's
+    body check: :func:`~machsurf_cad.machining.surfaces.lead_field_gouges`).
     """
     em = cutter.end_mill_radii("automatic lead")
     if em.is_ball:
@@ -164,15 +167,14 @@ def auto_lead(
     if check_faces is not None:
         # the global body check on a grid of tool placements: where the tool still gouges (its rear
         # reaching farther than second order sees), raise the need and rebuild the field
-        from .surfaces import MachiningMaps, gouging_placements
-
+        if gouging is None:
+            raise InputError("auto_lead with check_faces needs the body check (gouging=...)")
         for _ in range(max_rounds):  # the placements on the lead grid itself: a gouge marks its own cell
-            maps = MachiningMaps(face, cutter, 5, LeadField(us, vs, lead, feed), cutter.D, False)
-            gouging, depth, _ = gouging_placements(maps, us, vs, inside, check_faces, tolerance=check_tolerance)
-            rounds.append({"gouging_placements": int(gouging.sum()), "max_gouge_mm": float(depth.max())})
-            if not gouging.any():
+            bad, depth = gouging(LeadField(us, vs, lead, feed), us, vs, inside, check_faces, check_tolerance)
+            rounds.append({"gouging_placements": int(bad.sum()), "max_gouge_mm": float(depth.max())})
+            if not bad.any():
                 break
-            for i, j in np.argwhere(gouging):
+            for i, j in np.argwhere(bad):
                 sl = (slice(max(0, i - 3), i + 4), slice(max(0, j - 3), j + 4))
                 need[sl] = np.maximum(need[sl], lead[sl] + bump_deg)
             lead = _smooth_field(need, du_mm, dv_mm, rate_deg_per_mm)

@@ -22,6 +22,7 @@ is parallel to the axis (the torus then touches along a circle).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -293,6 +294,15 @@ def _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field):
     return LeadTilt(lead, tilt, feed)
 
 
+def lead_field_gouges(face, cutter, field, us, vs, inside, check_faces, tolerance):
+    """Where the whole tool gouges ``check_faces`` at the placements of a lead ``field`` on the grid
+    ``us x vs`` (``inside``: the grid points on the face), and how deep (mm): the body check
+    :func:`~machsurf_cad.machining.autolead.auto_lead` raises its lead with."""
+    maps = MachiningMaps(face, cutter, 5, field, cutter.D, False)
+    bad, depth, _ = gouging_placements(maps, us, vs, inside, check_faces, tolerance=tolerance)
+    return bad, depth
+
+
 def machining_surface(
     face,
     tool,
@@ -403,6 +413,7 @@ def machining_surface(
             min_deg=lead_min_deg,
             rate_deg_per_mm=lead_rate_deg_per_mm,
             check_faces=[face] if lead_check_faces is None else lead_check_faces,
+            gouging=functools.partial(lead_field_gouges, face, cutter),
         )
     else:
         strat = _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field)

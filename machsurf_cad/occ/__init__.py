@@ -15,14 +15,13 @@ import OCP  # noqa: F401  (any other failure, Ctrl-C included, propagates as its
 from .convert import (
     check_valid,
     face_from_surface,
-    from_cq_face,
     from_geom_surface,
     is_valid,
     to_cq_face,
     to_geom_surface,
 )
 from .mesh import read_stl, triangulate_face, triangulate_step, write_stl
-from .step import read_step_face, read_step_faces, step_face_summaries, write_step
+from .step import from_cq_face, read_step_face, read_step_faces, step_face_summaries, write_step
 
 __all__ = [
     "to_geom_surface",

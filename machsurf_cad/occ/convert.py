@@ -256,13 +256,6 @@ def to_cq_face(face) -> object:
     return cq.Face(face_from_surface(face.surface, [list(lp) for lp in face.loops] or None))
 
 
-def from_cq_face(cq_face, name: str = "") -> object:
-    """A numpy :class:`~machsurf_cad.geometry.face.Face` from a cadquery ``Face`` (NURBS-converted)."""
-    from .step import face_record
-
-    return face_record(cq_face.wrapped, -1, name or "face")
-
-
 def check_valid(shape, what: str = "shape") -> None:
     """Raise :class:`InputError` if ``BRepCheck_Analyzer`` finds the shape invalid."""
     if not BRepCheck_Analyzer(shape).IsValid():

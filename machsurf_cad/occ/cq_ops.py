@@ -22,7 +22,8 @@ from __future__ import annotations
 import cadquery as cq
 
 from ..machining import machining_surface
-from .convert import from_cq_face, to_cq_face
+from .convert import to_cq_face
+from .step import from_cq_face
 
 
 def machining_surface_faces(face: cq.Face, tool, **kwargs):

@@ -149,6 +149,11 @@ def _named_faces(path):
     return out
 
 
+def from_cq_face(cq_face, name: str = "") -> Face:
+    """A numpy :class:`~machsurf_cad.geometry.face.Face` from a cadquery ``Face`` (NURBS-converted)."""
+    return face_record(cq_face.wrapped, -1, name or "face")
+
+
 def read_step_faces(path, indices=None) -> list[Face]:
     """Faces of a STEP file as numpy :class:`Face` objects, with their index and name.
 
