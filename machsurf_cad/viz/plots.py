@@ -1,18 +1,24 @@
-"""2-D plots (matplotlib, Agg backend) for studies; lengths in mm, angles in degrees."""
+"""2-D plots (matplotlib figures drawn by the Agg canvas, without pyplot: importing this module changes
+no global state, such as pyplot's backend); lengths in mm, angles in degrees."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
+
+def _figure(figsize, dpi):
+    """A figure and its axes on its own Agg canvas (nothing registered with pyplot)."""
+    fig = Figure(figsize=figsize, dpi=dpi)
+    FigureCanvasAgg(fig)
+    return fig, fig.add_subplot()
 
 
 def plot_ratio_curves(curves, png_path, *, label_key: str, label_fmt: str, title: str) -> Path:
     """Error ratio standard / optimum against R, one curve per study parameter (log axes)."""
-    fig, ax = plt.subplots(figsize=(8, 5.5), dpi=120)
+    fig, ax = _figure((8, 5.5), 120)
     for c in curves:
         ax.plot(c["R_mm"], c["ratio"], marker="o", ms=3, label=label_fmt.format(c[label_key]))
     ax.set_xscale("log")
@@ -27,7 +33,6 @@ def plot_ratio_curves(curves, png_path, *, label_key: str, label_fmt: str, title
     png_path = Path(png_path)
     fig.tight_layout()
     fig.savefig(png_path)
-    plt.close(fig)
     return png_path
 
 
@@ -38,7 +43,7 @@ def plot_path_distance(distance, status, png_path, *, tolerance: float, title: s
 
     d = np.asarray(distance, float)
     x = np.arange(d.size)
-    fig, ax = plt.subplots(figsize=(10, 4.5), dpi=120)
+    fig, ax = _figure((10, 4.5), 120)
     shown = np.clip(d, -10 * max(tolerance, 1e-9) - np.nanmax(-d[np.isfinite(d)], initial=0), 5.0)
     ax.plot(x, shown, lw=0.8, color="tab:blue", label="tool to part, mm")
     ax.axhline(-tolerance, color="tab:red", ls="--", lw=1, label=f"-tolerance ({tolerance:g} mm)")
@@ -53,7 +58,6 @@ def plot_path_distance(distance, status, png_path, *, tolerance: float, title: s
     png_path = Path(png_path)
     fig.tight_layout()
     fig.savefig(png_path)
-    plt.close(fig)
     return png_path
 
 
@@ -63,7 +67,7 @@ def plot_simulation_histogram(value, reached, png_path, *, tolerance: float, hei
     import numpy as np
 
     v = np.asarray(value, float)[np.asarray(reached, bool)]
-    fig, ax = plt.subplots(figsize=(9, 4.5), dpi=120)
+    fig, ax = _figure((9, 4.5), 120)
     if v.size:
         ax.hist(v, bins=120, color="tab:blue", alpha=0.85)
     ax.axvline(-tolerance, color="tab:red", ls="--", lw=1, label=f"-tolerance ({tolerance:g} mm)")
@@ -78,7 +82,6 @@ def plot_simulation_histogram(value, reached, png_path, *, tolerance: float, hei
     png_path = Path(png_path)
     fig.tight_layout()
     fig.savefig(png_path)
-    plt.close(fig)
     return png_path
 
 
@@ -86,7 +89,7 @@ def plot_rule_errors(profiles: dict, png_path, *, tolerance: float | None = None
     """The error along the rule (mm) of every setting against v (0 at C0, 1 at C1): negative gouge,
     positive undercut (the flank paper's figures 6 and 7). ``profiles``: setting name -> Interference
     (settings that do not exist, given as a reason string, are listed in the legend's title)."""
-    fig, ax = plt.subplots(figsize=(7.5, 4.5), dpi=110)
+    fig, ax = _figure((7.5, 4.5), 110)
     missing = []
     for kind, e in profiles.items():
         if isinstance(e, str):
@@ -104,5 +107,4 @@ def plot_rule_errors(profiles: dict, png_path, *, tolerance: float | None = None
     ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(png_path)
-    plt.close(fig)
     return Path(png_path)

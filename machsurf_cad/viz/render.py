@@ -9,14 +9,16 @@ import pyvista as pv
 
 from ..measure import DeviationResult
 
-try:  # keep VTK's "no X server" chatter off the terminal; rendering falls back off-screen
-    from vtkmodules.vtkCommonCore import vtkLogger
 
-    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
-except Exception:  # pragma: no cover - older VTK
-    pass
+def _quiet_vtk() -> None:
+    """Keep VTK's "no X server" chatter off the terminal while we render (off-screen) - set when a picture is
+    taken, not on import: importing machsurf_cad.viz changes no global state."""
+    try:
+        from vtkmodules.vtkCommonCore import vtkLogger
 
-pv.OFF_SCREEN = True
+        vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
+    except Exception:  # pragma: no cover - older VTK
+        pass
 
 
 def _bar_args(title: str, color: str = "black", n_labels: int = 5) -> dict:
@@ -38,6 +40,7 @@ def _save(plotter, png_path, mesh=None, vtp_path=None) -> Path:
     """Screenshot to ``png_path`` (folders made), close the plotter, and save ``mesh`` as .vtp if asked."""
     png_path = Path(png_path)
     png_path.parent.mkdir(parents=True, exist_ok=True)
+    _quiet_vtk()
     plotter.screenshot(str(png_path))
     plotter.close()
     if vtp_path is not None and mesh is not None:
