@@ -40,8 +40,6 @@ if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``im
         EndMillRadii,
         FlatEndMill,
         Shank,
-        cutter_from_apt,
-        parse_cutter,
     )
     from .effradius import DirectionMap, ReffMaps, effective_radius, reff_maps, stepover
     from .effradius import reff_maps as reff
@@ -103,6 +101,7 @@ if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``im
         top_faces,
         waterline,
     )
+    from .toolspec import cutter_from_apt, parse_cutter
 
 
 def _lazy_names() -> dict[str, tuple[str, str]]:

@@ -45,7 +45,8 @@ def index(name: str, value, *, low: int = 0) -> int:
 
 def tool(value, name: str = "tool"):
     """A :class:`~machsurf_cad.cutters.Cutter`, from itself or its string (``ball:D=10``)."""
-    from .cutters import Cutter, parse_cutter
+    from .cutters import Cutter
+    from .toolspec import parse_cutter
 
     if isinstance(value, Cutter):
         return value

@@ -41,12 +41,13 @@ import numpy as np
 from scipy.special import cosdg, sindg
 
 from .chunking import split_map
-from .cutters import Cutter, parse_cutter
+from .cutters import Cutter
 from .errors import DegenerateGeometryError, InputError
 from .geometry.bspline import BSplineSurface
 from .geometry.face import Face
 from .geometry.normals import unit_normals
 from .results import Result
+from .toolspec import parse_cutter
 
 _S_FLAT_DEG = 1e-9  # slopes below this are a flat spot: R_eff is infinite
 

@@ -6,9 +6,9 @@ import sys
 import numpy as np
 
 from machsurf_cad import examples
-from machsurf_cad.cutters import parse_cutter
 from machsurf_cad.geometry import builders, insert_knot_surface, local_properties
 from machsurf_cad.measure import deviation
+from machsurf_cad.toolspec import parse_cutter
 
 
 def test_core_does_not_load_kernel_or_pyvista():

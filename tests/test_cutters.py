@@ -14,10 +14,9 @@ from machsurf_cad.cutters import (
     FlatEndMill,
     LineSegment,
     Shank,
-    cutter_from_apt,
-    parse_cutter,
 )
 from machsurf_cad.errors import InputError
+from machsurf_cad.toolspec import cutter_from_apt, parse_cutter
 
 SPECS = [
     "ball:D=10",

@@ -8,12 +8,12 @@ import pytest
 from helpers import assert_points_close
 
 from machsurf_cad import examples
-from machsurf_cad.cutters import parse_cutter
 from machsurf_cad.errors import DegenerateGeometryError, InputError, ToleranceError
 from machsurf_cad.geometry import builders
 from machsurf_cad.geometry.face import Face
 from machsurf_cad.machining import LoopError, machining_surface, recover_axis
 from machsurf_cad.machining.strategies import LeadTilt, LocalFrame, PlanesFeed
+from machsurf_cad.toolspec import parse_cutter
 
 TOL = 1e-3
 

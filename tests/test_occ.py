@@ -186,8 +186,8 @@ def test_step_without_faces(tmp_path):
 
 
 def test_cutter_solids_volumes_match_closed_forms():
-    from machsurf_cad.cutters import parse_cutter
     from machsurf_cad.occ.solids import cutter_solid, solid_volume
+    from machsurf_cad.toolspec import parse_cutter
 
     ball = parse_cutter("ball:D=10,L=30")
     assert abs(solid_volume(cutter_solid(ball)) - (math.pi * 25 * 25 + 2 / 3 * math.pi * 125)) < 1e-6
@@ -232,9 +232,9 @@ def test_cadquery_face_round_trip(rng):
     ],
 )
 def test_every_cutter_solid_is_valid_with_the_profile_volume(spec):
-    from machsurf_cad.cutters import parse_cutter
     from machsurf_cad.occ import is_valid
     from machsurf_cad.occ.solids import cutter_solid, solid_volume
+    from machsurf_cad.toolspec import parse_cutter
 
     c = parse_cutter(spec)
     solid = cutter_solid(c, tip=(3, -2, 7), axis=(0.2, 0.1, 1.0))

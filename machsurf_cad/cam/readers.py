@@ -278,7 +278,7 @@ def read_apt(path, *, name: str | None = None) -> ToolPath:
         Missing or binary file, no GOTO, a malformed statement, an inconsistent ``CUTTER``, or a
         statement that changes the geometry and is not supported.
     """
-    from ..cutters import cutter_from_apt
+    from ..toolspec import cutter_from_apt
 
     p = _path(path)
     if not p.is_file():
@@ -390,7 +390,7 @@ def read_csv(path) -> ToolPath:
     InputError
         Missing or binary file, no tip columns, malformed rows.
     """
-    from ..cutters import parse_cutter
+    from ..toolspec import parse_cutter
 
     p = _path(path)
     if not p.is_file():

@@ -194,7 +194,8 @@ def flank(
     >>> abs(res.interference.max_abs - 10 * (1 - math.cos(math.radians(30)))) < 1e-9  # R (1 - cos alpha0)
     True
     """
-    from ..cutters import FlatEndMill, parse_cutter
+    from ..cutters import FlatEndMill
+    from ..toolspec import parse_cutter
 
     t0 = time.perf_counter()
     cutter: Any

@@ -455,12 +455,12 @@ def radius_range(
 
 
 def envelope_deviation(path: FlankPath, env_surface, n: int = 121):
-    """Deviation of the nominal ruled surface from the swept envelope (mm): **gouge positive**.
+    """Deviation of the nominal ruled surface from the swept envelope (mm): gouge negative, as everywhere.
 
     The magnitude is the distance to the fitted envelope surface; where the closest envelope
     point is on its start or end edge (the first or last tool position), the distance to that
     whole cylinder is used instead of the distance to the edge curve. The sign says whether the
-    nominal point is inside the swept tool (gouge, +) or outside (undercut, -), decided by the
+    nominal point is inside the swept tool (gouge, -) or outside (undercut, +), decided by the
     densely interpolated tool positions. Returns a :class:`~machsurf_cad.measure.DeviationResult`.
     """
     from ..measure import DeviationResult, deviation_stats, project_points
@@ -480,19 +480,19 @@ def envelope_deviation(path: FlankPath, env_surface, n: int = 121):
             w = w - (w @ path.axis[k])[:, None] * path.axis[k]
             ends.append(np.abs(np.linalg.norm(w, axis=1) - path.R))
         mag = np.where(at_end, np.minimum(ends[0], ends[1]), mag)
-    sign = np.where(brute.ravel() < 0, 1.0, -1.0)
+    sign = np.where(brute.ravel() < 0, -1.0, 1.0)
     signed = sign * mag
     uu, vv = np.meshgrid(np.linspace(path.u[0], path.u[-1], n), np.linspace(0, 1, n), indexing="ij")
     uv = np.stack([uu.ravel(), vv.ravel()], 1)
     stats = deviation_stats(signed, pts, uv)
     stats["n_measured_to_end_positions"] = int(at_end.sum())
-    stats["sign_convention"] = "gouge positive (nominal inside the swept tool), undercut negative"
+    stats["sign_convention"] = "gouge negative (nominal inside the swept tool), undercut positive"
     return DeviationResult(pts, signed, uv, proj.foot, proj.on_boundary, (n, n), None, path.step_tolerance, stats)
 
 
 def positions_deviation(path: FlankPath, n: int = 121):
     """Deviation of the nominal from the swept tool measured on the tool positions themselves (mm, gouge
-    positive): :func:`position_deviation` (every nominal sample against densely interpolated
+    negative): :func:`position_deviation` (every nominal sample against densely interpolated
     positions) as a :class:`~machsurf_cad.measure.DeviationResult`. The map of a segment whose swept
     envelope could not be fitted (a folding motion); needs at least 2 rules."""
     from ..measure import DeviationResult, deviation_stats
@@ -501,12 +501,12 @@ def positions_deviation(path: FlankPath, n: int = 121):
         raise InputError("a deviation map needs at least 2 rules")
     pts_grid, brute = position_deviation(path, n_u=n, n_v=n)
     pts = pts_grid.reshape(-1, 3)
-    signed = -brute.ravel()
+    signed = brute.ravel()
     uu, vv = np.meshgrid(np.linspace(path.u[0], path.u[-1], n), np.linspace(0, 1, n), indexing="ij")
     uv = np.stack([uu.ravel(), vv.ravel()], 1)
     stats = deviation_stats(signed, pts, uv)
     stats["measured_to"] = "the interpolated tool positions (no envelope surface)"
-    stats["sign_convention"] = "gouge positive (nominal inside the swept tool), undercut negative"
+    stats["sign_convention"] = "gouge negative (nominal inside the swept tool), undercut positive"
     return DeviationResult(
         pts, signed, uv, pts.copy(), np.zeros(len(pts), bool), (n, n), None, path.step_tolerance, stats
     )

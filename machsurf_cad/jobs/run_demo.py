@@ -39,13 +39,13 @@ def default_part_path(work_dir: Path) -> Path:
 
 
 def run_demo(spec: DemoJob, out, say: Say, progress=None) -> JobOutcome:
-    from ..cutters import parse_cutter
     from ..geometry import local_properties
     from ..measure import deviation
     from ..meshsample import subdivide
     from ..occ import read_step_faces, read_stl, write_step, write_stl
     from ..occ.solids import cutter_solid
     from ..occ.step import write_step_shape
+    from ..toolspec import parse_cutter
     from ..viz import render_deviation
 
     t0 = time.perf_counter()

@@ -7,9 +7,9 @@ from .specs import EnvelopeJob
 
 
 def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
-    from ..cutters import parse_cutter
     from ..examples import example
     from ..sweep import envelope, fitted_normals, load_path
+    from ..toolspec import parse_cutter
 
     cutter = parse_cutter(spec.tool)
     motion = load_path(spec.path) if spec.path else example(spec.example or "sine", "motion")

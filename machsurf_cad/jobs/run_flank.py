@@ -132,7 +132,7 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
                     st.path("deviation.png"),
                     vtp_path=st.path("deviation.vtp"),
                     title=f"nominal vs {'envelope' if env is not None else 'positions'} of {cutter.spec()} "
-                    f"({spec.setting}); red gouge, blue undercut",
+                    f"({spec.setting}); blue gouge (negative), red undercut",
                     tolerance=spec.tol,
                     view_direction=mean_normal(surf, spec.side),
                 )

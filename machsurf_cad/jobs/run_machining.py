@@ -9,9 +9,9 @@ from .specs import MachiningSurfaceJob
 
 
 def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> JobOutcome:
-    from ..cutters import parse_cutter
     from ..machining import machining_surface
     from ..machining.surfaces import fit_deviation
+    from ..toolspec import parse_cutter
 
     if spec.faces is not None:
         from .run_threeaxis import run_three_axis

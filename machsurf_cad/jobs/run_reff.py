@@ -17,8 +17,8 @@ def _f(x, fmt: str = ".4g") -> str:
 
 
 def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
-    from ..cutters import parse_cutter
     from ..effradius import parse_directions, reff_maps
+    from ..toolspec import parse_cutter
 
     t0 = time.perf_counter()
     cutter = parse_cutter(spec.tool)

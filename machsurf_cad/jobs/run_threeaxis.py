@@ -28,9 +28,10 @@ def _part(spec: MachiningSurfaceJob):
 
 
 def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> JobOutcome:
-    from ..cutters import parse_cutter
     from ..threeaxis import select_faces
-    from ..threeaxis.paths import raster, waterline
+    from ..threeaxis.paths import raster
+    from ..threeaxis.zlevel import waterline
+    from ..toolspec import parse_cutter
 
     t0 = time.perf_counter()
     cutter = parse_cutter(spec.tool)

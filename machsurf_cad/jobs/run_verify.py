@@ -212,7 +212,7 @@ def read_toolpath_file(path: Path):
 def toolpath_and_cutter(toolpath: str, tool: str | None, say: Say):
     """The tool path file and its cutter: ``tool`` (a cutter string) wins over the file's CUTTER, with a
     warning when they disagree; one of them must exist."""
-    from ..cutters import parse_cutter
+    from ..toolspec import parse_cutter
 
     path = Path(toolpath)
     tp = read_toolpath_file(path)

@@ -39,6 +39,7 @@ from ..geometry.differential import local_properties_grid
 from ..geometry.face import Face
 from ..geometry.normals import unit_normals
 from ..results import Result
+from .bodycheck import gouging_placements
 from .loops import LoopError, LoopReport, fold_mask, region_from_mask
 from .strategies import AxisField, FixedAxis, IsoFeed, LeadTilt, LocalFrame, PlanesFeed, as_feed
 
@@ -647,31 +648,6 @@ def detect_loops(maps: MachiningMaps, n: int = 121) -> LoopReport:
         iv = np.clip(np.round((rg.uv[:, 1] - v0) / (v1 - v0) * (n - 1)).astype(int), 0, n - 1)
         mask[iu, iv] = True
     return LoopReport(tuple(regions), (n, n), mask, us, vs)
-
-
-def gouging_placements(maps: MachiningMaps, us, vs, inside, faces, *, tolerance: float):
-    """The tool placed by the exact maps at every grid point inside the face, each checked alone against
-    ``faces`` (:func:`machsurf_cad.verify`): grid masks of the gouging placements and their depths (mm),
-    and the tips (mm)."""
-    from ..cam.toolpath import Move, ToolPath
-    from ..gougecheck import GOUGE, verify
-
-    tips, axes = maps.tool_placements(us, vs)
-    bad = np.zeros(inside.shape, bool)
-    depth = np.zeros(inside.shape)
-    sel = np.nonzero(inside.ravel())[0]
-    if sel.size:
-        tp = ToolPath(
-            tips.reshape(-1, 3)[sel],
-            axes.reshape(-1, 3)[sel],
-            np.full(sel.size, Move.CUT),
-            np.arange(sel.size),
-            cutter=maps.cutter,
-        )
-        res = verify(faces, tp, tolerance=tolerance, step_mm=1e9, step_deg=180.0)  # each placement alone
-        bad.ravel()[sel] = res.status == GOUGE
-        depth.ravel()[sel] = res.gouge_depth
-    return bad, depth, tips
 
 
 def _box_loop(bounds):

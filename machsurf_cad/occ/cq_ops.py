@@ -70,8 +70,8 @@ def raster_on_faces(faces, tool, *, check_faces=(), **kwargs):
     >>> bool(abs(z.max() - 5.0) < 1e-9), bool(z.min() < 5.0)  # on the top face; into the hole near it
     (True, True)
     """
-    from ..cutters import parse_cutter
     from ..threeaxis import raster
+    from ..toolspec import parse_cutter
 
     cutter = parse_cutter(tool) if isinstance(tool, str) else tool
     mf = [from_cq_face(f, f"face_{i}") for i, f in enumerate(faces)]

@@ -24,9 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..cutters import Cutter, SphereFamilySegment, parse_cutter
+from ..cutters import Cutter, SphereFamilySegment
 from ..errors import DegenerateGeometryError, InputError
 from ..results import Result
+from ..toolspec import parse_cutter
 
 _FD = np.array([1.0, -8.0, 0.0, 8.0, -1.0]) / 12.0  # 5-point first-derivative stencil, O(h^4)
 

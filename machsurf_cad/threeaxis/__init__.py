@@ -4,8 +4,9 @@ height-field CL surface, raster and waterline tool paths."""
 from .dropcutter import Contact, DropCutterResult, default_seed_spacing, drop_cutter
 from .faceset import FaceSet, axis_frame, face_set
 from .heightfield import cl_surface
-from .paths import Direction, Pattern, raster, scallop_stepover, waterline
+from .paths import Direction, Pattern, raster, scallop_stepover
 from .select import select_faces, top_faces
+from .zlevel import waterline
 
 __all__ = [
     "Contact",
