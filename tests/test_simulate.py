@@ -401,3 +401,270 @@ def test_flank_cylinder_around_a_convex_cylinder_cuts_the_chord_sag():
     at20 = np.abs(np.degrees(np.arctan2(pts[:, 1], pts[:, 0])) - 20.0) < 1e-9
     assert at20.sum() >= 5
     assert_close(np.asarray(res.value)[band][at20], -R * (1 / math.cos(math.radians(1.0)) - 1), 2e-6)
+
+
+# ---------------------------------------------------------------- machined region, border, gouges, not measured
+# issue 25 item 4: the border around the passes is reported apart from the scallops between them; a gouge is
+# the depth of the nominal point inside the swept tool (what verify measures), not the cut along the normal;
+# rays that do not converge are not measured.
+
+R_BALL = 5.0
+S_CUSP = 4.0 * math.sin(math.radians(15.0))  # 1.035276 mm: the cusp R - sqrt(R^2 - s^2/4) is 0.026867 mm
+
+
+def _cusp(R, s):
+    return R - math.sqrt(R * R - s * s / 4.0)
+
+
+def _raster(cutter, s, n_pass=5, half=4.0, z=0.0, npts=33, axis=(0.0, 0.0, 1.0), slope=None):
+    """Passes along x from -half to half, ``s`` apart across; on the plane z = y tan(slope) when given (the
+    tips lifted so that the tool touches it: contacts ``s`` apart along the slope)."""
+    x = np.linspace(-half, half, npts)
+    tips = []
+    for k in range(n_pass):
+        c = (k - (n_pass - 1) / 2) * s
+        if slope is None:
+            tips.append(np.stack([x, np.full_like(x, c), np.full_like(x, z)], 1))
+        else:  # a ball whose centre lies R above the sloped plane, its contact c along the slope
+            th = math.radians(slope)
+            n = np.array([0.0, -math.sin(th), math.cos(th)])
+            centre = np.array([0.0, c * math.cos(th), c * math.sin(th)]) + R_BALL * n
+            tips.append(np.stack([x, np.full_like(x, centre[1]), np.full_like(x, centre[2] - R_BALL)], 1))
+    return _passes(tips, [np.tile(axis, (x.size, 1))] * n_pass, cutter)
+
+
+def _zbuffer_ball(xy, centres, R):
+    """Brute force: the lowest point of the balls R about ``centres`` (dense along the motion) above each xy."""
+    z = np.full(xy.shape[0], np.inf)
+    for i in range(0, centres.shape[0], 4000):
+        c = centres[i : i + 4000]
+        d2 = ((xy[:, None, :] - c[None, :, :2]) ** 2).sum(-1)
+        low = np.where(d2 <= R * R, c[None, :, 2] - np.sqrt(np.maximum(R * R - d2, 0.0)), np.inf)
+        z = np.minimum(z, low.min(axis=1))
+    return z
+
+
+def _dense_centres(tp, R, step=0.005):
+    """Ball centres every ``step`` mm along the cutting moves of ``tp`` (3 axes: the axis is +z)."""
+    out = []
+    cut = tp.move == ms.Move.CUT
+    for j in np.flatnonzero(cut):
+        a, b = tp.tip[j - 1], tp.tip[j]
+        k = max(1, math.ceil(np.linalg.norm(b - a) / step))
+        f = np.linspace(0.0, 1.0, k + 1)[:, None]
+        out.append(a * (1 - f) + b * f)
+    return np.concatenate(out) + [0.0, 0.0, R]
+
+
+@pytest.mark.parametrize("per_step", [20.0, 17.3])
+def test_ball_raster_on_a_plane_reports_the_cusp_in_the_machined_region_and_the_border_apart(per_step):
+    """Five passes of a ball R 5, 1.0353 mm apart, from x = -4 to 4 on a plane 12 x 8.3 mm: the cusp is
+    R - sqrt(R^2 - s^2/4) = 0.026867 mm; the border around the passes (beyond the outer passes and past their
+    ends) is left up to the blade's 1 mm and is reported apart. Samples s/20 apart fall on the cusp lines: the
+    figure is exact; s/17.3 apart, the nearest sample lies within half a spacing of a cusp line: the reported
+    maximum is within the profile's drop over res/2, R - sqrt(R^2 - (s/2 - res/2)^2) <= max <= h. The mean
+    over the region is the profile's mean over [0, s/2] up to the trapezoidal rule's res^2 f''/12."""
+    R, s = R_BALL, S_CUSP
+    h = _cusp(R, s)
+    assert abs(h - 0.026867) < 5e-7
+    res_mm = s / per_step
+    plane = builders.plane_patch((-6.0, -4 * s, 0.0), (12.0, 0, 0), (0, 8 * s, 0))
+    tp = _raster(ms.BallEndMill(2 * R), s)
+    res = ms.simulate(plane, tp, resolution=res_mm)
+    rep = res.report()
+    p = res.points
+    box = (np.abs(p[:, 0]) <= 4.0 + 1e-9) & (np.abs(p[:, 1]) <= 2 * s + 1e-9)  # under and between the passes
+    assert np.array_equal(res.in_region, box & res.reached)
+    if per_step == 20.0:
+        assert_close(rep["max_scallop_mm"], h, 1e-9, "cusp on the sampled cusp lines")
+    else:
+        assert _cusp(R, s - res_mm) - 1e-12 <= rep["max_scallop_mm"] <= h + 1e-12
+    a = s / 2
+    mean = (R * a - 0.5 * (a * math.sqrt(R * R - a * a) + R * R * math.asin(a / R))) / a
+    assert abs(rep["mean_scallop_mm"] - mean) <= res_mm**2 / (12 * (R - 0.11)) * 1.05 + 1e-9
+    # the border: what the old single figure reported (0.9997 in the issue); reached up to the 1 mm blade
+    b = rep["border"]
+    assert b["n_samples"] == int((res.reached & ~box).sum()) > 0 and 0.9 < b["max_material_mm"] <= 1.0
+    assert b["max_material_mm"] == pytest.approx(float(res.value[res.reached & ~box].max()))
+    region_area = 8.0 * 4 * s
+    assert abs(rep["machined_region"]["area_mm2"] - region_area) < 2 * (8.0 + 4 * s) * res_mm
+    total = float(res.area.sum())
+    assert_close(total, 12.0 * 8 * s, 1e-9, "sampled area")
+    assert_close(b["area_mm2"] + rep["machined_region"]["area_mm2"] + res.area[~res.reached].sum(), total, 1e-9)
+    assert rep["max_gouge_mm"] < 1e-12 and rep["not_measured"]["n_samples"] == 0
+    # every reached sample against a z-buffer of the balls every 0.005 mm along the passes (independent)
+    rng = np.random.default_rng(7)
+    pick = rng.choice(np.flatnonzero(res.reached), 300, replace=False)
+    z = _zbuffer_ball(p[pick, :2], _dense_centres(tp, R), R)
+    assert_close(res.value[pick], z, 2e-6, "material left against the z-buffer")
+    # strict JSON: NaN/inf as null
+    import json
+
+    from machsurf_cad.results import strict_json
+
+    json.loads(strict_json(rep), parse_constant=lambda c: pytest.fail(f"non-strict JSON constant {c}"))
+
+
+@pytest.mark.parametrize("kind", ["flat", "bull"])
+def test_flat_and_bull_rasters_on_a_plane_leave_the_floor_and_the_torus_cusp(kind):
+    """3 axes on a plane, passes along x: a flat end mill D10 with passes 8 mm apart leaves a flat floor (no
+    scallop: its bottom overlaps); a bull D10 r2 (R_t 3) with passes 7 mm apart leaves, at a distance d from the
+    nearest pass, 0 under the flat bottom (d <= R_t) and r - sqrt(r^2 - (d - R_t)^2) beyond: the cusp at d = 3.5
+    is 2 - sqrt(4 - 0.25) = 0.06351 mm. The flat end mill reaches nothing beyond its radius (no border); the
+    bull's torus does (border, reported apart)."""
+    cut, s = (ms.FlatEndMill(10), 8.0) if kind == "flat" else (ms.BullNoseEndMill(10, 2), 7.0)
+    plane = builders.plane_patch((-8.0, -2.0 * s, 0.0), (16.0, 0, 0), (0, 4.0 * s, 0))
+    tp = _raster(cut, s, n_pass=3)
+    res = ms.simulate(plane, tp, resolution=s / 40)  # rows on the cusp lines y = +-s/2
+    rep = res.report()
+    p = res.points
+    d = np.min(np.abs(p[:, 1][:, None] - np.array([-s, 0.0, s])[None, :]), axis=1)
+    box = (np.abs(p[:, 0]) <= 4.0 + 1e-9) & (np.abs(p[:, 1]) <= s + 1e-9)
+    if kind == "flat":
+        assert rep["max_scallop_mm"] < 1e-12 and rep["border"]["n_samples"] == 0
+        # under the flat bottoms: the passes' footprints (discs of radius 5 along them): all reached samples
+        foot = np.min(np.hypot(np.maximum(np.abs(p[:, 0]) - 4.0, 0.0)[:, None],
+                               p[:, 1][:, None] - np.array([-s, 0.0, s])[None, :]), axis=1)  # fmt: skip
+        assert np.array_equal(res.in_region, res.reached) and np.all(foot[res.reached] <= 5.0 + 1e-9)
+    else:
+        r_, R_t = 2.0, 3.0
+        exact = np.where(d <= R_t, 0.0, r_ - np.sqrt(np.maximum(r_ * r_ - (d - R_t) ** 2, 0.0)))
+        reg = res.in_region
+        assert np.all(reg[box & res.reached]) and reg.sum() > 0
+        inner = reg & box
+        assert_close(res.value[inner], exact[inner], 1e-6, "torus section across the passes")
+        assert_close(rep["max_scallop_mm"], r_ - math.sqrt(r_ * r_ - (s / 2 - R_t) ** 2), 1e-6, "bull cusp")
+        # past the pass ends, under the flat bottom (within R_t of the end point) is machined; the rest is border
+        end = np.hypot(np.maximum(np.abs(p[:, 0]) - 4.0, 0.0), d)
+        assert np.array_equal(reg & ~box, res.reached & ~box & (end <= R_t + 1e-9))
+        assert rep["border"]["n_samples"] > 0 and rep["border"]["max_material_mm"] > 0.5
+    assert rep["max_gouge_mm"] < 1e-12
+
+
+def test_ball_raster_on_a_sloped_plane_leaves_the_cusp_along_the_slope():
+    """A plane rising 20 deg across the feed, a 3-axis ball R 5 touching it with contacts s = 1.0353 mm apart
+    along the slope: the material left along the normal at a distance d (along the slope) from the nearest
+    contact line is R - sqrt(R^2 - d^2); the cusp 0.026867 mm. The machined region is the strip between the
+    outer contact lines, over the passes' length."""
+    R, s, th = R_BALL, S_CUSP, math.radians(20.0)
+    along = np.array([0.0, math.cos(th), math.sin(th)])
+    plane = builders.plane_patch(-4 * s * along + [-6.0, 0, 0], (12.0, 0, 0), 8 * s * along)
+    tp = _raster(ms.BallEndMill(2 * R), s, slope=20.0)
+    res = ms.simulate(plane, tp, resolution=s / 20)
+    rep = res.report()
+    c = res.points @ along  # coordinate along the slope
+    d = np.min(np.abs(c[:, None] - (np.arange(5) - 2)[None, :] * s), axis=1)
+    box = (np.abs(res.points[:, 0]) <= 4.0 + 1e-9) & (np.abs(c) <= 2 * s + 1e-9)
+    assert np.array_equal(res.in_region, box & res.reached)
+    assert_close(res.value[box], R - np.sqrt(R * R - d[box] ** 2), 1e-6, "profile along the slope")
+    assert_close(rep["max_scallop_mm"], _cusp(R, s), 1e-6, "cusp on the slope")
+    assert rep["border"]["max_material_mm"] > 0.5 and rep["max_gouge_mm"] < 1e-9
+
+
+def _top_and_wall(delta=0.002):
+    """The pump's mechanism, built here: a top face z = 0 (y < 0) meeting a wall y = 0 (z < 0) at a convex
+    edge; a bull D10 r2 raster over the top, dipping ``delta`` below it (a chord's sag), passes running over
+    the edge (the tool overhangs the wall)."""
+    top = ms.Face(builders.plane_patch((-8, -8, 0), (16, 0, 0), (0, 8, 0)), name="top")
+    wall_s = builders.plane_patch((-8, 0, -6), (16, 0, 0), (0, 0, 6))
+    out = float(ms.local_properties(wall_s, 0.5, 0.5).normal[1]) > 0
+    wall = ms.Face(wall_s, name="wall", reversed=not out)
+    x = np.linspace(-6, 6, 25)
+    tips = [np.stack([x, np.full_like(x, y), np.full_like(x, -delta)], 1) for y in np.arange(-7.0, 3.01, 2.0)]
+    tp = _passes(tips, [np.tile([0.0, 0, 1], (x.size, 1))] * len(tips), ms.BullNoseEndMill(10, 2))
+    return [top, wall], tp
+
+
+def _body_depth(cut, tp, P, step=0.01):
+    """Brute force: the signed distance of points to the tool body placed every ``step`` mm along the
+    moves (3 axes), the smallest over the placements (negative: inside)."""
+    from machsurf_cad.simulation.nbuffer import motion_poses
+
+    T, A, _ = motion_poses(tp.tip, tp.axis, step, float(cut.length))
+    best = np.full(P.shape[0], np.inf)
+    for i in range(0, T.shape[0], 2000):
+        q = P[:, None, :] - T[None, i : i + 2000, :]
+        rho = np.hypot(q[..., 0], q[..., 1])
+        best = np.minimum(best, cut.cutting_distance_rz(rho, q[..., 2]).min(axis=1))
+    return best
+
+
+def test_a_dip_at_a_convex_edge_gouges_its_depth_not_the_length_of_the_wall_blade():
+    """The tool dips 2 um into the top face and holds the edge: the wall's blades at the edge run along the
+    top face under the tool's flat bottom, so along the wall's normal the cut is 1 mm long (the old figure:
+    1 mm "gouges" on every wall, as on the pump's 14 faces). The gouge is the depth of the nominal point
+    inside the swept tool: 2 um, as verify's body check and a brute force here (every 0.01 mm) find."""
+    faces, tp = _top_and_wall(0.002)
+    res = ms.simulate(faces, tp, resolution=0.1)
+    rep = res.report()
+    assert_close(rep["max_gouge_mm"], 0.002, 1e-9, "gouge at the edge")
+    assert not rep["gouged"] and rep["n_unconverged"] == 0 and rep["not_measured"]["n_samples"] == 0
+    walls = rep["faces"][1]
+    assert walls["name"] == "wall" and walls["max_gouge_mm"] == pytest.approx(0.002, abs=1e-9)
+    assert float(-res.normal_value[res.face == 1].min()) > 0.5  # what the thickness along the normal says
+    gouged = np.flatnonzero(res.reached & (res.value < 0))
+    on_wall = gouged[res.face[gouged] == 1]
+    assert on_wall.size > 10
+    gouged = np.concatenate([on_wall, np.random.default_rng(5).choice(gouged, 200, replace=False)])
+    brute = _body_depth(ms.BullNoseEndMill(10, 2), tp, res.points[gouged])
+    assert_close(res.value[gouged], np.minimum(brute, 0.0), 1e-6, "depth inside the tool (brute force)")
+    v = ms.verify(faces, tp)
+    assert abs(v.max_gouge - res.max_gouge) <= 1e-6
+
+
+def test_rays_that_do_not_converge_are_counted_located_and_not_measured(monkeypatch):
+    """Sphere tracing the whole bull body (its general path) crawls along rays that graze its flat bottom: the
+    tool dips 0.0995 mm into the top face, the wall's sample row at z = -0.1 runs 0.5 um under the bottom.
+    Such a ray is neither a gouge nor a scallop: its samples are reported as not measured (count, faces, where)
+    and left out of every figure. The closed-form path measures them all, with the same gouge."""
+    import machsurf_cad.simulation.nbuffer as nb
+
+    faces, tp = _top_and_wall(0.0995)
+    monkeypatch.setattr(nb, "ray_core", lambda cutter: None)
+    res = ms.simulate(faces, tp, resolution=0.1)
+    rep = res.report()
+    nm = rep["not_measured"]
+    assert rep["n_unconverged"] > 0 and nm["n_rays"] == rep["n_unconverged"]
+    assert nm["n_samples"] == int((~res.measured).sum()) > 0 and {f["name"] for f in nm["per_face"]} <= {"top", "wall"}
+    assert len(nm["where_xyz_mm"]) == min(20, nm["n_samples"])
+    assert not (res.in_region & ~res.measured).any() and not (res.on_border & ~res.measured).any()
+    assert_close(rep["max_gouge_mm"], 0.0995, 1e-6, "gouge of the measured samples")
+    monkeypatch.undo()
+    exact = ms.simulate(faces, tp, resolution=0.1)
+    assert exact.n_unconverged == 0 and exact.measured.all()
+    ok = res.measured & res.reached
+    assert_close(res.value[ok], exact.value[ok], 1e-5, "measured samples agree with the closed form")
+
+
+def test_the_torus_quartic_solves_the_grazing_rays_sphere_tracing_cannot():
+    """Rays parallel to a bull's flat bottom, 1e-9 to 1e-2 mm above it, enter its torus where the tube's
+    height above the bottom equals theirs: closed form. Sphere tracing crawls (steps the size of the height);
+    the quartic's root is exact."""
+    from machsurf_cad.simulation.rays import _trace_torus, torus_quartic_entry
+
+    rng = np.random.default_rng(3)
+    R_t, r, m = 3.0, 2.0, 2000
+    eps = 10 ** rng.uniform(-9, -2, m)
+    y = rng.uniform(-4.9, 4.9, m)
+    qp = np.stack([np.full(m, -7.0), y, np.zeros(m)], 1)
+    dp = np.tile([1.0, 0.0, 0.0], (m, 1))
+    t0, stop = np.zeros(m), np.full(m, 20.0)
+    _, st = _trace_torus(R_t, r, qp, dp, eps, np.zeros(m), t0, stop, 600)
+    t, sq = torus_quartic_entry(R_t, r, qp, dp, eps, np.zeros(m), t0, stop)
+    rho = R_t + np.sqrt(np.maximum(r * r - (eps - r) ** 2, 0.0))  # the tube at the ray's height
+    hit = np.abs(y) < rho
+    exact = 7.0 - np.sqrt(np.maximum(rho**2 - y**2, 0.0))
+    assert (st == 3).sum() > m / 4  # the tracing stalls on many
+    assert np.array_equal(sq == 0, hit) and np.all(sq[~hit] == 2)
+    assert_close(t[hit], exact[hit], 1e-8, "entry into the torus")
+
+
+def test_the_map_shows_the_border_and_what_was_not_measured():
+    """The map's point data name each sample's region (1 machined, 0 border, -1 not reached, -2 not measured)."""
+    pytest.importorskip("pyvista")
+    from machsurf_cad.viz.simmap import simulation_polydata
+
+    res = ms.simulate(_plane(3.0, 3.0), _raster(ms.BallEndMill(10), 1.0, n_pass=3, half=1.5), resolution=0.1)
+    reg = np.asarray(simulation_polydata(res).point_data["region"])
+    assert set(np.unique(reg)) >= {0, 1} and np.array_equal(reg == 1, res.in_region)
+    assert np.array_equal(reg == 0, res.on_border)

@@ -75,7 +75,8 @@ def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
         write_step(st.path("envelopes.step"), faces)
         write_stl(st.path("envelopes.stl"), faces, linear_deflection=spec.tol * 10)
         if spec.part:  # the passes' tool path against every face of the part they are for
-            from .run_verify import part_faces, write_checked_toolpath
+            from .inputs import part_faces
+            from .run_verify import write_checked_toolpath
 
             rep["verify"], vcode = write_checked_toolpath(
                 st, say, tp, part_faces(spec.part), spec, tolerance=spec.gouge_tol, render=spec.render

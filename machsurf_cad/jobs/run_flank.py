@@ -107,7 +107,8 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
         if res.path is not None:
             from ..geometry.face import Face
             from ..occ import write_step, write_stl
-            from .run_verify import part_faces, write_checked_toolpath
+            from .inputs import part_faces
+            from .run_verify import write_checked_toolpath
 
             path, env, dev = res.path, res.envelope, res.envelope_deviation
             # the tool body against the part: every face of a STEP part, or the example's surface

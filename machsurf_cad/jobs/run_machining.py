@@ -29,7 +29,7 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
     def part():
         """Every face of the part the face came from (an example is its own part), read once."""
         if not faces_of_part:
-            from .run_verify import part_faces
+            from .inputs import part_faces
 
             faces_of_part.extend(part_faces(spec.part) if spec.part else [face])
         return faces_of_part

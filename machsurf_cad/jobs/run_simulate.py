@@ -4,8 +4,12 @@ from __future__ import annotations
 
 from ..batchrun.runner import chunk_map
 from .base import EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, finish
-from .run_verify import part_faces, toolpath_and_cutter
+from .inputs import part_faces, toolpath_and_cutter
 from .specs import SimulateJob
+
+
+def _mm(v) -> str:
+    return "-" if v is None or v != v else f"{v:.4g} mm"
 
 
 def simulate_path(
@@ -21,7 +25,9 @@ def simulate_path(
     prefix: str = "simulate",
     **kw,
 ):
-    """Simulate ``tp`` on ``faces``; say and draw the result; return ``(SimulationResult, report)``."""
+    """Simulate ``tp`` on ``faces``; say and draw the result; return ``(SimulationResult, report)``. The
+    material left is said for the machined region and for the border apart, the samples not measured
+    (rays that did not converge) with where they lie."""
     from ..simulation import simulate
 
     res = simulate(faces, tp, cutter, tolerance=tolerance, progress=progress, **kw)
@@ -31,15 +37,27 @@ def simulate_path(
         f"{res.resolution_mm:.3g} mm apart, {rep['n_placements']:,} placements ({res.motion_step_mm:.3g} mm apart, "
         f"refined over the motion: last change {res.motion_residual_mm:.2g} mm) in {res.time_s['total_s']:.2f} s"
     )
+    reg, bd, nm = rep["machined_region"], rep["border"], rep["not_measured"]
     say(
-        f"  material left: max {rep['max_scallop_mm']:.4g} mm, mean {rep['mean_scallop_mm']:.4g} mm; "
-        f"max gouge {rep['max_gouge_mm']:.4g} mm (tol {tolerance:g}"
-        + (", deeper than --depth: a lower bound" if rep["gouge_deeper_than_depth"] else "")
-        + f"); not reached within {res.stock_mm:g} mm: {100 * rep['not_reached_fraction']:.1f} % of the samples"
+        f"  machined region (under and between the passes, {100 * reg['area_fraction']:.1f} % of the area): "
+        f"material left max {_mm(rep['max_scallop_mm'])}, mean {_mm(rep['mean_scallop_mm'])}"
     )
-    say("  area above: " + ", ".join(f"{h} mm {100 * f:.1f} %" for h, f in rep["fraction_above_mm"].items()))
-    if rep["n_unconverged"]:
-        say(f"  warning: {rep['n_unconverged']} ray(s) did not converge (their cut is a lower bound)")
+    say(
+        f"  border (reached around the passes, {100 * bd['area_fraction']:.1f} % of the area): material left max "
+        f"{_mm(bd['max_material_mm'])}, mean {_mm(bd['mean_material_mm'])}; not reached within {res.stock_mm:g} mm: "
+        f"{100 * rep['not_reached_fraction']:.1f} % of the samples"
+    )
+    say(
+        f"  max gouge {rep['max_gouge_mm']:.4g} mm (depth inside the swept tool, tol {tolerance:g}) on "
+        f"{rep['n_gouged_samples']} sample(s)"
+    )
+    say("  machined area above: " + ", ".join(f"{h} mm {100 * f:.1f} %" for h, f in rep["fraction_above_mm"].items()))
+    if nm["n_samples"] or nm["n_rays"] or nm["n_motion_probes"]:
+        where = ", ".join(f"{f['name']}: {f['n_samples']}" for f in nm["per_face"][:8])
+        say(
+            f"  warning: {nm['n_rays'] + nm['n_motion_probes']} ray(s) did not converge; {nm['n_samples']} sample(s) "
+            f"not measured (in no figure; report not_measured)" + (f" on {where}" if where else "")
+        )
     if render:
         from ..viz import render_simulation_map
         from ..viz.plots import plot_simulation_histogram
@@ -48,11 +66,12 @@ def simulate_path(
             res,
             st.path(f"{prefix}_map.png"),
             vtp_path=st.path(f"{prefix}_map.vtp"),
-            title=f"{tp.name}: material left (max {rep['max_scallop_mm']:.3g} mm, gouge {rep['max_gouge_mm']:.3g} mm)",
+            title=f"{tp.name}: material left (machined region max {_mm(rep['max_scallop_mm'])}, border max "
+            f"{_mm(bd['max_material_mm'])}, gouge {rep['max_gouge_mm']:.3g} mm)",
         )
         plot_simulation_histogram(
             res.value,
-            res.reached,
+            res.reached & res.measured,
             st.path(f"{prefix}_histogram.png"),
             tolerance=tolerance,
             heights=res.heights_mm,

@@ -22,7 +22,7 @@ def _part(spec: MachiningSurfaceJob):
 
         s = build(spec.example, "surface")
         return [Face(s, name=s.name or spec.example)], f"example {spec.example}"
-    from .run_verify import part_faces
+    from .inputs import part_faces
 
     return part_faces(spec.part), str(spec.part)
 
@@ -38,7 +38,7 @@ def run_three_axis(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> J
     if spec.shank or spec.holder:
         import dataclasses
 
-        from .run_verify import _shank
+        from .inputs import shank as _shank
 
         shank, holder = _shank(spec.shank, "shank"), _shank(spec.holder, "holder")
         cutter = dataclasses.replace(cutter, shank=shank, holder=holder)  # type: ignore[type-var]

@@ -3,47 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
-from typing import Any
 
-from ..errors import InputError
 from .base import EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, finish, write_toolpath
+from .inputs import part_faces, shank, toolpath_and_cutter
 from .specs import VerifyJob
-
-
-def _shank(text: str | None, what: str):
-    """``D=..,L=..`` (mm) as a :class:`~machsurf_cad.cutters.Shank`."""
-    if not text:
-        return None
-    from ..cutters import Shank
-
-    kw = {}
-    for part in text.split(","):
-        k, _, v = part.partition("=")
-        k = k.strip().upper()
-        if k not in ("D", "L") or not v.strip():
-            raise InputError(f"--{what} must be D=..,L=.. (mm), got {text!r}")
-        try:
-            kw[k] = float(v)
-        except ValueError:
-            raise InputError(f"--{what} {k} must be a number, got {v!r}") from None
-    if set(kw) != {"D", "L"}:
-        raise InputError(f"--{what} needs D and L (mm), got {text!r}")
-    return Shank(kw["D"], kw["L"])
-
-
-def part_faces(part: str, faces: str = "all"):
-    """Faces of a STEP part: ``all`` or a comma list of indices."""
-    from ..occ import read_step_faces
-
-    if faces.strip().lower() == "all":
-        return read_step_faces(part)
-    try:
-        idx = [int(x) for x in faces.split(",") if x.strip()]
-    except ValueError:
-        raise InputError(f"--faces must be all or indices like 0,3,5; got {faces!r}") from None
-    return read_step_faces(part, idx)
-
 
 COLLISION_CLEARANCE_MM = 0.01
 """The least distance rapids, shank and holder keep from the part in the jobs (or the gouge tolerance when
@@ -195,38 +158,9 @@ def write_checked_toolpath(st: Staging, say: Say, tp, faces, spec, *, tolerance:
     return rep, code
 
 
-def read_toolpath_file(path: Path):
-    """A tool path from our CSV or an APT CLDATA file, by its suffix."""
-    from ..cam import read_apt, read_csv
-
-    suffix = path.suffix.lower()
-    if not path.is_file():
-        raise InputError(f"tool path file not found: {path}")
-    if suffix == ".csv":
-        return read_csv(path)
-    if suffix in (".apt", ".cls", ".cl", ".aptsource", ".txt"):
-        return read_apt(path)
-    raise InputError(f"tool path must be .csv (ours) or APT CLDATA (.apt, .cls, .cl), got {path.name}")
-
-
-def toolpath_and_cutter(toolpath: str, tool: str | None, say: Say):
-    """The tool path file and its cutter: ``tool`` (a cutter string) wins over the file's CUTTER, with a
-    warning when they disagree; one of them must exist."""
-    from ..toolspec import parse_cutter
-
-    path = Path(toolpath)
-    tp = read_toolpath_file(path)
-    cutter: Any = parse_cutter(tool) if tool else tp.cutter
-    if cutter is None:
-        raise InputError(f"{path.name} names no usable CUTTER: give --tool")
-    if tool and tp.cutter is not None and tp.cutter.apt_parameters() != cutter.apt_parameters():
-        say(f"warning: {path.name} names the tool {tp.cutter.spec()}, --tool says {cutter.spec()}: using --tool")
-    return path, tp, cutter
-
-
 def run_verify(spec: VerifyJob, out, say: Say, progress=None) -> JobOutcome:
     path, tp, cutter = toolpath_and_cutter(spec.toolpath, spec.tool, say)
-    cutter = dataclasses.replace(cutter, shank=_shank(spec.shank, "shank"), holder=_shank(spec.holder, "holder"))
+    cutter = dataclasses.replace(cutter, shank=shank(spec.shank, "shank"), holder=shank(spec.holder, "holder"))
     if cutter.holder is not None and cutter.shank is not None and cutter.holder.diameter < cutter.shank.diameter:
         say("warning: the holder is narrower than the shank")
     faces = part_faces(spec.part, spec.faces)

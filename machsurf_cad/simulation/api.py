@@ -18,6 +18,7 @@ from ..geometry.normals import unit_normals
 from ..gougecheck import _faces, face_size, motion_radius
 from ..results import Progress, Result
 from .nbuffer import motion_poses, nbuffer
+from .region import machined_region, sample_curvature
 
 DEFAULT_HEIGHTS_MM = (0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1)
 """Heights (mm) whose exceeded area fraction the report lists."""
@@ -28,8 +29,18 @@ BYTES_PER_SAMPLE = 400
 
 @dataclass(frozen=True, eq=False)
 class SimulationResult(Result):
-    """Per nominal sample: the signed thickness left along the outward normal (mm: + material left,
-    - gouge), whether any placement reached it, and the figures of the run.
+    """Per nominal sample: the signed thickness left (mm: + material left along the outward normal,
+    - gouge: the depth of the nominal point inside the swept cutting body), whether any placement
+    reached it, whether it was measured, whether it lies in the machined region, and the figures of the run.
+
+    The material-left figures (``max_scallop``, ``mean_scallop``, ``fraction_above``) are those of the
+    **machined region** (under a pass or between two: :mod:`~machsurf_cad.simulation.region`); the
+    unmachined **border** around the passes is reported apart (:meth:`border`). Gouges count everywhere.
+    A sample that is not ``measured`` (a ray that did not converge could still cut it deeper) counts in
+    neither. ``normal_value`` keeps the thickness along the normal also below the nominal (at a convex edge
+    it runs under the neighbouring face: not a gouge depth). ``area`` is each sample's share of the
+    sampled area (mm^2, a quarter of each grid quad it is a corner of): the areas and area fractions of
+    the regions add up to the sampled area; the means are taken over the quads wholly in a region.
 
     ``quads`` (k, 4) indexes the samples of each face's parameter grid whose four corners lie on the
     trimmed face, for maps."""
@@ -57,42 +68,128 @@ class SimulationResult(Result):
     n_marched: int
     n_unconverged: int
     time_s: dict
+    measured: np.ndarray | None = None
+    machined: np.ndarray | None = None
+    normal_value: np.ndarray | None = None
+    area: np.ndarray | None = None
+    n_unconverged_motion: int = 0
+
+    def __post_init__(self) -> None:
+        n = self.points.shape[0]
+        for name, default in (("measured", True), ("machined", True)):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.full(n, default))
+        if self.normal_value is None:
+            object.__setattr__(self, "normal_value", self.value)
+        if self.area is None:
+            object.__setattr__(self, "area", np.ones(n))
+        super().__post_init__()
+
+    @property
+    def areas(self) -> np.ndarray:
+        """Area (mm^2) each sample stands for (set in ``__post_init__`` when not given)."""
+        assert self.area is not None
+        return self.area
+
+    @property
+    def known(self) -> np.ndarray:
+        """Reached and measured samples."""
+        return self.reached & self.measured
+
+    @property
+    def in_region(self) -> np.ndarray:
+        """Reached, measured samples of the machined region."""
+        return self.known & self.machined
+
+    @property
+    def on_border(self) -> np.ndarray:
+        """Reached, measured samples outside the machined region."""
+        return self.known & ~self.machined
 
     @property
     def scallop(self) -> np.ndarray:
-        """Material left (mm, >= 0) at reached samples, 0 where gouged, NaN where nothing reached."""
-        return np.where(self.reached, np.maximum(self.value, 0.0), np.nan)
+        """Material left (mm, >= 0) at reached measured samples (both regions), 0 where gouged, NaN elsewhere."""
+        return np.where(self.known, np.maximum(self.value, 0.0), np.nan)
 
     @property
     def max_scallop(self) -> float:
-        v = self.value[self.reached]
+        """Most material left in the machined region (mm); NaN where it is empty."""
+        v = self.value[self.in_region]
         return float(max(v.max(), 0.0)) if v.size else float("nan")
 
     @property
     def mean_scallop(self) -> float:
-        v = self.value[self.reached]
-        return float(np.maximum(v, 0.0).mean()) if v.size else float("nan")
+        """Mean material left over the machined region (mm): :meth:`region_mean`."""
+        return self.region_mean(np.maximum(self.value, 0.0), self.in_region)
+
+    def region_mean(self, v: np.ndarray, sel: np.ndarray) -> float:
+        """Mean of ``v`` over the area of the grid quads whose four corners are all in ``sel`` (each quad's
+        corner average: the trapezoidal rule, exact to second order in the sample spacing); the plain mean of
+        ``v[sel]`` where no quad lies wholly in it; NaN where ``sel`` is empty."""
+        if not sel.any():
+            return float("nan")
+        q = np.asarray(self.quads, int)
+        q = q[sel[q].all(axis=1)] if q.size else q
+        if q.size == 0:
+            return float(v[sel].mean())
+        P = self.points
+        a = 0.5 * np.linalg.norm(np.cross(P[q[:, 2]] - P[q[:, 0]], P[q[:, 3]] - P[q[:, 1]]), axis=1)
+        return float((a * v[q].mean(axis=1)).sum() / a.sum()) if a.sum() > 0 else float(v[sel].mean())
 
     @property
     def max_gouge(self) -> float:
-        """Deepest cut below the nominal (mm, >= 0); ``depth_mm`` is a lower bound where ``clamped``."""
-        v = self.value[self.reached]
+        """Deepest cut below the nominal over every measured sample (mm, >= 0): the depth of the nominal point
+        inside the swept cutting body."""
+        v = self.value[self.known]
         return float(max(-v.min(), 0.0)) if v.size else 0.0
 
     @property
     def gouged(self) -> bool:
         return self.max_gouge > self.tolerance_mm
 
-    def fraction_above(self, h: float) -> float:
-        """Fraction (0..1) of the reached samples with more than ``h`` mm of material left."""
-        r = self.reached
-        return float((self.value[r] > h).mean()) if r.any() else 0.0
+    def fraction_above(self, h: float, where: np.ndarray | None = None) -> float:
+        """Area fraction (0..1) of the machined region (or of ``where``) with more than ``h`` mm left."""
+        sel = self.in_region if where is None else where
+        a = self.area[sel]
+        return float(a[self.value[sel] > h].sum() / a.sum()) if a.sum() > 0 else 0.0
+
+    def border(self) -> dict:
+        """The unmachined border: samples, area (mm^2) and its fraction of the sampled area, material left."""
+        b = self.on_border
+        v = self.value[b]
+        total = float(self.areas.sum())
+        return {
+            "n_samples": int(b.sum()),
+            "area_mm2": float(self.areas[b].sum()),
+            "area_fraction": float(self.areas[b].sum()) / total if total > 0 else 0.0,
+            "max_material_mm": float(max(v.max(), 0.0)) if v.size else None,
+            "mean_material_mm": self.region_mean(np.maximum(self.value, 0.0), b),
+            "max_gouge_mm": float(max(-v.min(), 0.0)) if v.size else 0.0,
+            "fraction_above_mm": {f"{h:g}": self.fraction_above(h, b) for h in self.heights_mm},
+        }
+
+    def not_measured(self, n_where: int = 20) -> dict:
+        """Samples a ray that did not converge leaves unknown: counts per face and where (the first few)."""
+        bad = ~self.measured
+        idx = np.flatnonzero(bad)
+        faces, counts = np.unique(self.face[idx], return_counts=True)
+        return {
+            "n_samples": int(idx.size),
+            "n_rays": int(self.n_unconverged),
+            "n_motion_probes": int(self.n_unconverged_motion),
+            "per_face": [
+                {"face": int(f), "name": self.face_names[int(f)], "n_samples": int(c)} for f, c in zip(faces, counts)
+            ],
+            "where_xyz_mm": self.points[idx[:n_where]].tolist(),
+        }
 
     def report(self) -> dict:
         n = int(self.points.shape[0])
         nr = int(self.reached.sum())
         t = float(self.time_s.get("total_s", float("nan")))
-        v = self.value[self.reached]
+        v = self.value[self.in_region]
+        total = float(self.areas.sum())
+        known = self.value[self.known]
         return {
             "n_samples": n,
             "resolution_mm": self.resolution_mm,
@@ -104,11 +201,18 @@ class SimulationResult(Result):
             "max_scallop_mm": self.max_scallop,
             "mean_scallop_mm": self.mean_scallop,
             "median_scallop_mm": float(np.median(np.maximum(v, 0.0))) if v.size else float("nan"),
+            "machined_region": {
+                "n_samples": int(self.in_region.sum()),
+                "area_mm2": float(self.area[self.in_region].sum()),
+                "area_fraction": float(self.area[self.in_region].sum()) / total if total > 0 else 0.0,
+            },
+            "border": self.border(),
+            "not_measured": self.not_measured(),
             "max_gouge_mm": self.max_gouge,
             "gouge_tolerance_mm": self.tolerance_mm,
             "gouged": self.gouged,
-            "n_gouged_samples": int((v < -self.tolerance_mm).sum()),
-            "gouge_deeper_than_depth": bool(self.clamped.any()),
+            "n_gouged_samples": int((known < -self.tolerance_mm).sum()),
+            "gouge_deeper_than_depth": bool(self.max_gouge > self.depth_mm),
             "fraction_above_mm": {f"{h:g}": self.fraction_above(h) for h in self.heights_mm},
             "depth_mm": self.depth_mm,
             "stock_mm": self.stock_mm,
@@ -125,24 +229,41 @@ class SimulationResult(Result):
         }
 
     def per_face(self) -> list[dict]:
-        """Per face: samples, reached fraction, max and mean material left, max gouge (mm)."""
+        """Per face: samples, reached and machined fractions, material left in the machined region and on the
+        border, max gouge (mm), samples not measured."""
         out = []
         for i, name in enumerate(self.face_names):
             sel = self.face == i
-            r = sel & self.reached
+            r = sel & self.known
             v = self.value[r]
+            vm = self.value[sel & self.in_region]
+            vb = self.value[sel & self.on_border]
             out.append(
                 {
                     "face": i,
                     "name": name,
                     "n_samples": int(sel.sum()),
-                    "reached_fraction": float(r.sum() / max(1, sel.sum())),
-                    "max_scallop_mm": float(max(v.max(), 0.0)) if v.size else None,
-                    "mean_scallop_mm": float(np.maximum(v, 0.0).mean()) if v.size else None,
+                    "reached_fraction": float((sel & self.reached).sum() / max(1, sel.sum())),
+                    "machined_fraction": float((sel & self.in_region).sum() / max(1, sel.sum())),
+                    "max_scallop_mm": float(max(vm.max(), 0.0)) if vm.size else None,
+                    "mean_scallop_mm": float(np.maximum(vm, 0.0).mean()) if vm.size else None,
+                    "border_max_material_mm": float(max(vb.max(), 0.0)) if vb.size else None,
                     "max_gouge_mm": float(max(-v.min(), 0.0)) if v.size else 0.0,
+                    "n_not_measured": int((sel & ~self.measured).sum()),
                 }
             )
         return out
+
+
+def sample_areas(P: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Each sample's share of the sampled area (mm^2): a quarter of every grid quad it is a corner of (the
+    quad's area as half the cross product of its diagonals)."""
+    out = np.zeros(P.shape[0])
+    if Q.size:
+        q = np.asarray(Q, int)
+        a = 0.5 * np.linalg.norm(np.cross(P[q[:, 2]] - P[q[:, 0]], P[q[:, 3]] - P[q[:, 1]]), axis=1)
+        np.add.at(out, q.ravel(), np.repeat(0.25 * a, 4))
+    return out
 
 
 def _face_size(face: Face) -> tuple[float, float]:
@@ -207,6 +328,12 @@ def simulate(
 ) -> SimulationResult:
     """Simulate the cut of a tool path on the nominal faces (N-buffer) and measure what it leaves.
 
+    The material left is reported for the machined region (under the cutting passes and between
+    adjacent ones, :mod:`~machsurf_cad.simulation.region`) and, apart, for the unmachined border around
+    them (``report()["border"]``); gouges are the depth of the nominal point inside the swept cutting
+    body, the figure :func:`~machsurf_cad.verify` measures. Samples a ray that did not converge leaves
+    unknown are not measured: counted and located (``report()["not_measured"]``), in no figure.
+
     Parameters
     ----------
     part : Face, BSplineSurface or sequence of them
@@ -221,13 +348,15 @@ def simulate(
     tolerance : float
         A cut deeper than this below the nominal is a gouge (mm).
     depth, stock : float
-        Length of each sample's blade inside and outside the part, mm: gouges deeper than ``depth``
-        are reported as ``depth`` (and flagged), material thicker than ``stock`` as not reached.
+        Length of each sample's blade inside and outside the part, mm: a placement is looked for within
+        them; material thicker than ``stock`` is not reached. A gouge's depth (inside the swept body)
+        is measured whatever ``depth``; ``clamped`` flags a cut along the normal beyond it.
     motion_step : float, optional
         Largest move of any point of the cutting part between simulated placements, mm (the motion
         between them is then refined); default: the tool radius / 10.
     heights : tuple of float
-        Heights (mm) whose exceeded area fractions are reported.
+        Heights (mm) whose exceeded area fractions are reported (of the machined region; of the border
+        apart).
     max_samples : int
         Memory budget in samples (about 400 bytes each); a finer resolution is refused with its size.
     chunks : int
@@ -264,9 +393,14 @@ def simulate(
     (0.101, 0.101)
     """
     t0 = time.perf_counter()
-    c = cutter if cutter is not None else toolpath.cutter
+    from .. import checks
+
+    toolpath = checks.toolpath(toolpath)
+    c = checks.tool(cutter) if cutter is not None else toolpath.cutter
     if c is None:
         raise InputError("simulate needs the tool: the path carries no cutter (give --tool)")
+    resolution = None if resolution is None else checks.positive("resolution", resolution)
+    motion_step = None if motion_step is None else checks.positive("motion step", motion_step)
     for name, val in (("depth", depth), ("stock", stock), ("tolerance", tolerance)):
         if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
             raise InputError(f"{name} must be > 0 mm, got {val!r}")
@@ -292,38 +426,57 @@ def simulate(
     if check_chunks(chunks) == 1:
         kw["progress"] = progress
     out = _merge_chunks(split_map(functools.partial(_nbuffer_chunk, c, T, A, kw), [P, N], chunks, map_chunks))
-    value, clamped = out["t"], out["clamped"]
     t2 = time.perf_counter()
     if not out["reached"].any():
         raise InputError(
             f"no contact: no tool placement comes within {stock:g} mm of the {len(faces)} face(s) "
             "(wrong part, faces or tool path?)"
         )
-    times = {"sampling_s": t1 - t0, "simulation_s": t2 - t1, "total_s": time.perf_counter() - t0}
+    machined = machined_region(
+        c, toolpath, P, N, out["reached"], depth=depth, stock=stock, touch=tolerance,
+        curvature=sample_curvature(P, N, Q),
+    )  # fmt: skip
+    t3 = time.perf_counter()
+    times = {"sampling_s": t1 - t0, "simulation_s": t2 - t1, "region_s": t3 - t2, "total_s": t3 - t0}
+    figures = dict(
+        resolution_mm=float(resolution),
+        depth_mm=float(depth),
+        stock_mm=float(stock),
+        tolerance_mm=float(tolerance),
+        motion_step_mm=step,
+        motion_bound_smooth_mm=step * step / (8 * rho) if smooth else None,
+        heights_mm=tuple(float(h) for h in heights),
+        n_placements=int(T.shape[0]),
+        time_s=times,
+    )
+    return _result(toolpath, c, faces, (P, N, F, Q), out, machined, figures)
+
+
+def _result(toolpath, cutter, faces, samples, out: dict, machined, figures: dict) -> SimulationResult:
+    """The :class:`SimulationResult` of a run: samples ``(P, N, F, Q)``, the merged N-buffer output, the
+    machined region and the run's figures."""
+    P, N, F, Q = samples
     return SimulationResult(
-        toolpath,
-        c,
-        P,
-        N,
-        F,
-        value,
-        out["reached"],
-        clamped,
-        Q,
-        tuple(f.name or f"face_{i}" for i, f in enumerate(faces)),
-        float(resolution),
-        float(depth),
-        float(stock),
-        float(tolerance),
-        step,
-        step * step / (8 * rho) if smooth else None,
-        out["motion_residual_mm"],
-        tuple(float(h) for h in heights),
-        int(T.shape[0]),
-        out["n_pairs"],
-        out["n_marched"],
-        out["n_unconverged"],
-        times,
+        toolpath=toolpath,
+        cutter=cutter,
+        points=P,
+        normals=N,
+        face=F,
+        value=out["t"],
+        reached=out["reached"],
+        clamped=out["clamped"],
+        quads=Q,
+        face_names=tuple(f.name or f"face_{i}" for i, f in enumerate(faces)),
+        motion_residual_mm=out["motion_residual_mm"],
+        n_pairs=out["n_pairs"],
+        n_marched=out["n_marched"],
+        n_unconverged=out["n_unconverged"],
+        measured=out["measured"],
+        machined=machined,
+        normal_value=out["t_normal"],
+        area=sample_areas(P, Q),
+        n_unconverged_motion=out["n_unconverged_motion"],
+        **figures,
     )
 
 
@@ -335,8 +488,9 @@ def _nbuffer_chunk(cutter, T, A, kw, P, N) -> dict:
 def _merge_chunks(parts: list) -> dict:
     if len(parts) == 1:
         return parts[0]
-    out: dict[str, Any] = {k: np.concatenate([p[k] for p in parts]) for k in ("t", "reached", "clamped", "pose")}
-    for k in ("n_pairs", "n_marched", "n_refined", "n_unconverged"):
+    keys = ("t", "t_normal", "reached", "measured", "clamped", "pose")
+    out: dict[str, Any] = {k: np.concatenate([p[k] for p in parts]) for k in keys}
+    for k in ("n_pairs", "n_marched", "n_refined", "n_unconverged", "n_unconverged_motion"):
         out[k] = int(sum(p[k] for p in parts))
     out["motion_residual_mm"] = float(max(p["motion_residual_mm"] for p in parts))
     return out
@@ -357,4 +511,4 @@ def _has_sharp_corner(cutter) -> bool:
     return False
 
 
-__all__ = ["simulate", "SimulationResult", "sample_faces", "DEFAULT_HEIGHTS_MM"]
+__all__ = ["simulate", "SimulationResult", "sample_faces", "sample_areas", "DEFAULT_HEIGHTS_MM"]

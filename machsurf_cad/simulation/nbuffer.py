@@ -4,8 +4,15 @@ After Jerard, Drysdale et al.: every sample of the nominal surface carries a "bl
 outward unit normal ``n``, from ``-depth`` (inside the part) to ``+stock`` (outside). Every tool
 placement removes the part of the blade inside the tool's cutting body; what is left is the blade
 from ``-depth`` up to the lowest point where it enters a tool body. The signed result per sample is
-that entry parameter ``t`` (mm along ``n``): ``t > 0`` is material left (a scallop, an undercut),
-``t < 0`` a gouge of depth ``-t``.
+that entry parameter ``t`` (mm along ``n``): ``t > 0`` is material left (a scallop, an undercut).
+
+Where the tool cut below the nominal (``t < 0``) the gouge is measured as the depth of the nominal point
+inside the swept cutting body (its signed distance to the body, :func:`inside_depth`), the figure
+:func:`~machsurf_cad.gougecheck.verify` measures: along the normal the cut can be far longer than deep.
+At a convex edge the blade of a wall runs just under the neighbouring face; a tool that dips 2 um into
+that face (a chord's sag) holds the edge's nominal point and meets the wall's blade all along its
+flat bottom: 1 mm "deep" along the wall's normal, 2 um deep in fact. For a gouge inside a smooth face
+the two agree to first order (the distance is never more than the length along the normal).
 
 Exactness:
 
@@ -15,9 +22,11 @@ Exactness:
   point to the body is exact for line and arc profiles
   (:meth:`~machsurf_cad.cutters.Cutter.cutting_distance_rz`), and the ray is marched by that
   distance (sphere tracing: each step is the distance to the body, so no step passes through it)
-  until the distance is below ``1e-7`` mm. A march that has not converged in ``max_steps`` (the
-  torus: ten times that) leaves its lower bound (a deeper cut, on the safe side for gouges) and is
-  counted.
+  until the distance is below ``1e-7`` mm. A torus march that has not converged in ten times
+  ``max_steps`` (a ray grazing the torus) is solved exactly on the ray-torus quartic instead. A march
+  that still has no entry (a general profile after ``max_steps``) is never taken as a cut: its lower
+  bound is kept aside, and a sample whose entry found is not below it is **not measured** (reported
+  apart, counted in neither the material left nor the gouges).
 * **The motion between placements** is sampled ``motion_step`` mm apart (tip and every point of the
   cutting part, axis interpolated linearly and normalised, as :func:`~machsurf_cad.gougecheck.verify`
   does). For each sample the best placement and its two neighbours are then refined by four rounds of
@@ -176,14 +185,17 @@ def nbuffer(
     placement within it of a sample's best is kept and refined over the motion around it (one per
     local minimum along the path: the neighbouring passes each get theirs).
 
-    Returns a dict of arrays per sample: ``t`` (mm, ``+stock`` where nothing reached), ``reached``,
-    ``clamped`` (cut below ``-depth``), ``pose`` (best placement, fractional), and figures
-    ``n_pairs``, ``n_marched``, ``n_refined``, ``n_unconverged``, ``motion_residual_mm``.
+    Returns a dict of arrays per sample: ``t`` (mm, ``+stock`` where nothing reached; where negative, the
+    depth of the nominal point inside the swept body), ``t_normal`` (the entry along the normal, also
+    below the nominal), ``reached``, ``measured`` (see the module docstring), ``clamped`` (cut below
+    ``-depth`` along the normal), ``pose`` (best placement, fractional), and figures ``n_pairs``,
+    ``n_marched``, ``n_refined``, ``n_unconverged`` (rays at placements), ``n_unconverged_motion``
+    (probes over the motion), ``motion_residual_mm``.
     """
     m = P.shape[0]
     best = np.full(m, np.inf)
     clamped = np.zeros(m, bool)
-    stats = {"unconv": 0, "marched": 0}
+    stats: dict = {"unconv": 0, "unconv_motion": 0, "marched": 0, "unconv_lb": []}
     records: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     n_pairs = 0
     heights, radii = cover_spheres(cutter)
@@ -217,17 +229,7 @@ def nbuffer(
         known = None if sharp else _Known(rs, rp, rt, n_poses)
         keep = (rt <= best[rs] + margin) & ~clamped[rs]
         rs, rp, rt = rs[keep], rp[keep], rt[keep]
-        # one per local minimum along the path: drop a placement whose neighbour on the path cuts deeper
-        o = np.lexsort((rp, rs))
-        rs, rp, rt = rs[o], rp[o], rt[o]
-        same_next = np.zeros(rs.size, bool)
-        same_next[:-1] = (rs[1:] == rs[:-1]) & (rp[1:] == rp[:-1] + 1)
-        lower_next = np.zeros(rs.size, bool)
-        lower_next[:-1] = same_next[:-1] & (rt[1:] < rt[:-1])
-        lower_prev = np.zeros(rs.size, bool)
-        lower_prev[1:] = same_next[:-1] & (rt[:-1] < rt[1:])
-        loc = ~(lower_next | lower_prev)
-        rs, rp, rt = rs[loc], rp[loc], rt[loc]
+        rs, rp, rt = _local_minima(rs, rp, rt)
         # the lowest sampled candidate of each sample first; the others only where they can still beat it
         o = np.lexsort((rt, rs))
         rs, rp, rt = rs[o], rp[o], rt[o]
@@ -243,11 +245,15 @@ def nbuffer(
             s_s, s_p, s_t = rs[stage], rp[stage], rt[stage]
             n_refined += int(s_s.size)
             if sharp:  # the search probes inside the bracket only
-                t_ref, x_ref, res_ = _refine_golden(cutter, P[s_s], N[s_s], T, A, s_p, s_t, depth, stock)
+                t_ref, x_ref, res_, lb_ = _refine_golden(cutter, P[s_s], N[s_s], T, A, s_p, s_t, depth, stock)
             else:  # the bracket's ends are the neighbouring placements, mostly marched already
                 assert known is not None
                 nb = known.neighbours(s_s, s_p)
-                t_ref, x_ref, res_ = _refine_motion(cutter, P[s_s], N[s_s], T, A, s_p, s_t, depth, stock, nb)
+                t_ref, x_ref, res_, lb_ = _refine_motion(cutter, P[s_s], N[s_s], T, A, s_p, s_t, depth, stock, nb)
+            unc = np.isfinite(lb_)  # probes that did not converge: their lower bounds are kept aside
+            if unc.any():
+                stats["unconv_motion"] += int(unc.sum())
+                stats["unconv_lb"].append((s_s[unc], lb_[unc]))
             residual = max(residual, res_)
             o2 = np.lexsort((t_ref, s_s))
             s_s, t_ref, x_ref = s_s[o2], t_ref[o2], x_ref[o2]
@@ -258,18 +264,116 @@ def nbuffer(
             pose[s_s[first][better]] = x_ref[first][better]
     if progress is not None:
         progress(1, 1, "simulating the cut")
-    t_out = np.where(reached, best, stock)
+    out = _finish(cutter, P, T, A, best, reached, stats, heights, radii, margin, stock)
+    out.update(
+        clamped=clamped,
+        pose=pose,
+        n_pairs=int(n_pairs),
+        n_marched=int(stats["marched"]),
+        n_refined=n_refined,
+        motion_residual_mm=float(residual),
+    )
+    return out
+
+
+def _finish(cutter, P, T, A, best, reached, stats, heights, radii, margin, stock) -> dict:
+    """Per sample: the thickness along the normal ``t_normal``; the signed value ``t`` (the same, but the
+    depth of the nominal point inside the swept body where the tool cut below it); ``measured`` (False
+    where a march that did not converge could still lie below the entry found)."""
+    m = P.shape[0]
+    lb = np.full(m, np.inf)
+    for s_, t_ in stats["unconv_lb"]:
+        np.minimum.at(lb, s_, t_)
+    measured = ~(lb < best - 1e-9)
+    t_normal = np.where(reached, best, stock)
+    value = t_normal.copy()
+    below = np.flatnonzero(reached & (best < 0))
+    if below.size:
+        value[below] = np.minimum(inside_depth(cutter, P[below], T, A, heights, radii, margin), 0.0)
     return {
-        "t": t_out,
+        "t": value,
+        "t_normal": t_normal,
         "reached": reached,
-        "clamped": clamped,
-        "pose": pose,
-        "n_pairs": int(n_pairs),
-        "n_marched": int(stats["marched"]),
-        "n_refined": n_refined,
+        "measured": measured,
         "n_unconverged": int(stats["unconv"]),
-        "motion_residual_mm": float(residual),
+        "n_unconverged_motion": int(stats["unconv_motion"]),
     }
+
+
+def inside_depth(cutter, P, T, A, heights, radii, margin: float, iterations: int = GOLDEN_ITERATIONS + 4):
+    """Signed distance (mm) of points to the swept cutting body, negative inside; ``inf`` where no placement
+    comes within ``margin``.
+
+    Per placement the distance is exact (:meth:`~machsurf_cad.cutters.Cutter.cutting_distance_rz`); the
+    motion between placements can come up to ``margin`` closer (the sagitta bound of the simulation), so the
+    motion on each side of every placement within ``margin`` of a point's smallest value is searched by
+    golden section. Between two placements the tool translates along a line (3 axes; nearly so with a
+    turning axis), and the signed distance of a point to a translating convex body is convex along it: one
+    minimum per interval, which the search closes on (to ``0.618^iterations`` of the interval). The lowest
+    value seen is kept.
+    """
+    m = P.shape[0]
+    recs = []
+    for _s, _e, si, pi in candidate_pairs(cKDTree(P), T, A, heights, radii, margin):
+        if si.size:
+            g = _distance(cutter, P[si], P[si], np.zeros(si.size), T[pi], A[pi])
+            keep = g <= margin
+            recs.append((si[keep], pi[keep], g[keep]))
+    best = np.full(m, np.inf)
+    n = T.shape[0]
+    if not recs:
+        return best
+    rs, rp, rg = (np.concatenate(x) for x in zip(*recs))
+    np.minimum.at(best, rs, rg)
+    keep = rg <= best[rs] + margin
+    rs, rp = rs[keep], rp[keep]
+    # the intervals [j, j + 1] on each side of the candidates, each once
+    key = np.unique(np.concatenate([rs * n + rp - 1, rs * n + rp]).astype(np.int64))
+    js, jp = key // n, key % n
+    ok = (jp >= 0) & (jp < n - 1) & (key >= 0)
+    js, jp = js[ok], jp[ok]
+    if js.size == 0:
+        return best
+    Pi = P[js]
+    zero = np.zeros(js.size)
+
+    def f(x):
+        tip, ax = _pose_at(T, A, x)
+        return _distance(cutter, Pi, Pi, zero, tip, ax)
+
+    gr = (math.sqrt(5.0) - 1.0) / 2.0
+    a, b = jp.astype(float), jp + 1.0
+    x1, x2 = b - gr * (b - a), a + gr * (b - a)
+    f1, f2 = f(x1), f(x2)
+    low = np.minimum(f1, f2)
+    for _ in range(iterations):
+        left = f1 <= f2  # the lowest value lies in [a, x2]
+        b = np.where(left, x2, b)
+        a = np.where(left, a, x1)
+        nx1 = np.where(left, b - gr * (b - a), x2)
+        nx2 = np.where(left, x1, a + gr * (b - a))
+        fp = f(np.where(left, nx1, nx2))
+        f1, f2 = np.where(left, fp, f2), np.where(left, f1, fp)
+        x1, x2 = nx1, nx2
+        low = np.minimum(low, fp)
+    np.minimum.at(best, js, low)
+    return best
+
+
+def _local_minima(rs, rp, rt):
+    """The (sample, placement, value) records that are local minima along the path: a placement whose
+    neighbour on the path has a lower value for the same sample is dropped (one per valley: the
+    neighbouring passes each keep theirs)."""
+    o = np.lexsort((rp, rs))
+    rs, rp, rt = rs[o], rp[o], rt[o]
+    same_next = np.zeros(rs.size, bool)
+    same_next[:-1] = (rs[1:] == rs[:-1]) & (rp[1:] == rp[:-1] + 1)
+    lower_next = np.zeros(rs.size, bool)
+    lower_next[:-1] = same_next[:-1] & (rt[1:] < rt[:-1])
+    lower_prev = np.zeros(rs.size, bool)
+    lower_prev[1:] = same_next[:-1] & (rt[:-1] < rt[1:])
+    loc = ~(lower_next | lower_prev)
+    return rs[loc], rp[loc], rt[loc]
 
 
 def _settle(cutter, P, N, T, A, si, pi, best, clamped, depth, stock, margin, max_steps, stats, records):
@@ -303,7 +407,11 @@ def _settle(cutter, P, N, T, A, si, pi, best, clamped, depth, stock, margin, max
         stats["marched"] += a_s.size
         # a placement away from the nominal point (g0 > 0) can only count at t >= g0 (see the docstring): start there
         t, st = march(cutter, P[a_s], N[a_s], T[a_p], A[a_p], np.where(a_g > 0, a_g, -depth), stock, max_steps)
-        stats["unconv"] += int((st == 3).sum())
+        unc = st == 3  # not converged: its lower bound is kept aside, never taken as the entry
+        if unc.any():
+            stats["unconv"] += int(unc.sum())
+            stats["unconv_lb"].append((a_s[unc], t[unc]))
+            t = np.where(unc, np.inf, t)
         t = np.where((t < 0) & (a_g > 0), np.inf, t)  # cuts below the nominal only: see the docstring
         fin = np.isfinite(t)
         records.append((a_s[fin], a_p[fin], t[fin]))
@@ -326,15 +434,24 @@ def _pose_at(T, A, x):
     return tip, a / np.linalg.norm(a, axis=1, keepdims=True)
 
 
-def _entry_at(cutter, P, N, T, A, x, t_hint, depth, stock):
+def _entry_at(cutter, P, N, T, A, x, t_hint, depth, stock, lb=None):
+    """Entry of each blade into the placement at fractional index ``x`` (``inf``: none that counts).
+
+    A march that has not converged gives no entry here; its lower bound goes into ``lb`` (per row, in
+    place: the sample is then not measured unless its final entry lies below that bound)."""
     tip, a = _pose_at(T, A, x)
     # warm start a little below the current best entry; from -depth where that start is inside
     start = np.maximum(t_hint - 0.05 * (depth + stock) - 1e-3, -depth)
     t, st = march(cutter, P, N, tip, a, start, stock)
     redo = (st == 1) & (start > -depth)
     if redo.any():
-        t2, _ = march(cutter, P[redo], N[redo], tip[redo], a[redo], -depth, stock)
-        t[redo] = t2
+        t2, st2 = march(cutter, P[redo], N[redo], tip[redo], a[redo], -depth, stock)
+        t[redo], st[redo] = t2, st2
+    unc = st == 3
+    if unc.any():
+        if lb is not None:
+            lb[unc] = np.minimum(lb[unc], t[unc])
+        t[unc] = np.inf
     below = t < 0
     if below.any():  # a cut below the nominal counts only when the tool holds the nominal point itself
         g0 = _distance(cutter, P[below], N[below], np.zeros(int(below.sum())), tip[below], a[below])
@@ -366,14 +483,16 @@ class _Known:
         return self._get(s, p - 1), self._get(s, p + 1)
 
 
-def _entry_or_known(cutter, P, N, T, A, x, t_hint, depth, stock, known):
+def _entry_or_known(cutter, P, N, T, A, x, t_hint, depth, stock, known, lb):
     if known is None:
-        return _entry_at(cutter, P, N, T, A, x, t_hint, depth, stock)
+        return _entry_at(cutter, P, N, T, A, x, t_hint, depth, stock, lb)
     out = np.array(known, float, copy=True)
     # the path's ends clamp x to the neighbour index itself: recompute there as well
     miss = np.isnan(out)
     if miss.any():
-        out[miss] = _entry_at(cutter, P[miss], N[miss], T, A, x[miss], t_hint[miss], depth, stock)
+        sub = lb[miss]
+        out[miss] = _entry_at(cutter, P[miss], N[miss], T, A, x[miss], t_hint[miss], depth, stock, sub)
+        lb[miss] = sub
     return out
 
 
@@ -387,8 +506,9 @@ def _refine_golden(cutter, P, N, T, A, k, t_k, depth, stock, iterations: int = G
     a = np.maximum(k - 1.0, 0.0)
     b = np.minimum(k + 1.0, n - 1.0)
     x1, x2 = b - g * (b - a), a + g * (b - a)
-    f1 = _entry_at(cutter, P, N, T, A, x1, t_k, depth, stock)
-    f2 = _entry_at(cutter, P, N, T, A, x2, t_k, depth, stock)
+    lb = np.full(P.shape[0], np.inf)
+    f1 = _entry_at(cutter, P, N, T, A, x1, t_k, depth, stock, lb)
+    f2 = _entry_at(cutter, P, N, T, A, x2, t_k, depth, stock, lb)
     best_f, best_x = t_k.copy(), k.astype(float)
     for _ in range(iterations):
         left = f1 <= f2  # the lowest value lies in [a, x2]
@@ -399,7 +519,7 @@ def _refine_golden(cutter, P, N, T, A, k, t_k, depth, stock, iterations: int = G
         nf1 = np.where(left, np.nan, f2)
         nf2 = np.where(left, f1, np.nan)
         probe = np.where(left, nx1, nx2)
-        fp = _entry_at(cutter, P, N, T, A, probe, np.minimum(best_f, t_k), depth, stock)
+        fp = _entry_at(cutter, P, N, T, A, probe, np.minimum(best_f, t_k), depth, stock, lb)
         f1 = np.where(left, fp, nf1)
         f2 = np.where(left, nf2, fp)
         x1, x2 = nx1, nx2
@@ -410,24 +530,27 @@ def _refine_golden(cutter, P, N, T, A, k, t_k, depth, stock, iterations: int = G
     inner = np.fmin(f1, f2)
     fin = np.isfinite(inner)
     residual = float((inner - best_f)[fin].max()) if fin.any() else 0.0
-    return best_f, best_x, residual
+    return best_f, best_x, residual, lb
 
 
 def _refine_motion(cutter, P, N, T, A, k, t_k, depth, stock, neighbours=None):
     """Rounds of safeguarded parabolic interpolation of the entry over the placement index.
 
     ``neighbours``: the entries already marched at placements ``k - 1`` and ``k + 1`` (NaN where not
-    known; those are marched here)."""
+    known; those are marched here). Returns the best entry, its index, the last round's change and the
+    lowest lower bound of the marches that did not converge (per row, ``inf`` where none)."""
     n = T.shape[0]
     x0 = k.astype(float)
     xl, xr = np.maximum(x0 - 1, 0.0), np.minimum(x0 + 1, n - 1.0)
-    fl = _entry_or_known(cutter, P, N, T, A, xl, t_k, depth, stock, None if neighbours is None else neighbours[0])
-    fr = _entry_or_known(cutter, P, N, T, A, xr, t_k, depth, stock, None if neighbours is None else neighbours[1])
+    lb = np.full(P.shape[0], np.inf)
+    nl, nr = (None, None) if neighbours is None else neighbours
+    fl = _entry_or_known(cutter, P, N, T, A, xl, t_k, depth, stock, nl, lb)
+    fr = _entry_or_known(cutter, P, N, T, A, xr, t_k, depth, stock, nr, lb)
     xb, fb = x0.copy(), t_k.copy()
     residual = 0.0
     for _ in range(REFINE_ROUNDS):
         xv = _parabola_vertex(xl, fl, xb, fb, xr, fr)
-        fv = _entry_at(cutter, P, N, T, A, xv, fb, depth, stock)
+        fv = _entry_at(cutter, P, N, T, A, xv, fb, depth, stock, lb)
         gain = np.where(np.isfinite(fv), np.maximum(fb - fv, 0.0), 0.0)
         residual = float(gain.max()) if gain.size else 0.0
         # keep a bracket around the best of the four points
@@ -441,7 +564,7 @@ def _refine_motion(cutter, P, N, T, A, k, t_k, depth, stock, neighbours=None):
         xb = np.where(better, xv, xb)
         fb = np.where(better, fv, fb)
         xl, fl, xr, fr = nxl, nfl, nxr, nfr
-    return fb, xb, residual
+    return fb, xb, residual, lb
 
 
 def _parabola_vertex(x1, f1, x2, f2, x3, f3):

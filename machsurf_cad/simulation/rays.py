@@ -11,7 +11,10 @@ three pieces whose ray intersections are closed forms or nearly so:
 
 Cylinders and spheres are intervals of a quadratic and a slab (exact); the torus is sphere-traced on
 its own exact distance, which stays fast because its surface curves away from a grazing ray (sphere
-tracing on the whole body crawls along a ray that runs just outside the cylindrical side).
+tracing on the whole body crawls along a ray that runs just outside the cylindrical side). A ray that
+grazes the torus itself (one running just above a bull-nose's flat bottom, along a wall under the tool)
+makes sphere tracing crawl too: where it has not converged the entry is solved exactly instead, as the
+smallest root of the ray-torus quartic on which the torus distance vanishes (:func:`torus_quartic_entry`).
 """
 
 from __future__ import annotations
@@ -103,8 +106,12 @@ def ray_entry(core, P, N, T, A, t_start, t_end: float, max_steps: int = 60):
         stop = np.minimum(entry, t_end)
         cand = np.flatnonzero(~inside & (blo <= bhi) & (bhi >= t0) & (blo <= stop))
         if cand.size:
-            tt, st = _trace_torus(R_t, r, qp[cand], dp[cand], qz[cand], dz[cand], np.maximum(blo[cand], t0[cand]),
-                                  stop[cand], 10 * max_steps)  # fmt: skip
+            args = (R_t, r, qp[cand], dp[cand], qz[cand], dz[cand], np.maximum(blo[cand], t0[cand]), stop[cand])
+            tt, st = _trace_torus(*args, 10 * max_steps)
+            slow = np.flatnonzero(st == 3)  # a grazing ray: the quartic's exact root instead
+            if slow.size:
+                tq, sq = torus_quartic_entry(*(x[slow] if np.ndim(x) else x for x in args))
+                tt[slow], st[slow] = tq, sq
             st = np.where((st == 1) & (blo[cand] > t0[cand]), 0, st)  # inside where the bound starts: enters there
             better = (st != 2) & (tt < entry[cand])
             idx = cand[better]
@@ -120,6 +127,60 @@ def _trace_torus(R_t, r, qp, dp, qz, dz, t, stop, max_steps):
         return np.hypot(rho - R_t, qz[i] + tt * dz[i] - r) - r
 
     return sphere_trace(dist, t, stop, max_steps)
+
+
+def torus_quartic_entry(R_t, r, qp, dp, qz, dz, t_start, t_end):
+    """Entry of rays into the solid torus (ring radius ``R_t``, tube ``r``, centre ``r`` above the tip) by the
+    exact quartic ``(|p|^2 + R_t^2 - r^2)^2 = 4 R_t^2 rho^2``: its real roots (companion-matrix eigenvalues,
+    one Newton step on the torus distance) where that distance is below 1e-6 mm, the smallest in
+    ``[t_start, t_end]``. ``qp, dp`` are the rays' start and direction across the axis, ``qz, dz`` along it.
+    Returns ``(t, status)`` as :func:`ray_entry` (1 inside at ``t_start``, 3 where no root could be told)."""
+    m = qp.shape[0]
+    t0 = np.asarray(t_start, float)
+    # centred on each ray's closest approach to the torus centre: better conditioned roots
+    wz0 = qz - r
+    a = np.einsum("ij,ij->i", dp, dp) + dz * dz
+    tc = -(np.einsum("ij,ij->i", qp, dp) + wz0 * dz) / np.where(a > 0, a, 1.0)
+    x0 = qp + tc[:, None] * dp
+    z0 = wz0 + tc * dz
+    A2, A1, A0 = np.einsum("ij,ij->i", dp, dp), 2.0 * np.einsum("ij,ij->i", x0, dp), np.einsum("ij,ij->i", x0, x0)
+    b = A1 + 2.0 * z0 * dz
+    c = A0 + z0 * z0 + R_t * R_t - r * r
+    k4 = 4.0 * R_t * R_t
+    coef = np.stack([a * a, 2 * a * b, b * b + 2 * a * c - k4 * A2, 2 * b * c - k4 * A1, c * c - k4 * A0], 1)
+    comp = np.zeros((m, 4, 4))
+    comp[:, 1:, :-1] = np.eye(3)
+    comp[:, :, -1] = -(coef[:, :0:-1] / coef[:, :1])
+    roots = np.linalg.eigvals(comp)
+    s = roots.real
+    ok = np.abs(roots.imag) <= 1e-4 * (1.0 + np.abs(s))
+
+    def dist(sv):
+        x = x0[:, None, :] + sv[..., None] * dp[:, None, :]
+        rho = np.sqrt(np.einsum("ijk,ijk->ij", x, x))
+        zz = z0[:, None] + sv * dz[:, None]
+        return np.hypot(rho - R_t, zz) - r, rho, zz
+
+    g, rho, zz = dist(s)
+    with np.errstate(invalid="ignore", divide="ignore"):  # one Newton step on the distance (none at a tangency)
+        x = x0[:, None, :] + s[..., None] * dp[:, None, :]
+        drho = np.einsum("ijk,ik->ij", x, dp) / rho
+        h = np.hypot(rho - R_t, zz)
+        dg = ((rho - R_t) * drho + zz * dz[:, None]) / h
+        step = np.where(np.abs(dg) > 1e-3, -g / dg, 0.0)
+    s = s + np.where(np.isfinite(step) & (np.abs(step) < 1e-3), step, 0.0)
+    g = dist(s)[0]
+    t = s + tc[:, None]
+    good = ok & (np.abs(g) <= 1e-6) & (t >= t0[:, None]) & (t <= np.asarray(t_end, float)[..., None])
+    entry = np.where(good, t, np.inf).min(axis=1)
+    status = np.where(np.isfinite(entry), 0, 2).astype(np.int8)
+    inside = dist((t0 - tc)[:, None])[0][:, 0] <= 0.0
+    status[inside] = 1
+    entry[inside] = t0[inside]
+    bad = ~np.all(np.isfinite(coef), axis=1) | (a <= 0)
+    status[bad] = 3
+    entry[bad] = t0[bad]
+    return np.where(status == 2, np.inf, entry), status
 
 
 def sphere_trace(dist, t_start: np.ndarray, t_end, max_steps: int):
