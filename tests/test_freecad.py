@@ -164,7 +164,7 @@ def test_cam_operation_in_a_path_job(tmp_path):
     assert sim["status"].startswith("warning: the path leaves up to") and sim["n_g1"] == op["n_g1"]
     assert sim["map_max"] == pytest.approx(sim["max_scallop"], abs=1e-12) and 0.05 < sim["max_scallop"] < 2.5
     assert sim["map_min"] >= -0.01 and 30_000 < sim["n_values"] < 50_000 and sim["n_quads"] > 30_000
-    assert sim["title"].startswith("material left [mm]")
+    assert sim["title"].startswith("material left, machined region [mm]")
 
 
 def test_colour_maps_migrations_cancel(tmp_path):

@@ -171,13 +171,15 @@ def reff_map(obj, m, shows):
 
 def simulation_map(obj, sim, tolerance):
     """Material a tool path leaves (mm along the outward normal: + left, - gouge) from
-    ``machsurf_cad.simulate``, on the nominal samples the simulation reached."""
-    value = np.where(sim.reached, sim.value, np.nan)
+    ``machsurf_cad.simulate``: in the machined region (under and between the passes; its largest value is
+    ``max_scallop``), and gouges wherever they are; the unmachined border and samples not measured are not
+    drawn (the report gives the border's figures)."""
+    value = np.where(sim.in_region | (sim.known & (sim.value < 0)), sim.value, np.nan)
     ok = np.isfinite(value)
     top = max(float(np.nanmax(np.abs(value))) if ok.any() else 0.0, tolerance)
     store_map(obj, sim.points, value, np.asarray(sim.quads, int).reshape(-1, 4),
-              title="material left [mm] (+ left, - gouge)", low=-top, high=top, marks=(-tolerance, tolerance),
-              diverging=True)  # fmt: skip
+              title="material left, machined region [mm] (+ left, - gouge)", low=-top, high=top,
+              marks=(-tolerance, tolerance), diverging=True)  # fmt: skip
 
 
 def envelope_map(obj, chain, tolerance, n: int = 64):
