@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint format docs bench venv clean np124 workbench-install workbench-uninstall
+.PHONY: demo test test-slow check lint format docs bench venv clean np124 workbench-install workbench-uninstall
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -15,10 +15,19 @@ $(STAMP): pyproject.toml
 venv: $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/machsurf demo -o out
+	$(BIN)/machsurf demo -o out/demo
 
+# the suite without the slow tier (tests marked slow: the README's examples, real parts, long runs)
 test: $(STAMP)
-	$(BIN)/python -m pytest -n 2 tests machsurf_cad
+	$(BIN)/python -m pytest -n 2 -m "not slow" tests machsurf_cad
+
+# the slow tier (CI runs it after make test)
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -n 2 -m slow tests machsurf_cad
+
+# the numpy core's tests only, for the edit loop (no kernel, no pictures, no FreeCAD)
+check: $(STAMP)
+	$(BIN)/python -m pytest -n 2 -m "not slow" $(CORE_TESTS)
 
 # ruff (lint and format check) and mypy, configured in pyproject.toml
 lint: $(STAMP)
@@ -59,5 +68,5 @@ workbench-install:
 workbench-uninstall:
 	rm -f $(FC_MOD)/machsurf
 
-clean:
-	rm -rf out .pytest_cache build *.egg-info docs/_build docs/generated
+clean:  # build products only: out/ is left alone (it may hold files of yours beside the runs' outputs)
+	rm -rf .pytest_cache build *.egg-info docs/_build docs/generated

@@ -54,6 +54,7 @@ def _run_batch(args) -> int:
 _BAR_TITLES = {
     "inspect": "measuring deviation",
     "machining-surface": "fitting S1/S2",
+    "mill3": "drop-cutter",
     "flank": "settings along the surface",
     "demo": "measuring the STL",
     "verify": "checking the tool body",
@@ -74,6 +75,8 @@ def run(argv=None) -> int:
         if args.command == "batch":
             return _run_batch(args)
         spec = _spec(args)
+        if args.command == "machining-surface" and getattr(args, "faces", None) is not None:
+            _say("note: `machsurf mill3` is the whole-part 3-axis command (machining-surface --faces still works)")
         with Bar(_BAR_TITLES.get(args.command, args.command)) as bar:
             from .jobs import run_job
 

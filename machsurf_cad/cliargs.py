@@ -58,8 +58,10 @@ def _lead(text: str):
 
 def spec_of_args(args):
     """The job spec of the parsed arguments (options and spec fields share their names)."""
-    cls = SPECS[args.command]
+    cls = SPECS["machining-surface" if args.command == "mill3" else args.command]
     kw = {f.name: getattr(args, f.name) for f in fields(cls) if hasattr(args, f.name)}
+    if args.command == "mill3":  # the whole-part 3-axis engine: a machining-surface job with --faces, 3 axes
+        kw.update(axes=3, toolpath=True, strategy="planes:x")
     if "axis" in kw:
         kw["axis"] = _axis(kw["axis"])
     return cls(**kw)
@@ -131,7 +133,7 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", parser_class=parser_class)
 
     d = sub.add_parser("demo", help="main job on the embedded example part: STEP, STL, deviation map, report")
-    d.add_argument("-o", "--out", default="out", help="output folder (default: out)")
+    d.add_argument("-o", "--out", default="out/demo", help="output folder (default: out/demo)")
 
     i = sub.add_parser("info", help="faces of a STEP part: types, degrees, bounds, areas")
     i.add_argument("part", help="STEP file")
@@ -215,6 +217,8 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     _gouge(m, "0.01")
     _post(m)
     m.add_argument("-o", "--out", default="out/machining_surface", help="output folder")
+
+    _mill3_parser(sub)
 
     e = sub.add_parser("reff", help="effective cutter radius and step-over maps over a face")
     _face_input(e, "example surface instead of a STEP: blade, bezier5, ...")
@@ -355,6 +359,35 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     v.add_argument("-o", "--out", default="out/envelope", help="output folder")
     _batch_parser(sub)
     return p
+
+
+def _mill3_parser(sub) -> None:
+    w = sub.add_parser(
+        "mill3", help="3-axis tool paths on a whole part: exact drop-cutter on its faces (raster or waterline)"
+    )
+    w.add_argument("part", nargs="?", help="STEP file of the part (or use --example)")
+    w.add_argument("--example", help="example surface instead of a STEP: bezier5, blade, ...")
+    w.add_argument("--tool", required=True, help="any cutter: ball:D=.., flat:D=.., bull:D=..,r=.., cone:... (mm)")
+    w.add_argument("--faces", default="top", help="faces to machine: top (default: seen along the axis) | all | 0,3,5")
+    w.add_argument(
+        "--check-faces", default="rest", help="faces the tool must not cut into: rest (default) | all | none"
+    )
+    w.add_argument("--axis", default=None, help="fixed tool axis x,y,z (3+2; default 0,0,1)")
+    w.add_argument("--pattern", choices=["raster", "waterline"], default="raster", help="tool-path pattern")
+    w.add_argument("--stepover", type=_finite, default=None, help="distance between raster lines, mm (default 2)")
+    w.add_argument("--scallop", type=_finite, default=None, metavar="H", help="instead of --stepover: cusp height H mm")
+    w.add_argument("--angle", type=_finite, default=0.0, help="raster direction in the plane, degrees (default 0)")
+    w.add_argument("--direction", choices=["zigzag", "one-way"], default="zigzag", help="raster line order")
+    w.add_argument("--stepdown", type=_finite, default=None, help="waterline: distance between levels, mm")
+    w.add_argument("--grid", type=_finite, default=None, help="waterline / CL surface: plan grid of heights, mm")
+    w.add_argument("--chordal", type=_finite, default=0.005, help="chordal tolerance of the positions, mm")
+    w.add_argument("--cl-surface", action="store_true", help="also fit the certified height field of the positions")
+    w.add_argument("--tol", type=_finite, default=1e-3, help="CL surface fit tolerance, max-norm mm (default 0.001)")
+    w.add_argument("--shank", default=None, help="shank above the cutting length, D=..,L=.. (mm)")
+    w.add_argument("--holder", default=None, help="holder above the shank, D=..,L=.. (mm)")
+    _gouge(w, "0.01")
+    _post(w)
+    w.add_argument("-o", "--out", default="out/mill3", help="output folder")
 
 
 def _batch_parser(sub) -> None:

@@ -289,8 +289,8 @@ def test_flank_command(tmp_path):
     assert w["deviation_from_envelope"]["max_abs_mm"] < 0.5
     rows = (out / "toolpath.csv").read_text().splitlines()
     assert (
-        len(rows) == 2 + w["n_rules"] + 2
-    )  # tool comment, header, one cut position per rule, approach from and retract to clearance
+        len(rows) == 1 + w["n_rules"] + 2
+    )  # header, one cut position per rule, approach from and retract to clearance
     apt = (out / "toolpath.apt").read_text().splitlines()
     assert sum(ln.startswith("GOTO/") for ln in apt) == w["n_rules"] + 2
     assert "CUTTER/20.0000,0.0000,10.0000,0.0000,0.0000,0.0000," in "\n".join(apt)  # same convention as every tool

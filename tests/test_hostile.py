@@ -603,3 +603,14 @@ def test_a_large_gouge_tolerance_is_not_a_clearance_the_rapids_must_keep(tmp_pat
     v = _strict((out / "report.json").read_text())["whole"]["verify"]
     assert v["n_collisions"] == 0 and v["clearance_mm"] == 0.01 and v["min_clearance_mm"] > 4.4
     assert (out / "toolpath.apt").is_file() and "mm into" not in r.stdout
+
+
+def test_mill3_is_the_whole_part_three_axis_command_and_the_old_route_notes_it(tmp_path):
+    r = run("mill3", "--example", "bezier5", "--tool", "ball:D=10", "--stepover", "10", "-o", tmp_path / "m")
+    assert r.returncode == 0, r.stderr
+    rep = _strict((tmp_path / "m" / "report.json").read_text())
+    assert rep["verify"]["clean"] and rep["toolpath"]["n_passes"] == 11 and rep["faces_machined"] == [0]
+    old = run("machining-surface", "--example", "bezier5", "--faces", "top", "--axes", "3", "--tool", "ball:D=10",
+              "--toolpath", "--stepover", "10", "-o", tmp_path / "o")  # fmt: skip
+    assert old.returncode == 0 and "note: `machsurf mill3` is the whole-part 3-axis command" in old.stdout
+    assert (tmp_path / "o" / "toolpath.csv").read_text() == (tmp_path / "m" / "toolpath.csv").read_text()

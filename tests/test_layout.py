@@ -129,3 +129,10 @@ def test_help_imports_no_kernel_pyvista_dask_or_scipy():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True).stdout
     assert out.strip() == "[]", out
+
+
+def test_the_architecture_page_lists_every_module_with_its_layer():
+    page = (ROOT / "docs" / "architecture.md").read_text()
+    for path in PKG.rglob("*.py"):
+        rel = path.relative_to(PKG).as_posix()
+        assert f"| `{rel}` |" in page, f"docs/architecture.md does not list {rel}"

@@ -260,8 +260,8 @@ def test_tool_paths_on_planes_and_cl_files(tmp_path):
     assert tp.info["chordal_error_measured_mm"] <= 0.01
     assert tp.info["axis_error_deg_measured"] <= ms.alpha_max_deg_measured
     rows = write_csv(tmp_path / "p.csv", tp).read_text().splitlines()
-    assert len(rows) == tp.n_positions + 2 and rows[1].startswith("pass,index,move,tip_x,tip_y,tip_z,i,j,k")
-    assert rows[0].startswith("# machsurf_cad ") and rows[0].endswith(", tool bull:D=28,r=4")
+    assert len(rows) == tp.n_positions + 1 and rows[0].startswith("pass,index,move,tip_x,tip_y,tip_z,i,j,k")
+    assert rows[0].split(",")[13] == "tool" and rows[1].count('"bull:D=28,r=4"') == 1  # the cutter on every row
     apt = write_apt(tmp_path / "p.apt", tp).read_text().splitlines()
     assert apt[3] == "CUTTER/28.0000,4.0000,10.0000,4.0000,0.0000,0.0000,84.0000"
     assert apt[4:7] == ["LOADTL/1", "SPINDL/RPM,10000.0000,CLW", "MULTAX/ON"] and apt[-1] == "FINI"

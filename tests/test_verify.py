@@ -148,6 +148,7 @@ def test_bad_input():
 
 @needs_kernel
 def test_verify_command_reads_apt_and_csv_and_exits_by_the_result(tmp_path):
+    import csv
     import json
 
     from helpers import run
@@ -182,8 +183,8 @@ def test_verify_command_reads_apt_and_csv_and_exits_by_the_result(tmp_path):
     assert r.returncode == 2 and "tool bull:D=16,r=3" in r.stdout
     rep3 = json.loads((tmp_path / "v3" / "report.json").read_text())["verify"]
     assert rep3["max_gouge_mm"] == pytest.approx(rep["max_gouge_mm"], abs=1e-9)
-    plain = tmp_path / "plain.csv"  # a CSV without our comment line names no tool
-    plain.write_text("\n".join(bad.read_text().splitlines()[1:]) + "\n")
+    plain = tmp_path / "plain.csv"  # a CSV without our tool column names no tool
+    plain.write_text("\n".join(",".join(r[:13]) for r in csv.reader(bad.read_text().splitlines())) + "\n")
     r = run("verify", block, "--toolpath", plain, "-o", tmp_path / "v3b")
     assert r.returncode == 1 and "give --tool" in r.stderr
     r = run("verify", block, "--toolpath", bad, "--tool", "ball:D=10", "--shank", "D=10", "-o", tmp_path / "v4")

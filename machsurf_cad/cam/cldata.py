@@ -61,10 +61,11 @@ class PostOptions:
 def write_csv(path, tp: ToolPath) -> Path:
     """Write the tool path as CSV, one row per position.
 
-    A first comment line ``# machsurf_cad VERSION tool path NAME, units mm, tool SPEC`` (the cutter, read
-    back by :func:`~machsurf_cad.cam.readers.read_csv`), then the columns
-    ``pass,index,move,tip_x,tip_y,tip_z,i,j,k,cc_x,cc_y,cc_z,feed_mm_min`` and the producer's extra
-    columns (``name`` or ``name_0, name_1, ...``); empty cells for NaN. Lengths in mm.
+    Columns ``pass,index,move,tip_x,tip_y,tip_z,i,j,k,cc_x,cc_y,cc_z,feed_mm_min,tool`` (``tool``: the
+    cutter's text, e.g. ``bull:D=16,r=3``, on every row, read back by
+    :func:`~machsurf_cad.cam.readers.read_csv`) and the producer's extra columns (``name`` or
+    ``name_0, name_1, ...``); empty cells for NaN. Lengths in mm. A plain CSV: any spreadsheet or
+    ``csv.DictReader`` reads it.
 
     Parameters
     ----------
@@ -89,11 +90,8 @@ def write_csv(path, tp: ToolPath) -> Path:
     cc = tp.cc if tp.cc is not None else np.full((tp.n_positions, 3), np.nan)
     feed = tp.feed if tp.feed is not None else np.full(tp.n_positions, np.nan)
     counter: dict[int, int] = {}
-    from .._version import __version__
-
-    tool = f", tool {tp.cutter.spec()}" if tp.cutter is not None else ""
+    tool = tp.cutter.spec() if tp.cutter is not None else ""
     with open(path, "w", newline="") as fh:
-        fh.write(f"# machsurf_cad {__version__} tool path {tp.name}, units mm{tool}\n")
         w = csv.writer(fh)
         w.writerow(
             [
@@ -110,6 +108,7 @@ def write_csv(path, tp: ToolPath) -> Path:
                 "cc_y",
                 "cc_z",
                 "feed_mm_min",
+                "tool",
                 *extra_cols,
             ]
         )
@@ -126,6 +125,7 @@ def write_csv(path, tp: ToolPath) -> Path:
                     *(f"{x:.9f}" for x in tp.axis[n]),
                     *(_num(x, 6) for x in cc[n]),
                     _num(feed[n], 3),
+                    tool,
                     *(_num(x, 10) for x in X[n]),
                 ]
             )

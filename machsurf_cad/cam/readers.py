@@ -16,8 +16,8 @@ APT, as a CAM system reads it:
   number; known statements without geometry (feeds aside) are ignored; any other statement is skipped
   and listed (``ToolPath.info["skipped_statements"]``, and the reports of verify and simulate).
 
-CSV: ours (:func:`~machsurf_cad.cam.cldata.write_csv`, whose ``# machsurf_cad`` first line names the
-tool) or a spreadsheet's: columns in any order, named ``tip_x, tip_y, tip_z`` or ``x, y, z`` and
+CSV: ours (:func:`~machsurf_cad.cam.cldata.write_csv`, whose ``tool`` column names the cutter) or a
+spreadsheet's: columns in any order, named ``tip_x, tip_y, tip_z`` or ``x, y, z`` and
 ``i, j, k`` (or ``axis_x, axis_y, axis_z``; without them every axis is +Z, noted in ``info``),
 ``move`` and ``pass`` optional, UTF-8 with or without BOM or UTF-16, LF or CRLF, separated by ``,``
 ``;`` or tabs (with ``;``, a decimal comma is read as a point).
@@ -332,7 +332,7 @@ def _csv_columns(head: list[str], p: Path) -> dict[str, int]:
             raise InputError(f"{p.name}: more than one column could be {name}: {', '.join(head[i] for i in hits)}")
         if hits:
             col[name] = hits[0]
-    for extra in ("pass", "move", "cc_x", "cc_y", "cc_z", "feed_mm_min"):
+    for extra in ("pass", "move", "cc_x", "cc_y", "cc_z", "feed_mm_min", "tool"):
         if _key(extra) in keys:
             col[extra] = keys.index(_key(extra))
     if not {"tip_x", "tip_y", "tip_z"} <= set(col):
@@ -346,18 +346,9 @@ def _csv_columns(head: list[str], p: Path) -> dict[str, int]:
     return col
 
 
-def _csv_rows(text: str, p: Path) -> tuple[list[str], list[list[str]], str | None]:
-    """Header, rows and the tool named on our ``# machsurf_cad`` comment line."""
-    tool = None
-    lines = []
-    for line in text.splitlines():
-        if line.lstrip().startswith("#"):
-            m = re.search(r"\btool\s+(\w+:\S+)", line)
-            if m and "machsurf_cad" in line:
-                tool = m.group(1).rstrip(";,")
-            continue
-        if line.strip():
-            lines.append(line)
+def _csv_rows(text: str, p: Path) -> tuple[list[str], list[list[str]]]:
+    """Header and rows (``#`` comment lines and blank lines skipped)."""
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise InputError(f"{p.name} has no header and no positions")
     head_line = lines[0]
@@ -365,7 +356,7 @@ def _csv_rows(text: str, p: Path) -> tuple[list[str], list[list[str]], str | Non
     rows = list(csv.reader(io.StringIO("\n".join(lines)), delimiter=sep))
     if sep == ";":  # a spreadsheet with decimal commas
         rows = [rows[0]] + [[c.replace(",", ".") for c in r] for r in rows[1:]]
-    return rows[0], rows[1:], tool
+    return rows[0], rows[1:]
 
 
 def read_csv(path) -> ToolPath:
@@ -381,7 +372,7 @@ def read_csv(path) -> ToolPath:
     Returns
     -------
     ToolPath
-        With the cutter named on our ``# machsurf_cad ... tool SPEC`` line (else ``None``); axes
+        With the cutter named in the ``tool`` column (else ``None``); axes
         renormalised; ``info["assumed"]`` lists what the file did not say (axis +Z, every move a cut,
         one pass).
 
@@ -395,7 +386,7 @@ def read_csv(path) -> ToolPath:
     p = _path(path)
     if not p.is_file():
         raise InputError(f"CSV tool path not found: {p}")
-    head, body, tool = _csv_rows(_read_text(p), p)
+    head, body = _csv_rows(_read_text(p), p)
     if not body:
         raise InputError(f"{p.name} has no positions")
     if len(body) > _SIZE_LIMIT:
@@ -434,6 +425,13 @@ def read_csv(path) -> ToolPath:
     nrm = np.linalg.norm(axis, axis=1, keepdims=True)
     if (nrm < 1e-12).any():
         raise InputError(f"{p.name}: row {int(np.flatnonzero(nrm[:, 0] < 1e-12)[0]) + 1} has a zero tool axis")
+    if "tool" in col:
+        named = {r[col["tool"]].strip() for r in body if len(r) > col["tool"] and r[col["tool"]].strip()}
+        if len(named) > 1:
+            raise InputError(f"{p.name} names more than one tool ({', '.join(sorted(named)[:3])}): one tool per path")
+        tool = named.pop() if named else None
+    else:
+        tool = None
     cutter = parse_cutter(tool) if tool else None
     info = {"source": str(p), "assumed": assumed}
     return ToolPath(tip, axis / nrm, move, pidx, cc, feed, cutter, p.stem, {}, info)

@@ -50,6 +50,12 @@ _MIN_AXIS_ELEVATION_DEG = 1.0  # the axis must stay this far above the tangent p
 _PURPOSE = "machining surfaces (Table 1)"
 
 
+_THREE_AXIS_HINT = (
+    "; the 3-axis surface point is singular at horizontal spots: the whole-part 3-axis engine (exact "
+    "drop-cutter) handles them - `machsurf machining-surface PART --faces N --axes 3` or ms.raster"
+)
+
+
 def _as_face(face) -> Face:
     if isinstance(face, Face):
         return face
@@ -107,7 +113,7 @@ class MachiningMaps:
             raise DegenerateGeometryError(
                 f"v = ((u x n)/|u x n|) x u is undefined where the tool axis is parallel to the face normal "
                 f"({int(bad.sum())} sample(s), e.g. xyz {where}): the flat/torus end touches along a circle there"
-                + ("; use a lead angle" if self.axes == 5 else "; the 3-axis point is singular at horizontal spots"),
+                + ("; use a lead angle" if self.axes == 5 else _THREE_AXIS_HINT),
                 {"uv": np.stack([frame.U[bad], frame.V[bad]], 1)[:20].tolist()},
             )
         return np.cross(c / s[..., None], u)
@@ -175,7 +181,7 @@ class MachiningMaps:
             raise DegenerateGeometryError(
                 f"the tool axis is parallel to the face normal near xyz {where} (u ~ {us[i]:.4g}, v ~ {vs[j]:.4g}; "
                 f"{len(cells)} cell(s)): v = ((u x n)/|u x n|) x u is undefined there, the flat/torus end touches "
-                "along a circle" + ("; the 3-axis point is singular at horizontal spots" if self.axes == 3 else ""),
+                "along a circle" + (_THREE_AXIS_HINT if self.axes == 3 else ""),
                 {"uv": [[float(us[a]), float(vs[b])] for a, b in cells[:20]]},
             )
 

@@ -90,10 +90,11 @@ def _mesh_and_write(faces, linear_deflection: float, angular_deflection: float, 
 def _stoppable(fn, *args) -> str:
     """Run ``fn(*args)`` (which returns an error text) in a forked child, so that Ctrl-C or SIGTERM stop it
     at once: a long OCCT call holds the interpreter and would delay Python's signal handlers until it ends.
-    Inline where forking is not safe (not the main thread, no ``fork``)."""
+    Inline where forking is not safe: without ``fork``, or when the process runs other Python threads (a
+    Dask client's, a GUI's: a lock one of them holds at the fork would never be released in the child)."""
     import threading
 
-    if not hasattr(os, "fork") or threading.current_thread() is not threading.main_thread():
+    if not hasattr(os, "fork") or threading.active_count() > 1:
         return fn(*args)
     r, w = os.pipe()
     pid = os.fork()

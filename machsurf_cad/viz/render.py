@@ -21,6 +21,12 @@ def _quiet_vtk() -> None:
         pass
 
 
+def plotter(**kwargs) -> pv.Plotter:
+    """An off-screen plotter, VTK's logger quieted first (its "no X server" warnings are not the user's)."""
+    _quiet_vtk()
+    return pv.Plotter(off_screen=True, **kwargs)
+
+
 def _bar_args(title: str, color: str = "black", n_labels: int = 5) -> dict:
     """The one legend layout of every map: vertical on the right, 3 significant digits."""
     return dict(
@@ -108,7 +114,7 @@ def render_deviation(
     tol = tolerance if tolerance is not None else result.tolerance
     mesh = deviation_polydata(result)
     vmax = max(result.max_abs, tol or 0.0, 1e-12)
-    p = pv.Plotter(off_screen=True, window_size=list(window_size))
+    p = plotter(window_size=list(window_size))
     p.set_background("white")
     sargs = _bar_args("deviation [mm]", "black", 5)
     annotations = {}
@@ -200,7 +206,7 @@ def render_scalar_map(
         m = np.asarray(mask, bool).ravel()
         faces = mesh.faces.reshape(-1, 5)[:, 1:]
         mesh = mesh.extract_cells(np.nonzero(m[faces].all(axis=1))[0]).extract_surface(algorithm=None)
-    p = pv.Plotter(off_screen=True, window_size=list(window_size))
+    p = plotter(window_size=list(window_size))
     p.set_background(background)
     sargs = _bar_args(label, "white", 6)
     p.add_mesh(
@@ -245,7 +251,7 @@ def render_zebra(
             ]
         )
         stripes = 12 * np.pi / max(float(np.ptp(angs)), 1e-6)
-    p = pv.Plotter(off_screen=True, window_size=list(window_size), shape=(1, n))
+    p = plotter(window_size=list(window_size), shape=(1, n))
     for k, (title, surfaces) in enumerate(panels):
         p.subplot(0, k)
         p.set_background("lightsteelblue")
@@ -269,7 +275,7 @@ def render_gouge_map(
     cloud = pv.PolyData(pts)
     cloud.point_data["gouge_depth_mm"] = d
     vmax = max(float(d.max()), 2 * tolerance, 1e-9)
-    p = pv.Plotter(off_screen=True, window_size=list(window_size))
+    p = plotter(window_size=list(window_size))
     p.set_background("white")
     sargs = _bar_args("tool depth into the part [mm]", "black", 5)
     p.add_mesh(

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pyvista as pv
 
-from .render import _bar_args, _save
+from .render import _bar_args, _save, plotter
 
 REGION_MACHINED, REGION_BORDER, REGION_NOT_REACHED, REGION_NOT_MEASURED = 1, 0, -1, -2
 """Values of the map's ``region`` point data."""
@@ -47,7 +47,7 @@ def render_simulation_map(result, png_path, *, vtp_path=None, title: str = "", w
     gouge = v[np.isfinite(v) & (v < 0)]
     vmax = max(float(np.abs(inside).max()) if inside.size else 0.0, float(-gouge.min()) if gouge.size else 0.0)
     vmax = max(vmax, 2 * tol, 1e-9)
-    p = pv.Plotter(off_screen=True, window_size=list(window_size))
+    p = plotter(window_size=list(window_size))
     p.set_background("white")
     main = mesh.copy()
     main.point_data["left_mm"] = np.where(reg == REGION_BORDER, np.nan, v)
