@@ -2,4 +2,5 @@
 
 from ._start import entry
 
-entry()
+if __name__ == "__main__":  # a spawned child process (a large STL's meshing) imports this module again
+    entry()

@@ -614,3 +614,23 @@ def test_mill3_is_the_whole_part_three_axis_command_and_the_old_route_notes_it(t
               "--toolpath", "--stepover", "10", "-o", tmp_path / "o")  # fmt: skip
     assert old.returncode == 0 and "note: `machsurf mill3` is the whole-part 3-axis command" in old.stdout
     assert (tmp_path / "o" / "toolpath.csv").read_text() == (tmp_path / "m" / "toolpath.csv").read_text()
+
+
+@pytest.mark.slow
+@needs_kernel
+def test_sigterm_stops_a_long_stl_meshing_at_once(tmp_path):
+    p = subprocess.Popen([sys.executable, "-m", "machsurf_cad", "machining-surface", "--example", "blade", "--tool",
+                          "ball:D=10", "--axes", "3", "--tol", "0.01", "--stl-deflection", "0.0002", "-o",
+                          str(tmp_path / "o")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         stdin=subprocess.DEVNULL,
+                         env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
+    deadline = time.time() + 120
+    while "loops: none" not in (line := p.stdout.readline()) and time.time() < deadline:  # the fit is done
+        assert line or p.poll() is None, p.stderr.read()
+    time.sleep(3)  # inside OCCT's meshing of about 0.7 million triangles (about 20 s)
+    t = time.perf_counter()
+    p.send_signal(signal.SIGTERM)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 143 and time.perf_counter() - t < 3, (p.returncode, err)
+    assert err.strip() == "machsurf: terminated (nothing written)" and not (tmp_path / "o").exists()
+    _no_partial(tmp_path / "o")

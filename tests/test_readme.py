@@ -31,11 +31,12 @@ def test_the_python_block_runs_as_a_script(tmp_path):
                        stdin=subprocess.DEVNULL, timeout=900)  # fmt: skip
     assert r.returncode == 0, r.stderr[-2000:]
     lines = r.stdout.strip().splitlines()
-    assert len(lines) == 7, lines
+    assert len(lines) == 6, lines
     assert float(lines[0]) <= 1e-3  # S1 within its tolerance, on points the fit never saw
     assert float(lines[1]) <= 0.01  # the path does not gouge the face
     assert int(lines[2]) > 10 and (tmp_path / "out" / "path.apt").is_file()
-    assert int(lines[6]) == 1  # the batch job ran
+    assert float(lines[4]) < 0.5  # the flank path within its tolerance
+    assert int(lines[5]) == 1  # the batch job ran
     assert not (ROOT / "path.apt").exists() and not (ROOT / "out" / "path.apt").exists()
 
 

@@ -59,13 +59,15 @@ def write_stl(path, faces: list[Face], *, linear_deflection: float = 0.01, angul
 
     if not linear_deflection > 0:
         raise InputError("linear deflection must be > 0 mm")
-    check_mesh_size(faces, linear_deflection, angular_deflection, what=f"{len(faces)} face(s) for {Path(path).name}")
+    what = f"{len(faces)} face(s) for {Path(path).name}"
+    triangles = check_mesh_size(faces, linear_deflection, angular_deflection, what=what)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(suffix=".stl", dir=str(path.parent))
     os.close(fd)
     try:
-        err = _stoppable(_mesh_and_write, faces, linear_deflection, angular_deflection, tmp)
+        args = (list(faces), linear_deflection, angular_deflection, tmp)
+        err = _stoppable(_mesh_and_write, *args) if triangles > INLINE_TRIANGLES else _mesh_and_write(*args)
         if err:
             raise InputError(f"OCCT failed to write STL file {path}: {err}")
         os.chmod(tmp, 0o644)
@@ -87,43 +89,45 @@ def _mesh_and_write(faces, linear_deflection: float, angular_deflection: float, 
     return "" if ok else "the writer failed"
 
 
+INLINE_TRIANGLES = 200_000
+"""Meshes estimated under this many triangles are made in this process (a second or so); larger ones in a
+child process that Ctrl-C or SIGTERM stop at once."""
+
+
 def _stoppable(fn, *args) -> str:
-    """Run ``fn(*args)`` (which returns an error text) in a forked child, so that Ctrl-C or SIGTERM stop it
-    at once: a long OCCT call holds the interpreter and would delay Python's signal handlers until it ends.
-    Inline where forking is not safe: without ``fork``, or when the process runs other Python threads (a
-    Dask client's, a GUI's: a lock one of them holds at the fork would never be released in the child)."""
-    import threading
+    """Run ``fn(*args)`` (which returns an error text) in a spawned child process and wait for it while
+    signals are handled: a long OCCT call holds the interpreter and would delay Python's signal handlers
+    until it ends. Spawned, not forked: a fork copies the locks of OCCT's and BLAS's own threads but not
+    the threads, and the child can wait for ever (seen beside Dask and in pytest workers)."""
+    import multiprocessing as mp
 
-    if not hasattr(os, "fork") or threading.active_count() > 1:
-        return fn(*args)
-    r, w = os.pipe()
-    pid = os.fork()
-    if pid == 0:  # the child: no Python handler of the parent's (the parent kills it on a signal)
-        code = 1
-        try:
-            os.close(r)
-            msg = fn(*args)
-            os.write(w, msg.encode()[:4000])
-            code = 0
-        except BaseException as exc:  # reported to the parent through the pipe
-            os.write(w, f"{type(exc).__name__}: {exc}".encode()[:4000])
-        finally:
-            os._exit(code)
-    os.close(w)
+    ctx = mp.get_context("spawn")
+    mine, theirs = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_child, args=(theirs, fn, args), daemon=True)
+    child.start()
+    theirs.close()
     try:
-        _, status = os.waitpid(pid, 0)
+        while child.is_alive() and not mine.poll(0.2):
+            pass
+        msg = mine.recv() if mine.poll() else f"the meshing process ended with status {child.exitcode}"
+        child.join()
+        return msg
     except BaseException:
-        import signal
-
-        os.kill(pid, signal.SIGKILL)
-        os.waitpid(pid, 0)
-        os.close(r)
+        child.kill()
+        child.join()
         raise
-    with os.fdopen(r, "rb") as fh:
-        msg = fh.read().decode(errors="replace")
-    if os.waitstatus_to_exitcode(status) != 0 and not msg:
-        msg = f"the meshing process ended with status {os.waitstatus_to_exitcode(status)}"
-    return msg
+    finally:
+        mine.close()
+
+
+def _child(conn, fn, args) -> None:
+    """The spawned meshing process: ``fn(*args)``'s error text (or the exception's) back through ``conn``."""
+    try:
+        msg = fn(*args)
+    except BaseException as exc:  # reported to the parent
+        msg = f"{type(exc).__name__}: {exc}"
+    conn.send(msg)
+    conn.close()
 
 
 def read_stl(path):
