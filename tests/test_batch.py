@@ -280,7 +280,7 @@ def test_external_scheduler_and_workers_survive_a_killed_worker(tmp_path):
         res = box["res"]
         assert res.exit_code == 0 and all(j.status == "ok" for j in res.jobs), res.report()
         assert {j.worker for j in res.jobs} <= {"wa", "wb"} and "wb" in {j.worker for j in res.jobs}
-        d = ms.run_job(ms.cli.spec_from_argv(jobs[0].argv), tmp_path / "direct")
+        d = ms.run_job(__import__("machsurf_cad.cliargs").cliargs.spec_from_argv(jobs[0].argv), tmp_path / "direct")
         got = json.loads((tmp_path / "ext" / "s0" / "report.json").read_text())
         assert _figures(got) == _figures(d.report)
     finally:

@@ -102,6 +102,7 @@ def test_features_recompute_headless(tmp_path):
     assert ds["shape_null"] and ds["max_s1"] == 0.0 and "deleted" in ds["status"] and ds["n_objects"] >= 5
 
 
+@pytest.mark.slow
 def test_faces_with_holes_convert_exactly(tmp_path):
     """Inner wires (circle, ellipse, closed spline; planar and on a cylinder; the block's bottom) survive
     the round trip FreeCAD -> machsurf_cad -> FreeCAD: same wires, a valid face of the same meshed area,
@@ -123,6 +124,7 @@ def test_faces_with_holes_convert_exactly(tmp_path):
     assert g["valid"] and g["closed"] and g["wires"] == 1 and g["area"] == pytest.approx(2400.0, abs=0.01)
 
 
+@pytest.mark.slow
 def test_cam_operation_in_a_path_job(tmp_path):
     """A CamOperation on the block's free-form top: added to a Path Job created for the part, its tool from
     the Job's ToolController (the default 5 mm end mill), clean against every face of the block; one G1
@@ -167,6 +169,7 @@ def test_cam_operation_in_a_path_job(tmp_path):
     assert sim["title"].startswith("material left, machined region [mm]")
 
 
+@pytest.mark.slow
 def test_colour_maps_migrations_cancel(tmp_path):
     r = _run([FREECADCMD], tmp_path, "maps_check.py")
     d = r["deviation_map"]  # the guiding surface's deviation: machsurf_cad's own map, point for point
@@ -274,6 +277,7 @@ def test_freecad_imports_every_multi_face_step_we_write(tmp_path):
         assert not any("Open CASCADE" in lab for lab in got["labels"])
 
 
+@pytest.mark.slow
 @pytest.mark.skipif((FREECAD is None or XVFB is None) and not IN_CI, reason="FreeCAD GUI or xvfb-run is not installed")
 def test_colour_maps_with_legends_in_the_3d_view(tmp_path):
     """Screenshots of every feature's map (looked at: tmp_path/map_*.png): the guiding surface's deviation, R_eff,

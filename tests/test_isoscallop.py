@@ -28,6 +28,7 @@ def test_ball_on_a_plane_spacing_is_the_closed_form():
     "tool,axes,lead,resolution",
     [("ball:D=10", 3, 0.0, 0.3), ("bull:D=16,r=3", 5, 10.0, 0.3), ("flat:D=10", 5, 5.0, 0.5)],
 )
+@pytest.mark.slow
 def test_simulation_confirms_the_scallop_on_a_free_form_face(tool, axes, lead, resolution):
     """``--scallop 0.01`` on the example free-form: the simulated max scallop is at most H plus the fit and
     chordal tolerances, and at least 0.006 (the planner uses its allowance); fewer passes than a constant
@@ -52,6 +53,7 @@ def test_a_scallop_the_tool_cannot_leave_is_refused():
         iso_scallop_paths(res, scallop=0.0)
 
 
+@pytest.mark.slow
 @needs_kernel
 def test_machining_surface_command_with_scallop(tmp_path):
     import json

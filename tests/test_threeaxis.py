@@ -358,6 +358,7 @@ def test_cl_surface_of_a_flat_end_mill_with_flat_spots():
 
 
 # ----------------------------------------------------------------------------- the job, bad input
+@pytest.mark.slow
 @needs_kernel
 def test_cli_raster_on_the_mould_insert_writes_a_checked_path(tmp_path):
     import json
@@ -507,6 +508,7 @@ def test_gouging_moves_are_split_until_the_body_check_is_clean(mould):
     assert ms.verify(mould, fixed, tolerance=tol).clean
 
 
+@pytest.mark.slow
 def test_waterline_on_the_mould_insert_touches_and_is_clean(mould):
     """Waterline around the boss and the narrow dip beside it (bull D10 r2): every cutting position is
     at its exact drop-cutter height (or the foot of a wall's jump, never below the height), moves that

@@ -59,6 +59,7 @@ def test_slope_across_the_lines_is_met_along_the_normal(alpha):
     assert i["scallop_planned_max_vertical_mm"] == pytest.approx(i["scallop_planned_max_mm"] / ca, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_free_form_face_simulation_stays_within_the_target():
     """The bundled free-form face, ball D10, H = 0.01 mm on a 25 x 25 mm window: the N-buffer simulation of
     the planned path (an independent measure of what the moving tool leaves) finds at most H left away
