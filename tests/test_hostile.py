@@ -577,7 +577,14 @@ def test_a_raster_that_would_run_for_hours_is_refused_with_its_figure():
     t = time.perf_counter()
     with pytest.raises(ms.InputError, match=r"needs about .* drop-cutter points .* give a larger step-over"):
         ms.raster([ms.example("bezier5")], "ball:D=10", stepover_mm=1e-4)
-    assert time.perf_counter() - t < 10
+    face, tp = _plane_path(None)
+    with pytest.raises(ms.InputError, match=r"every 1e-06 mm needs .* tool placements .* give a larger motion step"):
+        ms.simulate(face, tp, motion_step=1e-6)  # asked for 52 GiB before
+    with pytest.raises(ms.InputError, match=r"needs .* tool placements .* give a larger step"):
+        ms.verify(face, tp, step_mm=1e-5)
+    with pytest.raises(ms.InputError, match="more than 10 times the part's size"):
+        ms.drop_cutter([face], "ball:D=1e6", [[0.0, 0.0]])
+    assert time.perf_counter() - t < 30
 
 
 @needs_kernel

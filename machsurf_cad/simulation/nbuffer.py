@@ -86,6 +86,11 @@ def cover_spheres(cutter, n_profile: int = 400) -> tuple[np.ndarray, np.ndarray]
     return np.array(heights), np.array(radii)
 
 
+MAX_POSES = 5_000_000
+"""Most tool placements a simulation takes on before it refuses (each one is solved against the samples
+near it: about a gigabyte and tens of minutes at this count)."""
+
+
 def motion_poses(tip, axis, step_mm: float, cut_length: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Placements along a path, no point of the cutting part moving more than ``step_mm`` between two.
 
@@ -97,6 +102,12 @@ def motion_poses(tip, axis, step_mm: float, cut_length: float) -> tuple[np.ndarr
         raise InputError("the tool path has no positions")
     d_tip = np.linalg.norm(np.diff(tip, axis=0), axis=1)
     d_ax = np.linalg.norm(np.diff(axis, axis=0), axis=1) * cut_length
+    need = float(np.maximum(1.0, np.ceil((d_tip + d_ax) / step_mm)).sum()) + 1
+    if need > MAX_POSES:
+        raise InputError(
+            f"simulating this path every {step_mm:g} mm needs {need:.3g} tool placements ({tip.shape[0]:,} "
+            f"positions, {float(d_tip.sum()):.4g} mm of motion), more than {MAX_POSES:,}: give a larger motion step"
+        )
     n = np.maximum(1, np.ceil((d_tip + d_ax) / step_mm).astype(int))
     total = 1 + int(n.sum())
     owner = np.concatenate([[0], np.repeat(np.arange(1, tip.shape[0]), n)])
