@@ -97,7 +97,7 @@ def build_cases(work: Path) -> list[dict]:
             cases.append({"name": f"{cmd} part={name}", "argv": argv, "refuse": True})
         for cmd in ("verify", "simulate"):
             cases.append({"name": f"{cmd} toolpath={name}", "argv": [cmd, str(BLOCK), "--toolpath", path,
-                          "--tool", "ball:D=10"], "refuse": True})  # fmt: skip
+                          "--tool", "ball:D=10"], "refuse": name != "utf16.csv"})  # a valid x,y,z path  # fmt: skip
     for cmd in BASE:
         for where in ("user", "file", "cwd"):
             cases.append({"name": f"{cmd} -o {where}", "argv": [cmd, *BASE[cmd]], "out": where, "refuse": True})
@@ -149,6 +149,8 @@ def _run_case(case: dict, folder: Path) -> tuple[int, str]:
             from machsurf_cad._start import main
 
             code = main(argv)
+        except SystemExit as exc:  # argparse's usage errors: what the console script turns into the exit code
+            code = exc.code if isinstance(exc.code, int) else 1
         except BaseException:  # an escaped exception is a traceback
             import traceback
 

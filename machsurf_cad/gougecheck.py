@@ -511,7 +511,7 @@ def verify(
         int(m),
         tuple(warns),
         times,
-        float(step_mm) ** 2 / (8.0 * rho_motion),
+        float(step_mm) * float(step_mm) / (8.0 * rho_motion),  # inf, not OverflowError, for an absurd step
         float(clear),
     )
 

@@ -291,14 +291,15 @@ def deviation(
     >>> round(d.stats["min"], 12), d.within_tolerance
     (-0.2, None)
     """
-    if tolerance is not None:
-        from .checks import positive
+    from .checks import positive
 
+    if tolerance is not None:
         tolerance = positive("tolerance", tolerance)
     if isinstance(candidate, (BSplineSurface, Face)):
         if int(samples) < 2:
             raise InputError(f"samples must be >= 2 per direction, got {samples}")
         need = samples * samples * _BYTES_PER_POINT / 2**20
+        positive("max_memory_mb", max_memory_mb, "MB")
         if need > max_memory_mb:
             raise InputError(
                 f"samples = {samples} ({samples * samples} points) needs about {need / 1024:.3g} GiB, over the "

@@ -67,6 +67,8 @@ def toolpath_and_cutter(toolpath: str, tool: str | None, say: Say):
     cutter: Any = parse_cutter(tool) if tool else tp.cutter
     if cutter is None:
         raise InputError(f"{path.name} names no usable CUTTER: give --tool")
+    for note in tp.info.get("assumed") or []:
+        say(f"note: {path.name} does not say it: assumed {note}")
     if tool and tp.cutter is not None and tp.cutter.apt_parameters() != cutter.apt_parameters():
         say(f"warning: {path.name} names the tool {tp.cutter.spec()}, --tool says {cutter.spec()}: using --tool")
     return path, tp, cutter

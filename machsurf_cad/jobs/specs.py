@@ -101,6 +101,7 @@ class InspectJob(JobSpec):
 
     def __post_init__(self) -> None:
         _positive("tol (mm)", self.tol, allow_none=True)
+        _positive("max_memory (MB)", self.max_memory)
         if int(self.samples) < 2:
             raise InputError("samples must be >= 2")
 
@@ -169,6 +170,8 @@ class MachiningSurfaceJob(_Post, JobSpec):
             _positive(n + " (mm)", getattr(self, n))
         _positive("stl_deflection (mm)", self.stl_deflection, allow_none=True)
         _positive("stepover (mm)", self.stepover, allow_none=True)
+        if not (isinstance(self.max_poles, int) and self.max_poles >= 16):
+            raise InputError(f"max_poles must be an integer >= 16, got {self.max_poles!r}")
         if self.axis is not None and len(self.axis) != 3:
             raise InputError("axis must be x,y,z")
         self._check_post()
@@ -181,13 +184,31 @@ class MachiningSurfaceJob(_Post, JobSpec):
             raise InputError(
                 f"--{'scallop' if self.scallop is not None else 'stepover'} applies to a tool path: add --toolpath"
             )
+        if not self.toolpath:
+            path_only = [
+                name for name, value, default in (
+                    ("--chordal", self.chordal, 0.005), ("--gouge-tol", self.gouge_tol, 0.01),
+                    ("--allow-gouge", self.allow_gouge, False), ("--trim-gouges", self.trim_gouges, False),
+                    ("--clearance", self.clearance, 5.0), ("--feed", self.feed, 1000.0),
+                    ("--plunge-feed", self.plunge_feed, 300.0), ("--spindle", self.spindle, 10000.0),
+                    ("--tool-number", self.tool_number, 1), ("--simulate", self.simulate, False),
+                    ("--simulate-resolution", self.simulate_resolution, None),
+                ) if value != default
+            ]  # fmt: skip
+            if path_only:
+                raise InputError(f"{path_only[0]} applies to a tool path: add --toolpath")
+        if self.overrun is not None and self.scallop is None:
+            raise InputError("--overrun applies to iso-scallop passes: add --scallop")
+        if self.lead != "auto" and (self.lead_margin, self.lead_min, self.lead_rate) != (1.0, 0.0, 2.0):
+            raise InputError("--lead-margin, --lead-min and --lead-rate apply to --lead auto")
         if self.faces is None:  # the options of the whole-part 3-axis engine
             given = [
                 name for name, value, default in (
                     ("--pattern", self.pattern, "raster"), ("--angle", self.angle, 0.0),
                     ("--direction", self.direction, "zigzag"), ("--stepdown", self.stepdown, None),
                     ("--grid", self.grid, None), ("--cl-surface", self.cl_surface, False),
-                    ("--check-faces", self.check_faces, "rest"),
+                    ("--check-faces", self.check_faces, "rest"), ("--shank", self.shank, None),
+                    ("--holder", self.holder, None),
                 ) if value != default
             ]  # fmt: skip
             if given:

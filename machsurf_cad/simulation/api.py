@@ -404,6 +404,8 @@ def simulate(
     for name, val in (("depth", depth), ("stock", stock), ("tolerance", tolerance)):
         if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
             raise InputError(f"{name} must be > 0 mm, got {val!r}")
+        if val > 10 * float(c.D):  # the rays march through it: a depth of kilometres marches for ever
+            raise InputError(f"{name} {val:g} mm is more than 10 times the tool's diameter ({c.D:g} mm)")
     faces = _faces(part, "simulate")
     if resolution is None:
         area = sum(a * b for a, b in map(_face_size, faces))
