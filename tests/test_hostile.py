@@ -644,3 +644,31 @@ def test_sigterm_stops_a_long_stl_meshing_at_once(tmp_path):
     assert p.returncode == 143 and time.perf_counter() - t < 3, (p.returncode, err)
     assert err.strip() == "machsurf: terminated (nothing written)" and not (tmp_path / "o").exists()
     _no_partial(tmp_path / "o")
+
+
+def test_a_scheduler_that_answers_http_is_refused_within_the_timeout(tmp_path):
+    import http.server
+    import threading
+
+    import machsurf_cad as ms
+
+    srv = http.server.ThreadingHTTPServer(("127.0.0.1", 0), http.server.SimpleHTTPRequestHandler)
+    srv.daemon_threads = True  # a handler waiting on the Dask client's bytes must not hold the shutdown
+    threading.Thread(target=srv.serve_forever, daemon=True).start()
+    try:
+        t = time.perf_counter()
+        with pytest.raises(ms.InputError, match="cannot reach the Dask scheduler"):
+            ms.batch([{"name": "r", "argv": ["reff", "--example", "bezier5", "--tool", "ball:D=10"]}], tmp_path / "b",
+                     scheduler=f"tcp://127.0.0.1:{srv.server_address[1]}", timeout_s=2)  # fmt: skip
+        assert time.perf_counter() - t < 10  # --timeout 3 was ignored for 60 s; a 3 EiB MemoryError before
+    finally:
+        srv.shutdown()
+    assert not (tmp_path / "b").exists()
+
+
+def test_an_iso_scallop_of_a_nanometre_is_refused_after_the_first_step(tmp_path):
+    t = time.perf_counter()
+    r = run("machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--tol", "0.01", "--toolpath",
+            "--scallop", "1e-9", "-o", tmp_path / "o")  # fmt: skip
+    _refused(r, "needs about", "passes on this face", "give a larger scallop height")
+    assert time.perf_counter() - t < 30  # 104 s before
