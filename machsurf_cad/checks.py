@@ -33,7 +33,7 @@ def positive(name: str, value, unit: str = "mm") -> float:
 
 def index(name: str, value, *, low: int = 0) -> int:
     """``value`` as an integer index >= ``low`` (a bool or a fractional number is refused, not rounded)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) and not hasattr(value, "__index__"):
+    if isinstance(value, bool) or not (isinstance(value, (int, float)) or hasattr(value, "__index__")):
         raise InputError(f"{name} must be an integer, got {value!r}")
     if isinstance(value, float) and not value.is_integer():
         raise InputError(f"{name} must be an integer, got {value!r}")

@@ -401,9 +401,12 @@ def test_spreadsheet_csv_and_our_csv_carrying_its_tool(tmp_path):
     assert back.cutter == ms.BallEndMill(10) and back.info["assumed"] == []
     assert_points_close(back.tip, tp.tip, atol=1e-6)  # 6 decimals per coordinate
     # a spreadsheet's: BOM, CRLF, ';' with decimal commas, other column order, no move or pass
-    (tmp_path / "s.csv").write_bytes("\ufeffK;J;I;Z;Y;X\r\n1;0;0;3,5;2;1,25\r\n1;0;0;3,5;2;2,25\r\n".encode())
+    (tmp_path / "s.csv").write_bytes(
+        "\ufeffK;J;I;Z;Y;X;tool\r\n1;0;0;3,5;2;1,25;bull:D=16,r=3\r\n1;0;0;3,5;2;2,25;bull:D=16,r=3\r\n".encode()
+    )
     s = ms.read_csv(tmp_path / "s.csv")
     assert_points_close(s.tip, [[1.25, 2, 3.5], [2.25, 2, 3.5]], atol=0)
+    assert s.cutter == ms.BullNoseEndMill(16, 3)  # the tool cell keeps its comma
     assert s.n_passes == 1 and "every move a cut (no move column)" in s.info["assumed"]
     (tmp_path / "u.csv").write_text("tip_z,tip_y,tip_x\n3,2,1\n", encoding="utf-16")
     u = ms.read_csv(tmp_path / "u.csv")

@@ -37,6 +37,7 @@ import numpy as np
 from ..errors import InputError
 from .toolpath import Move, ToolPath
 
+_DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d*,\d+([eE][+-]?\d+)?\s*$")
 _NUM = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eEdD][+-]?\d+)?$")
 
 _GEOMETRY_REFUSED = {"TRACUT", "COPY", "CIRCLE", "MOVARC", "CYCLE", "CUTCOM", "ROTABL", "ROTHED", "INDEX", "ORIGIN"}
@@ -104,13 +105,10 @@ def _read_text(p: Path) -> str:
         enc = "utf-8"
     try:
         text = data.decode(enc)
-    except UnicodeDecodeError:
-        try:
-            text = data.decode("latin-1") if b"\x00" not in data else ""
-        except UnicodeDecodeError:  # pragma: no cover - latin-1 decodes every byte
-            text = ""
-        if not text:
+    except UnicodeDecodeError:  # an older system's Latin-1 (accented comments): every byte decodes
+        if b"\x00" in data:
             raise InputError(f"{p.name} is not a text file (neither UTF-8 nor UTF-16)") from None
+        text = data.decode("latin-1")
     if "\x00" in text:
         raise InputError(f"{p.name} is not a text file (it holds NUL bytes)")
     return text
@@ -354,8 +352,8 @@ def _csv_rows(text: str, p: Path) -> tuple[list[str], list[list[str]]]:
     head_line = lines[0]
     sep = max((";", ",", "\t"), key=head_line.count)
     rows = list(csv.reader(io.StringIO("\n".join(lines)), delimiter=sep))
-    if sep == ";":  # a spreadsheet with decimal commas
-        rows = [rows[0]] + [[c.replace(",", ".") for c in r] for r in rows[1:]]
+    if sep == ";":  # a spreadsheet with decimal commas: numbers only (a tool cell bull:D=16,r=3 keeps its comma)
+        rows = [rows[0]] + [[c.replace(",", ".") if _DECIMAL_COMMA.match(c) else c for c in r] for r in rows[1:]]
     return rows[0], rows[1:]
 
 

@@ -401,21 +401,16 @@ def simulate(
         raise InputError("simulate needs the tool: the path carries no cutter (give --tool)")
     resolution = None if resolution is None else checks.positive("resolution", resolution)
     motion_step = None if motion_step is None else checks.positive("motion step", motion_step)
-    for name, val in (("depth", depth), ("stock", stock), ("tolerance", tolerance)):
-        if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
-            raise InputError(f"{name} must be > 0 mm, got {val!r}")
-        if val > 10 * float(c.D):  # the rays march through it: a depth of kilometres marches for ever
+    tolerance = checks.positive("tolerance", tolerance)
+    for name, val in (("depth", depth), ("stock", stock)):
+        if checks.positive(name, val) > 10 * float(c.D):  # the rays march through it: kilometres march for ever
             raise InputError(f"{name} {val:g} mm is more than 10 times the tool's diameter ({c.D:g} mm)")
     faces = _faces(part, "simulate")
     if resolution is None:
         area = sum(a * b for a, b in map(_face_size, faces))
         resolution = max(math.sqrt(area / 200_000), 1e-3)
-    if not (math.isfinite(resolution) and resolution > 0):
-        raise InputError(f"resolution must be > 0 mm, got {resolution!r}")
     R = float(c.max_radius())
-    step = float(motion_step) if motion_step is not None else 0.1 * R
-    if not (math.isfinite(step) and step > 0):
-        raise InputError(f"motion step must be > 0 mm, got {motion_step!r}")
+    step = motion_step if motion_step is not None else 0.1 * R
     P, N, F, Q = sample_faces(faces, resolution, max_samples=max_samples)
     t1 = time.perf_counter()
     T, A, _ = motion_poses(toolpath.tip, toolpath.axis, step, float(c.length))
