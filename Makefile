@@ -62,11 +62,12 @@ np124:
 FC_MOD ?= $(HOME)/.local/share/FreeCAD/Mod
 workbench-install:
 	mkdir -p $(FC_MOD)
-	ln -sfn $(CURDIR)/workbench $(FC_MOD)/machsurf
-	@echo "linked $(FC_MOD)/machsurf -> $(CURDIR)/workbench; restart FreeCAD and pick the machsurf workbench"
+	rm -f $(FC_MOD)/machsurf  # the link of versions before 0.3.0
+	ln -sfn $(CURDIR) $(FC_MOD)/machsurf_cad
+	@echo "linked $(FC_MOD)/machsurf_cad -> $(CURDIR) (package.xml: workbench/); restart FreeCAD, pick machsurf"
 
 workbench-uninstall:
-	rm -f $(FC_MOD)/machsurf
+	rm -f $(FC_MOD)/machsurf_cad $(FC_MOD)/machsurf
 
 clean:  # build products only: out/ is left alone (it may hold files of yours beside the runs' outputs)
 	rm -rf .pytest_cache build *.egg-info docs/_build docs/generated

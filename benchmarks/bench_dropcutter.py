@@ -62,11 +62,11 @@ def dropcutter_rows(quick=False, deflection=0.001):
     top = ms.top_faces(faces)
     rest = [f for i, f in enumerate(faces) if i not in top]
     t = time.perf_counter()
-    tp = ms.raster([faces[i] for i in top], cutter, check_faces=rest, stepover_mm=4.0 if quick else 1.0,
-                   chordal_tolerance_mm=0.01)  # fmt: skip
+    tp = ms.raster([faces[i] for i in top], cutter, check_faces=rest, stepover=4.0 if quick else 1.0,
+                   chordal_tolerance=0.01)  # fmt: skip
     t_path = time.perf_counter() - t
     t = time.perf_counter()
-    v = ms.verify(faces, tp, tolerance=0.01)
+    v = ms.verify(faces, tp, gouge_tolerance=0.01)
     t_verify = time.perf_counter() - t
     rows.append(
         {

@@ -67,7 +67,7 @@ def verify_rows(quick=False):
     n = 1000 if quick else 10000
     tp = _path(n)
     t = time.perf_counter()
-    res = ms.verify(faces, tp, tolerance=0.01)
+    res = ms.verify(faces, tp, gouge_tolerance=0.01)
     t_ours = time.perf_counter() - t
     t = time.perf_counter()
     brute, n_pts = _brute(faces, tp, 0.4 if quick else 0.2)

@@ -38,7 +38,7 @@ BLOCK = ROOT / "example_parts" / "freeform_block.step"
 BASE = {  # a fast valid command line per command
     "info": [str(BLOCK)],
     "inspect": [str(BLOCK), str(BLOCK), "--samples", "20", "--no-render"],
-    "machining-surface": ["--example", "bezier5", "--tool", "ball:D=10", "--axes", "3", "--tol", "0.01"],
+    "machining-surface": ["--example", "bezier5", "--tool", "ball:D=10", "--axes", "3", "--tolerance", "0.01"],
     "reff": ["--example", "bezier5", "--tool", "bull:D=10,r=2", "--grid", "16", "--no-render"],
     "flank": ["--example", "hypar", "--tool", "cyl:D=20", "--no-render"],
     "envelope": ["--example", "line", "--tool", "cyl:D=10", "--passes", "1", "--no-render"],

@@ -39,8 +39,8 @@ def _raster(faces, tool: str, stepover: float):
 
     machined = select_faces(faces, "top", axis=(0.0, 0.0, 1.0), what="--faces")
     checked = [faces[i] for i in range(len(faces)) if i not in machined]
-    tp = raster([faces[i] for i in machined], parse_cutter(tool), stepover_mm=stepover, check_faces=checked,
-                chordal_tolerance_mm=0.005, verify_tolerance_mm=0.01)  # fmt: skip
+    tp = raster([faces[i] for i in machined], parse_cutter(tool), stepover=stepover, check_faces=checked,
+                chordal_tolerance=0.005, gouge_tolerance=0.01)  # fmt: skip
     return tp, machined
 
 

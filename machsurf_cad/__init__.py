@@ -69,6 +69,7 @@ if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``im
         JobOutcome,
         JobSpec,
         MachiningSurfaceJob,
+        Mill3Job,
         ReffJob,
         SimulateJob,
         VerifyJob,
@@ -86,6 +87,7 @@ if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``im
     )
     from .machining.toolpath import part_sphere, tool_paths
     from .measure import DeviationResult, deviation, project_points
+    from .pathcheck import PathCheck, check_toolpath
     from .results import Progress
     from .simulation import SimulationResult, simulate
     from .sweep import Envelope, EnvelopeResult, Motion, PassChain, envelope
@@ -93,9 +95,11 @@ if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``im
         Contact,
         Direction,
         DropCutterResult,
+        Mill3Result,
         Pattern,
         cl_surface,
         drop_cutter,
+        mill3,
         raster,
         scallop_stepover,
         top_faces,
@@ -148,6 +152,10 @@ __all__ = [
     # entry points
     "machining_surface",
     "drop_cutter",
+    "mill3",
+    "Mill3Result",
+    "check_toolpath",
+    "PathCheck",
     "raster",
     "waterline",
     "cl_surface",
@@ -196,6 +204,7 @@ __all__ = [
     # job specs and outcome
     "JobSpec",
     "InfoJob",
+    "Mill3Job",
     "InspectJob",
     "MachiningSurfaceJob",
     "ReffJob",

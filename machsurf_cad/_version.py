@@ -1,3 +1,3 @@
-"""The version of machsurf_cad: its one source (pyproject reads it; a test checks the workbench package.xml)."""
+"""The version of machsurf_cad: its one source (pyproject reads it; a test checks package.xml)."""
 
-__version__ = "0.2.0"
+__version__ = "0.3.0"

@@ -11,7 +11,7 @@ the error reached. This engine is shared by the machining surfaces and the envel
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,6 +20,7 @@ from .errors import InputError, ToleranceError
 from .geometry.basis import collocation_matrix
 from .geometry.bspline import BSplineSurface
 from .results import Result
+from .typing import ArrayLike, ProgressLike
 
 GridMap = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
@@ -93,17 +94,17 @@ def _lstsq(b: np.ndarray, rhs: np.ndarray) -> np.ndarray:
 
 def fit_surface(
     f: GridMap,
-    bounds,
+    bounds: Sequence[float],
     *,
     tolerance: float,
-    degree=(3, 3),
+    degree: Sequence[int] = (3, 3),
     max_poles: int = 40000,
-    initial_spans=(4, 4),
+    initial_spans: Sequence[int] = (4, 4),
     max_iter: int = 40,
     check_grid: int = 101,
     name: str = "",
-    breaks=None,
-    progress=None,
+    breaks: tuple[tuple[ArrayLike, ArrayLike], tuple[ArrayLike, ArrayLike]] | None = None,
+    progress: ProgressLike = None,
 ) -> SurfaceFit:
     """Fit ``f`` over ``bounds = (u0, u1, v0, v1)`` within ``tolerance`` (max-norm distance, mm).
 

@@ -3,8 +3,14 @@
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from .errors import InputError
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from .cutters import Cutter
 
 LEAD_LIMIT_DEG = 89.0
 """Largest |lead|: at 90 deg the axis lies in the tangent plane."""
@@ -43,7 +49,7 @@ def index(name: str, value, *, low: int = 0) -> int:
     return i
 
 
-def tool(value, name: str = "tool"):
+def tool(value, name: str = "tool") -> Cutter:
     """A :class:`~machsurf_cad.cutters.Cutter`, from itself or its string (``ball:D=10``)."""
     from .cutters import Cutter
     from .toolspec import parse_cutter
@@ -66,7 +72,7 @@ def toolpath(value, name: str = "toolpath"):
     return value
 
 
-def points(name: str, value, dim: int):
+def points(name: str, value, dim: int) -> np.ndarray:
     """``value`` as a float array of shape (n, dim) (any array whose last axis has ``dim`` values)."""
     import numpy as np
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import sys
 
-from .cliargs import build_parser
+from .cliargs import build_parser, modernise_argv
 from .cliargs import spec_of_args as _spec
 from .errors import MachsurfError
 from .jobs.base import EXIT_INPUT
@@ -65,6 +65,7 @@ _BAR_TITLES = {
 def run(argv=None) -> int:
     """Parse ``argv`` and run the command (signal handlers are :func:`machsurf_cad._start.main`'s)."""
     parser = build_parser()
+    argv = modernise_argv(sys.argv[1:] if argv is None else argv, lambda line: print(line, file=sys.stderr))
     args = parser.parse_args(argv)
     if not getattr(args, "command", None):
         parser.print_help()

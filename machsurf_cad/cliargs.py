@@ -58,10 +58,8 @@ def _lead(text: str):
 
 def spec_of_args(args):
     """The job spec of the parsed arguments (options and spec fields share their names)."""
-    cls = SPECS["machining-surface" if args.command == "mill3" else args.command]
+    cls = SPECS[args.command]
     kw = {f.name: getattr(args, f.name) for f in fields(cls) if hasattr(args, f.name)}
-    if args.command == "mill3":  # the whole-part 3-axis engine: a machining-surface job with --faces, 3 axes
-        kw.update(axes=3, toolpath=True, strategy="planes:x")
     if "axis" in kw:
         kw["axis"] = _axis(kw["axis"])
     return cls(**kw)
@@ -77,9 +75,9 @@ def _face_input(p, example_help: str, part_help: str = "STEP file (or use --exam
 def _gouge(p, default: str) -> None:
     g = p.add_argument_group("tool-body check against every face of the part (before writing the path)")
     g.add_argument(
-        "--gouge-tol",
+        "--gouge-tolerance",
         type=_finite,
-        default=None if default == "--tol" else float(default),
+        default=None if default == "--tolerance" else float(default),
         help=f"deepest the tool may go into the part, mm (default {default}); deeper: the path is not written, exit 2",
     )
     g.add_argument("--allow-gouge", action="store_true", help="write a gouging path anyway, gouges listed in report")
@@ -105,6 +103,40 @@ def _post(p) -> None:
     g.add_argument("--simulate-resolution", type=_finite, default=None, help="sample spacing of --simulate, mm")
 
 
+DEPRECATED_OPTIONS: dict[str, dict[str, str]] = {
+    "inspect": {"--tol": "--tolerance", "--max-memory": "--max-memory-mb"},
+    "machining-surface": {"--tol": "--tolerance", "--chordal": "--chordal-tolerance",
+                          "--gouge-tol": "--gouge-tolerance", "--grid": "--grid-step"},
+    "mill3": {"--tol": "--tolerance", "--chordal": "--chordal-tolerance", "--gouge-tol": "--gouge-tolerance",
+              "--grid": "--grid-step"},
+    "reff": {"--max-memory": "--max-memory-mb"},
+    "flank": {"--tol": "--tolerance", "--envelope-tol": "--envelope-tolerance", "--gouge-tol": "--gouge-tolerance",
+              "--fit-ruled": "--ruled-tolerance"},
+    "envelope": {"--tol": "--tolerance", "--chordal": "--chordal-tolerance", "--gouge-tol": "--gouge-tolerance",
+                 "--seam-angle-tol": "--seam-angle-tolerance"},
+    "verify": {"--tol": "--gouge-tolerance", "--step-deg": "--angle-step"},
+    "simulate": {"--tol": "--gouge-tolerance"},
+}  # fmt: skip
+"""Options renamed in 0.3.0 (the glossary), by command: still accepted until 0.4 with a one-line note."""
+
+
+def modernise_argv(argv, note=None) -> list[str]:
+    """``argv`` with the old option names of its command replaced by the new ones; ``note(line)`` is told
+    of each."""
+    argv = [str(a) for a in argv]
+    command = next((a for a in argv if not a.startswith("-")), None)
+    old = DEPRECATED_OPTIONS.get(command or "", {})
+    out = []
+    for a in argv:
+        name, eq, value = a.partition("=")
+        if name in old:
+            if note is not None:
+                note(f"note: {name} is now {old[name]} (the old name goes in 0.4)")
+            a = old[name] + eq + value
+        out.append(a)
+    return out
+
+
 class _StrictParser(_Parser):
     def error(self, message):  # a batch job's command line: the message only, the batch goes on
         raise InputError(message)
@@ -120,7 +152,7 @@ def spec_from_argv(argv) -> JobSpec:
         raise InputError("a batch job's command line takes no -o: the batch writes OUT/<name>/")
     if argv[:1] in (["batch"], ["demo"]):
         raise InputError(f"'{argv[0]}' cannot run as a batch job")
-    args = build_parser(_StrictParser).parse_args(argv)
+    args = build_parser(_StrictParser).parse_args(modernise_argv(argv))
     if not getattr(args, "command", None):
         raise InputError("empty command line")
     return spec_of_args(args)
@@ -144,10 +176,12 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     n.add_argument("candidate", help="candidate STEP (.step/.stp) or mesh (.stl)")
     n.add_argument("--face", type=int, default=0, help="face index in the nominal file (default 0)")
     n.add_argument("--candidate-face", type=int, default=None, help="face index in a candidate STEP (default: --face)")
-    n.add_argument("--tol", type=_finite, default=None, help="tolerance, max |deviation| in mm (exit 2 if not met)")
+    n.add_argument(
+        "--tolerance", type=_finite, default=None, help="tolerance, max |deviation| in mm (exit 2 if not met)"
+    )
     n.add_argument("--samples", type=int, default=200, help="grid samples per direction on a STEP candidate")
     n.add_argument("--no-render", dest="render", action="store_false", help="skip the PNG/VTP (numbers only)")
-    n.add_argument("--max-memory", type=_finite, default=4096.0, help="memory budget, MB: bigger work is refused")
+    n.add_argument("--max-memory-mb", type=_finite, default=4096.0, help="memory budget, MB: bigger work is refused")
     n.add_argument("-o", "--out", default="out/inspect", help="output folder (default: out/inspect)")
 
     m = sub.add_parser("machining-surface", help="guiding S1 and orientation S2 surfaces of a face (Table 1)")
@@ -162,7 +196,7 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     m.add_argument("--tilt", type=_finite, default=0.0, help="tilt angle Omega_n, degrees (5 axes)")
     m.add_argument("--axis", default=None, help="fixed axis x,y,z for 3 axes / 3+2 (default 0,0,1)")
     m.add_argument("--tip", action="store_true", help="3 axes: S1 at the tool tip instead of the torus plane")
-    m.add_argument("--tol", type=_finite, default=1e-3, help="fit tolerance, max-norm mm (default 0.001)")
+    m.add_argument("--tolerance", type=_finite, default=1e-3, help="fit tolerance, max-norm mm (default 0.001)")
     m.add_argument("--degree", type=int, default=3, help="fit degree in u and v (default 3)")
     m.add_argument("--max-poles", type=int, default=40000, help="pole budget per surface (default 40000)")
     m.add_argument(
@@ -193,7 +227,10 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
         help="with --scallop: passes run on past the face's edges, mm (default R)",
     )
     m.add_argument(
-        "--chordal", type=_finite, default=0.005, help="chordal tolerance of the positions, mm (default 0.005)"
+        "--chordal-tolerance",
+        type=_finite,
+        default=0.005,
+        help="chordal tolerance of the positions, mm (default 0.005)",
     )
     t = m.add_argument_group("3 axes on whole parts: exact drop-cutter on several faces (with --axes 3)")
     t.add_argument(
@@ -206,7 +243,7 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     t.add_argument("--angle", type=_finite, default=0.0, help="raster direction in the plane, degrees (default 0)")
     t.add_argument("--direction", choices=["zigzag", "one-way"], default="zigzag", help="raster line order")
     t.add_argument("--stepdown", type=_finite, default=None, help="waterline: distance between levels, mm")
-    t.add_argument("--grid", type=_finite, default=None, help="waterline / CL surface: plan grid of heights, mm")
+    t.add_argument("--grid-step", type=_finite, default=None, help="waterline / CL surface: plan grid of heights, mm")
     t.add_argument(
         "--cl-surface", action="store_true", help="also fit the certified height-field B-spline of the tool positions"
     )
@@ -231,7 +268,7 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     e.add_argument("--lead", type=_finite, default=0.0, help="lead angle, degrees (5 axes)")
     e.add_argument("--tilt", type=_finite, default=0.0, help="tilt angle, degrees (5 axes)")
     e.add_argument("--no-render", dest="render", action="store_false", help="numbers only")
-    e.add_argument("--max-memory", type=_finite, default=4096.0, help="memory budget, MB: bigger work is refused")
+    e.add_argument("--max-memory-mb", type=_finite, default=4096.0, help="memory budget, MB: bigger work is refused")
     e.add_argument(
         "--chunks", type=int, default=1, help="split the directions into N groups (over the cluster in a batch)"
     )
@@ -239,7 +276,7 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
 
     f = sub.add_parser("flank", help="flank milling settings of a cylindrical cutter on a ruled surface")
     _face_input(f, "eq18 | hypar | liu (the paper's surfaces, exact)", "STEP file with a ruled face (or use --example)")
-    f.add_argument("--fit-ruled", type=_finite, default=None, help="accept a non-ruled face within this many mm")
+    f.add_argument("--ruled-tolerance", type=_finite, default=None, help="accept a non-ruled face within this many mm")
     f.add_argument("--tool", default="cyl:D=20", help="cylindrical cutter, e.g. cyl:D=80 (mm)")
     f.add_argument("--rule", type=_finite, default=0.5, help="rule position as a fraction of the u range [0, 1]")
     f.add_argument(
@@ -251,8 +288,10 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     )
     f.add_argument("--side", type=int, default=1, help="+1: tool on the side of S_u x S_v, -1: the other")
     f.add_argument("--whole", action="store_true", help="settings on the whole surface: tool path, envelope, map")
-    f.add_argument("--tol", type=_finite, default=0.01, help="whole-surface tolerance and rule step criterion, mm")
-    f.add_argument("--envelope-tol", type=_finite, default=1e-3, help="envelope fit tolerance, mm")
+    f.add_argument(
+        "--tolerance", type=_finite, default=0.01, help="whole-surface tolerance and rule step criterion, mm"
+    )
+    f.add_argument("--envelope-tolerance", type=_finite, default=1e-3, help="envelope fit tolerance, mm")
     f.add_argument("--study", action="store_true", help="the paper's parameter study plots (figs 9 and 10)")
     f.add_argument(
         "--radius-range",
@@ -276,7 +315,7 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
         "--chunks", type=int, default=1, help="--whole: split the rules into N spans (over the cluster in a batch)"
     )
     f.add_argument("--no-render", dest="render", action="store_false", help="numbers and files, no pictures")
-    _gouge(f, "--tol")
+    _gouge(f, "--tolerance")
     _post(f)
     f.add_argument("-o", "--out", default="out/flank", help="output folder")
 
@@ -287,15 +326,17 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     w.add_argument("--shank", default=None, help="shank cylinder above the cutting length: D=..,L=.. (mm)")
     w.add_argument("--holder", default=None, help="holder cylinder above the shank: D=..,L=.. (mm)")
     w.add_argument("--faces", default="all", help="faces to check: all (default) or indices 0,3,5")
-    w.add_argument("--tol", type=_finite, default=0.01, help="gouge / collision tolerance, mm (default 0.01)")
+    w.add_argument(
+        "--gouge-tolerance", type=_finite, default=0.01, help="gouge / collision tolerance, mm (default 0.01)"
+    )
     w.add_argument(
         "--step",
         type=_finite,
         default=None,
         help="largest tip step along each move, mm (default min(1, sqrt(4 rho tol)): what the motion between two "
-        "placements can cut deeper stays below tol/2, reported as motion_bound_mm)",
+        "placements can cut deeper stays below gouge-tolerance/2, reported as motion_bound_mm)",
     )
-    w.add_argument("--step-deg", type=_finite, default=1.0, help="largest axis step along each move, deg (default 1)")
+    w.add_argument("--angle-step", type=_finite, default=1.0, help="largest axis step along each move, deg (default 1)")
     w.add_argument("--spacing", type=_finite, default=None, help="part sample spacing, mm (default min(1, D/8))")
     w.add_argument(
         "--chunks", type=int, default=1, help="split the placements into N chunks (over the cluster in a batch)"
@@ -312,7 +353,10 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
         "--resolution", type=_finite, default=None, help="nominal sample spacing, mm (default ~200k samples)"
     )
     s.add_argument(
-        "--tol", type=_finite, default=0.01, help="a cut deeper than this is a gouge, mm (default 0.01); exit 2"
+        "--gouge-tolerance",
+        type=_finite,
+        default=0.01,
+        help="a cut deeper than this is a gouge, mm (default 0.01); exit 2",
     )
     s.add_argument("--depth", type=_finite, default=1.0, help="deepest gouge measured, mm (default 1)")
     s.add_argument("--stock", type=_finite, default=1.0, help="thickest material measured, mm (default 1)")
@@ -340,12 +384,15 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     v.add_argument("--continuity", choices=["g0", "g1"], default="g1", help="between passes (default g1)")
     v.add_argument("--theta", default="0", help="rotation of each next axis about n1, degrees (one, or one per seam)")
     v.add_argument("--side", type=int, default=1, help="envelope sheet: +1 (side of S_a x S_t) or -1")
-    v.add_argument("--tol", type=_finite, default=1e-3, help="fit tolerance per pass, mm (default 0.001)")
+    v.add_argument("--tolerance", type=_finite, default=1e-3, help="fit tolerance per pass, mm (default 0.001)")
     v.add_argument(
-        "--chordal", type=_finite, default=0.01, help="chordal tolerance of the tool path, mm (default 0.01)"
+        "--chordal-tolerance",
+        type=_finite,
+        default=0.01,
+        help="chordal tolerance of the tool path, mm (default 0.01)",
     )
     v.add_argument(
-        "--seam-angle-tol",
+        "--seam-angle-tolerance",
         type=_finite,
         default=0.05,
         help="G1 is claimed only when the written faces meet within this normal angle, deg (default 0.05); else exit 2",
@@ -379,10 +426,15 @@ def _mill3_parser(sub) -> None:
     w.add_argument("--angle", type=_finite, default=0.0, help="raster direction in the plane, degrees (default 0)")
     w.add_argument("--direction", choices=["zigzag", "one-way"], default="zigzag", help="raster line order")
     w.add_argument("--stepdown", type=_finite, default=None, help="waterline: distance between levels, mm")
-    w.add_argument("--grid", type=_finite, default=None, help="waterline / CL surface: plan grid of heights, mm")
-    w.add_argument("--chordal", type=_finite, default=0.005, help="chordal tolerance of the positions, mm")
+    w.add_argument("--grid-step", type=_finite, default=None, help="waterline: plan grid of heights, mm")
+    w.add_argument("--chordal-tolerance", type=_finite, default=0.005, help="chordal tolerance of the positions, mm")
     w.add_argument("--cl-surface", action="store_true", help="also fit the certified height field of the positions")
-    w.add_argument("--tol", type=_finite, default=1e-3, help="CL surface fit tolerance, max-norm mm (default 0.001)")
+    w.add_argument("--no-toolpath", dest="toolpath", action="store_false", help="with --cl-surface: no tool path")
+    w.add_argument(
+        "--tolerance", type=_finite, default=1e-3, help="CL surface fit tolerance, max-norm mm (default 0.001)"
+    )
+    w.add_argument("--degree", type=int, default=3, help="CL surface degree (default 3)")
+    w.add_argument("--max-poles", type=int, default=40000, help="CL surface pole budget (default 40000)")
     w.add_argument("--shank", default=None, help="shank above the cutting length, D=..,L=.. (mm)")
     w.add_argument("--holder", default=None, help="holder above the shank, D=..,L=.. (mm)")
     _gouge(w, "0.01")

@@ -35,6 +35,7 @@ from __future__ import annotations
 import functools
 import math
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -46,8 +47,10 @@ from .errors import DegenerateGeometryError, InputError
 from .geometry.bspline import BSplineSurface
 from .geometry.face import Face
 from .geometry.normals import unit_normals
+from .glossary import renamed
 from .results import Result
 from .toolspec import parse_cutter
+from .typing import ArrayLike, FaceLike, MapChunks, ToolLike
 
 _S_FLAT_DEG = 1e-9  # slopes below this are a flat spot: R_eff is infinite
 
@@ -62,16 +65,17 @@ def _check_angles(name: str, deg) -> np.ndarray:
     return a
 
 
-def effective_radius(cutter, slope_deg, alpha_deg) -> np.ndarray:
+@renamed(cutter="tool", slope_deg="slope", alpha_deg="alpha")
+def effective_radius(tool: ToolLike, slope: ArrayLike, alpha: ArrayLike) -> np.ndarray:
     """Effective radius (mm) of a cutter for slope ``S`` and angle ``alpha`` (degrees), vectorised.
 
     Parameters
     ----------
-    cutter : Cutter or str
+    tool : Cutter or str
         Ball, flat or bull-nose end mill (mm).
-    slope_deg : float or array_like
+    slope : float or array_like
         Slope S of the surface: angle between its normal and the tool axis, degrees.
-    alpha_deg : float or array_like
+    alpha : float or array_like
         Angle between the steepest slope and the feed, projected normal to the axis, degrees.
 
     Returns
@@ -94,11 +98,11 @@ def effective_radius(cutter, slope_deg, alpha_deg) -> np.ndarray:
     >>> float(effective_radius("ball:D=10", 30.0, 45.0))
     5.0
     """
-    c = parse_cutter(cutter) if isinstance(cutter, str) else cutter
+    c = parse_cutter(tool) if isinstance(tool, str) else tool
     em = c.end_mill_radii(_PURPOSE)
     R, r = em.R, em.r
-    S = _check_angles("slope", slope_deg)
-    al = _check_angles("alpha", alpha_deg)
+    S = _check_angles("slope", slope)
+    al = _check_angles("alpha", alpha)
     S, al = np.broadcast_arrays(S, al)
     if em.is_ball:
         return np.full(S.shape, R)
@@ -118,7 +122,7 @@ def effective_radius(cutter, slope_deg, alpha_deg) -> np.ndarray:
     return val
 
 
-def stepover(scallop: float, r_eff, rho) -> tuple[np.ndarray, np.ndarray]:
+def stepover(scallop: float, r_eff: ArrayLike, rho: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Distance between adjacent passes (mm) for scallop height ``scallop`` (mm).
 
     Parameters
@@ -330,19 +334,19 @@ def parse_directions(text) -> list[float]:
 
 
 def reff_maps(
-    face,
-    tool,
+    face: FaceLike,
+    tool: ToolLike,
     *,
-    directions=(0.0,),
+    directions: float | str | Iterable[float] = (0.0,),
     grid: int = 256,
-    compare="ball",
+    compare: ToolLike | None = "ball",
     scallop: float | None = None,
     axes: int = 3,
     lead: float = 0.0,
     tilt: float = 0.0,
     max_memory_mb: float = 4096.0,
     chunks: int = 1,
-    map_chunks=None,
+    map_chunks: MapChunks = None,
 ) -> ReffMaps:
     """Effective radius (and step-over) maps of ``tool`` over a face, for machining directions.
 

@@ -38,7 +38,9 @@ from .chunking import check_chunks, split_map
 from .errors import InputError
 from .geometry.bspline import BSplineSurface
 from .geometry.face import Face
+from .glossary import renamed
 from .results import Progress, Result
+from .typing import MapChunks, PartLike, ToolLike
 
 CLEAR, GOUGE, COLLISION = 0, 1, 2
 STATUS = {CLEAR: "clear", GOUGE: "gouge", COLLISION: "collision"}
@@ -290,20 +292,28 @@ def _coarse(c, tree, P, h, tolerance, T, A, progress=None):
     return cut_d, hold_d, seed, idx, val, hold_seed
 
 
+@renamed(
+    cutter="tool",
+    tolerance="gouge_tolerance",
+    step_mm="step",
+    step_deg="angle_step",
+    spacing_mm="spacing",
+    clearance_mm="clearance",
+)
 def verify(
-    part,
+    part: PartLike,
     toolpath: ToolPath,
-    cutter=None,
+    tool: ToolLike | None = None,
     *,
-    tolerance: float = 0.01,
-    step_mm: float | None = None,
-    step_deg: float = 1.0,
-    spacing_mm: float | None = None,
+    gouge_tolerance: float = 0.01,
+    step: float | None = None,
+    angle_step: float = 1.0,
+    spacing: float | None = None,
     progress: Progress | None = None,
     max_samples: int = 20_000_000,
     chunks: int = 1,
-    map_chunks=None,
-    clearance_mm: float | None = None,
+    map_chunks: MapChunks = None,
+    clearance: float | None = None,
 ) -> VerifyResult:
     """Gouges and collisions of a tool path's tool body against every face of a part.
 
@@ -312,22 +322,22 @@ def verify(
     part : Face, BSplineSurface or sequence of them
         Every face of the part (trimmed regions respected).
     toolpath : ToolPath
-        Positions, axes and move kinds; its cutter is used unless ``cutter`` is given.
-    cutter : Cutter, optional
+        Positions, axes and move kinds; its cutter is used unless ``tool`` is given.
+    tool : Cutter, optional
         The tool with its shank and holder.
-    tolerance : float
+    gouge_tolerance : float
         A part point deeper than this inside the cutting part is a gouge (mm).
-    clearance_mm : float, optional
+    clearance : float, optional
         Shank or holder closer than this to the part, or a rapid move's cutting part, is a collision (mm;
-        default ``tolerance``).
-    step_mm, step_deg : float
+        default ``gouge_tolerance``).
+    step, angle_step : float
         Largest step of the tip (mm) and of the axis (degrees) between checked placements along
         each linear move. Between two placements the swept tool can reach deeper than both by up to
-        ``step_mm^2 / (8 rho)`` (``rho`` the smallest profile arc radius, or the tool radius: the rim's
+        ``step^2 / (8 rho)`` (``rho`` the smallest profile arc radius, or the tool radius: the rim's
         circle in plan); that bound is reported (``motion_bound_mm``) and the default step,
-        ``min(1, sqrt(4 rho tolerance))``, keeps it at half the tolerance: a gouge deeper than 1.5
+        ``min(1, sqrt(4 rho gouge_tolerance))``, keeps it at half the tolerance: a gouge deeper than 1.5
         times the tolerance is never read as clear.
-    spacing_mm : float, optional
+    spacing : float, optional
         Part sample spacing (default min(1, D/8) mm); every close approach is refined on the exact
         surface to 1/18 of it.
     progress : Progress, optional
@@ -357,7 +367,7 @@ def verify(
     >>> plane = builders.plane_patch()  # z = 0, 100 x 100 mm
     >>> tips = [np.array([[20.0, 50, z], [80, 50, z]]) for z in (0.0, -0.05)]  # on it, then 0.05 mm into it
     >>> tp = ToolPath.from_passes(tips, [np.array([[0.0, 0, 1]] * 2)] * 2, cutter=BallEndMill(10))
-    >>> res = verify(plane, tp, tolerance=0.01)
+    >>> res = verify(plane, tp, gouge_tolerance=0.01)
     >>> round(res.max_gouge, 6), res.report()["n_gouging_positions"]
     (0.05, 2)
     """
@@ -368,18 +378,18 @@ def verify(
     from .checks import positive
 
     toolpath = checks.toolpath(toolpath)
-    c = checks.tool(cutter) if cutter is not None else toolpath.cutter
+    c = checks.tool(tool) if tool is not None else toolpath.cutter
     if c is None:
         raise InputError("verify needs the tool: give --tool (the tool path carries none)")
 
-    tolerance = positive("tolerance", tolerance)
-    clear = tolerance if clearance_mm is None else checks.finite("clearance_mm", clearance_mm)
+    gouge_tolerance = positive("gouge_tolerance", gouge_tolerance)
+    clear = gouge_tolerance if clearance is None else checks.finite("clearance", clearance)
     rho_motion = motion_radius(c)
-    step_mm = min(1.0, math.sqrt(4.0 * rho_motion * tolerance)) if step_mm is None else positive("step_mm", step_mm)
-    step_deg = positive("step_deg", step_deg, "deg")
+    step = min(1.0, math.sqrt(4.0 * rho_motion * gouge_tolerance)) if step is None else positive("step", step)
+    angle_step = positive("angle_step", angle_step, "deg")
     faces = _faces(part)
-    h = positive("spacing_mm", spacing_mm) if spacing_mm is not None else _auto_spacing(faces, c, max_samples)
-    _check_placements(toolpath, step_mm, step_deg)
+    h = positive("spacing", spacing) if spacing is not None else _auto_spacing(faces, c, max_samples)
+    _check_placements(toolpath, step, angle_step)
     pts, fid, us, vs, dus, dvs = [], [], [], [], [], []
     total = 0
     for i, f in enumerate(faces):
@@ -402,14 +412,14 @@ def verify(
     if P.shape[0] == 0:
         raise InputError("the part's faces have no sample inside their trimmed regions")
     tree = cKDTree(P)
-    T, A, owner = _placements(toolpath, step_mm, step_deg)
+    T, A, owner = _placements(toolpath, step, angle_step)
     m = T.shape[0]
     L_cut = float(c.length)
     r_cut = float(c.profile_points(16)[:, 0].max())
     t1 = time.perf_counter()
     one = check_chunks(chunks) == 1
     parts = split_map(
-        functools.partial(_coarse, c, tree, P, h, tolerance, progress=progress if one else None),
+        functools.partial(_coarse, c, tree, P, h, gouge_tolerance, progress=progress if one else None),
         [T, A],
         chunks,
         map_chunks,
@@ -419,7 +429,7 @@ def verify(
     np.maximum.at(depth, d_idx, d_val)
     t2 = time.perf_counter()
     # refine every close approach on the exact surfaces
-    close = np.nonzero((seed >= 0) & (cut_d < tolerance + h))[0]
+    close = np.nonzero((seed >= 0) & (cut_d < gouge_tolerance + h))[0]
     best_xyz = np.full((m, 3), np.nan)
     best_face = np.full(m, -1)
     if close.size:
@@ -448,7 +458,7 @@ def verify(
     behind_k = -np.einsum("ij,ij->i", np.repeat(mid, kn, axis=0) - P[flat], nrm).reshape(-1, kn)
     ni = nk[:, 0]
     behind = np.where(np.isfinite(behind_k).all(axis=1), behind_k.min(axis=1), np.nan)
-    buried = np.isfinite(behind) & (behind > h + tolerance + r_cut) & (cut_d > -tolerance)
+    buried = np.isfinite(behind) & (behind > h + gouge_tolerance + r_cut) & (cut_d > -gouge_tolerance)
     if np.any(buried):
         cut_d[buried] = -behind[buried]
         best_face[buried] = F[ni[buried]]
@@ -471,11 +481,11 @@ def verify(
     pos_xyz[owner[wp]] = best_xyz[wp]
     status = np.full(n, CLEAR, np.int8)
     rapid = toolpath.move == Move.RAPID
-    status[(~rapid) & (pos_cut < -tolerance)] = GOUGE
+    status[(~rapid) & (pos_cut < -gouge_tolerance)] = GOUGE
     status[rapid & (pos_cut < clear)] = COLLISION
     status[pos_hold < clear] = COLLISION
     # where shank or holder collide and the cutting part does not gouge: their part point
-    hold_pos = np.nonzero((pos_hold < clear) & (pos_cut >= -tolerance))[0]
+    hold_pos = np.nonzero((pos_hold < clear) & (pos_cut >= -gouge_tolerance))[0]
     if hold_pos.size:
         order_h = np.lexsort((hold_d, owner))
         wh = order_h[np.r_[True, owner[order_h][1:] != owner[order_h][:-1]]]
@@ -495,7 +505,7 @@ def verify(
     return VerifyResult(
         toolpath,
         c,
-        float(tolerance),
+        float(gouge_tolerance),
         pos_cut,
         pos_hold,
         pos_face,
@@ -506,12 +516,12 @@ def verify(
         depth,
         tuple(f.name or f"face_{i}" for i, f in enumerate(faces)),
         float(h),
-        float(step_mm),
-        float(step_deg),
+        float(step),
+        float(angle_step),
         int(m),
         tuple(warns),
         times,
-        float(step_mm) * float(step_mm) / (8.0 * rho_motion),  # inf, not OverflowError, for an absurd step
+        float(step) * float(step) / (8.0 * rho_motion),  # inf, not OverflowError, for an absurd step
         float(clear),
     )
 

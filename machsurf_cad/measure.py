@@ -29,7 +29,9 @@ from .errors import InputError
 from .geometry.bspline import BSplineSurface
 from .geometry.closest import closest_points, inside_face
 from .geometry.face import Face
+from .glossary import renamed
 from .results import Result
+from .typing import ArrayLike, FaceLike, ProgressLike
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,14 +111,15 @@ _MM_KEYS = {
 }
 
 
+@renamed(uv_tol="uv_tolerance")
 def project_points(
     surface: BSplineSurface,
-    points,
+    points: ArrayLike,
     *,
     seed_samples: int | None = None,
     max_iter: int = 50,
-    uv_tol: float = 1e-14,
-    progress=None,
+    uv_tolerance: float = 1e-14,
+    progress: ProgressLike = None,
 ) -> Projection:
     """Closest points on ``surface`` (inside its parameter box) of many 3-D points.
 
@@ -164,7 +167,7 @@ def project_points(
     if p.shape[0] > chunk:
         parts = []
         for a in range(0, p.shape[0], chunk):
-            parts.append(_newton(surface, p[a : a + chunk], uv[a : a + chunk].copy(), max_iter, uv_tol))
+            parts.append(_newton(surface, p[a : a + chunk], uv[a : a + chunk].copy(), max_iter, uv_tolerance))
             if progress is not None:
                 progress(min(p.shape[0], a + chunk), p.shape[0], "closest points")
         return Projection(
@@ -173,7 +176,7 @@ def project_points(
                 for k in ("uv", "foot", "normal", "on_boundary", "converged")
             )
         )
-    res = _newton(surface, p, uv, max_iter, uv_tol)
+    res = _newton(surface, p, uv, max_iter, uv_tolerance)
     if progress is not None:
         progress(p.shape[0], p.shape[0], "closest points")
     return res
@@ -239,13 +242,13 @@ def _newton(surface: BSplineSurface, p: np.ndarray, uv: np.ndarray, max_iter: in
 
 
 def deviation(
-    reference,
-    candidate,
+    reference: FaceLike,
+    candidate: FaceLike | ArrayLike,
     *,
     samples: int = 200,
     tolerance: float | None = None,
-    triangles=None,
-    progress=None,
+    triangles: ArrayLike | None = None,
+    progress: ProgressLike = None,
     max_memory_mb: float = 4096.0,
 ) -> DeviationResult:
     """Signed deviation of ``candidate`` from ``reference`` (mm).

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterable
 
 from .cutters import (
     APTCutter,
@@ -36,7 +37,7 @@ def apt_mismatch(d: float, r: float, e: float, f: float, alpha: float, beta: flo
     return max(abs(bottom), abs(side))
 
 
-def cutter_from_apt(params) -> Cutter:
+def cutter_from_apt(params: Iterable[float]) -> Cutter:
     """The cutter of an APT ``CUTTER/`` statement (1, 2 or 7 values, mm and degrees).
 
     Ball, flat and bull-nose end mills are recognised from the 7 parameters (the convention of

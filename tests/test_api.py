@@ -133,7 +133,7 @@ def test_one_progress_signature():
 
 
 def test_job_specs_validate_and_round_trip_through_a_mapping():
-    spec = ms.FlankJob(example="liu", tool="cyl:D=20", whole=True, tol=0.5)
+    spec = ms.FlankJob(example="liu", tool="cyl:D=20", whole=True, tolerance=0.5)
     again = ms.FlankJob.from_mapping({k: v for k, v in spec.to_dict().items() if k != "command"})
     assert again == spec and spec.to_dict()["command"] == "flank"
     with pytest.raises(ms.InputError, match="setting must be one of"):

@@ -106,8 +106,8 @@ def test_verification_in_chunks_equals_one_run():
     x = np.linspace(10, 90, 60)
     tips = [np.stack([x, np.full_like(x, y), np.where(x > 50, -0.03, 0.0)], 1) for y in (30.0, 50.0, 70.0)]
     tp = ms.ToolPath.from_passes(tips, [np.tile([0.1, 0, 1], (60, 1))] * 3, cutter=ms.BullNoseEndMill(10, 2))
-    one = ms.verify(plane, tp, tolerance=0.01)
-    four = ms.verify(plane, tp, tolerance=0.01, chunks=4)
+    one = ms.verify(plane, tp, gouge_tolerance=0.01)
+    four = ms.verify(plane, tp, gouge_tolerance=0.01, chunks=4)
     for name in ("cut_distance", "holder_distance", "worst_face", "status", "sample_depth"):
         assert np.array_equal(getattr(one, name), getattr(four, name)), name
     assert np.array_equal(one.worst_xyz, four.worst_xyz, equal_nan=True)

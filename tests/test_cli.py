@@ -35,7 +35,7 @@ def test_inspect_step_candidate_and_tolerance_exit_code(tmp_path):
     shifted = tmp_path / "shifted.step"
     s = top.surface
     write_step(shifted, [Face(s.with_poles(s.poles + [0, 0, 0.02]), top.loops, name="shifted")])
-    ok = run("inspect", nominal, shifted, "--tol", "0.05", "--samples", "60", "-o", tmp_path / "ok")
+    ok = run("inspect", nominal, shifted, "--tolerance", "0.05", "--samples", "60", "-o", tmp_path / "ok")
     assert ok.returncode == 0, ok.stderr
     rep = json.loads((tmp_path / "ok" / "report.json").read_text())
     dev = rep["deviation"]
@@ -44,7 +44,7 @@ def test_inspect_step_candidate_and_tolerance_exit_code(tmp_path):
     assert f"{dev['max_abs_mm']:.6g}" in ok.stdout
     assert (tmp_path / "ok" / "deviation.png").stat().st_size > 10000
     bad = run_process(
-        "inspect", nominal, shifted, "--tol", "0.01", "--samples", "40", "--no-render", "-o", tmp_path / "bad"
+        "inspect", nominal, shifted, "--tolerance", "0.01", "--samples", "40", "--no-render", "-o", tmp_path / "bad"
     )
     assert bad.returncode == 2 and "NOT met" in bad.stdout
     assert json.loads((tmp_path / "bad" / "report.json").read_text())["deviation"]["within_tolerance"] is False
@@ -109,7 +109,7 @@ def test_machining_surface_command_with_toolpath(tmp_path):
         "20",
         "--tilt",
         "0",
-        "--tol",
+        "--tolerance",
         "0.001",
         "--toolpath",
         "--stepover",
@@ -130,7 +130,7 @@ def test_machining_surface_command_with_toolpath(tmp_path):
         "bull:D=28,r=4",
         "--lead",
         "5",
-        "--tol",
+        "--tolerance",
         "0.001",
         "--toolpath",
         "--stepover",
@@ -176,7 +176,7 @@ def test_machining_surface_command_errors(tmp_path):
         "bull:D=28,r=4",
         "--lead",
         "20",
-        "--tol",
+        "--tolerance",
         "1e-9",
         "--max-poles",
         "300",
@@ -273,7 +273,7 @@ def test_flank_command(tmp_path):
         "--side",
         "+1",
         "--whole",
-        "--tol",
+        "--tolerance",
         "0.5",
         "-o",
         out,
@@ -306,7 +306,9 @@ def test_flank_command(tmp_path):
     for name in ("envelope.step", "envelope.stl", "deviation.png"):
         assert (out / name).is_file()
     # the whole surface is not within 0.01 mm with R = 10: exit 2, outputs still written
-    r = run("flank", "--example", "liu", "--tool", "cyl:D=20", "--whole", "--tol", "0.01", "-o", tmp_path / "tight")
+    r = run(
+        "flank", "--example", "liu", "--tool", "cyl:D=20", "--whole", "--tolerance", "0.01", "-o", tmp_path / "tight"
+    )
     assert r.returncode == 2 and "NOT met" in r.stdout
 
 
@@ -339,7 +341,7 @@ def test_envelope_command(tmp_path):
         "g1",
         "--theta",
         "0",
-        "--tol",
+        "--tolerance",
         "0.001",
         "-o",
         out,
@@ -382,7 +384,7 @@ def test_lead_auto_reports_its_range_and_the_global_check_still_decides(tmp_path
         "bull:D=28,r=4",
         "--lead",
         "auto",
-        "--tol",
+        "--tolerance",
         "0.001",
         "-o",
         out,

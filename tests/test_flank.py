@@ -397,7 +397,7 @@ def test_smooth_minimax_path_bounds_the_axis_turn_and_beats_the_rule_optima():
     from machsurf_cad.flank_milling import compare_with_rule_optima, smooth_minimax_path
 
     s = examples.liu_ruled()
-    p = smooth_minimax_path(s, 10.0, n_rules=6, max_turn_deg_per_mm=2.5)
+    p = smooth_minimax_path(s, 10.0, n_rules=6, max_turn_rate=2.5)
     mids = np.array([0.5 * (st.frame.p0 + st.frame.p1) for st in p.settings])
     turn = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", p.axis[:-1], p.axis[1:]), -1, 1)))
     rate = turn / np.linalg.norm(np.diff(mids, axis=0), axis=1)
@@ -405,10 +405,10 @@ def test_smooth_minimax_path_bounds_the_axis_turn_and_beats_the_rule_optima():
     assert abs(rate.max() - p.smoothness["max_turn_reached_deg_per_mm"]) < 1e-9
     errs = [interference(s, st, n_v=101) for st in p.settings]
     assert abs(max(e.max_gouge for e in errs) - p.max_gouge) < 1e-12
-    c = compare_with_rule_optima(s, 10.0, n_rules=6, max_turn_deg_per_mm=2.5)
+    c = compare_with_rule_optima(s, 10.0, n_rules=6, max_turn_rate=2.5)
     assert c["smooth_minimax"]["max_abs_mm"] < 0.5 * c["rule_optima"]["max_abs_mm"]
-    with pytest.raises(InputError, match="max_turn_deg_per_mm must be > 0"):
-        smooth_minimax_path(s, 10.0, max_turn_deg_per_mm=-1.0)
+    with pytest.raises(InputError, match="max_turn_rate must be > 0"):
+        smooth_minimax_path(s, 10.0, max_turn_rate=-1.0)
 
 
 def test_smooth_bound_below_zero_is_a_one_line_error(tmp_path):

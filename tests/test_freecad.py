@@ -27,7 +27,9 @@ pytestmark = pytest.mark.skipif(
 def _home(tmp_path):
     mod = tmp_path / "home" / ".local" / "share" / "FreeCAD" / "Mod"
     mod.mkdir(parents=True)
-    (mod / "machsurf").symlink_to(ROOT / "workbench")
+    (mod / "machsurf_cad").symlink_to(
+        ROOT
+    )  # as `make workbench-install` does: the root package.xml points to workbench/
     return tmp_path / "home"
 
 

@@ -51,7 +51,7 @@ def test_reused_output_folder_holds_exactly_one_run(tmp_path):
         "ball:D=10",
         "--axes",
         "3",
-        "--tol",
+        "--tolerance",
         "0.01",
         "--toolpath",
         "--stepover",
@@ -70,7 +70,7 @@ def test_reused_output_folder_holds_exactly_one_run(tmp_path):
         "bull:D=16,r=3",
         "--lead",
         "10",
-        "--tol",
+        "--tolerance",
         "0.01",
         "-o",
         out,
@@ -118,7 +118,7 @@ def test_work_size_is_bounded_before_the_work(tmp_path):
             "ball:D=10",
             "--axes",
             "3",
-            "--tol",
+            "--tolerance",
             "0.01",
             "--toolpath",
             "--stepover",
@@ -196,7 +196,7 @@ def test_user_path_gets_exact_derivatives_and_measured_g1(tmp_path):
         "2",
         "--no-render",
         "--no-theta-scan",
-        "--seam-angle-tol",
+        "--seam-angle-tolerance",
         "1e-9",
         "-o",
         tmp_path / "env2",
@@ -447,7 +447,7 @@ def test_reports_are_strict_json():
 def test_ctrl_c_and_sigterm_during_start_up(tmp_path, delay):
     for sig, code, word in ((signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")):
         p = subprocess.Popen([sys.executable, "-m", "machsurf_cad", "machining-surface", "--example", "bezier5",
-                              "--tool", "ball:D=10", "--axes", "3", "--tol", "0.01", "-o", str(tmp_path / "o")],
+                              "--tool", "ball:D=10", "--axes", "3", "--tolerance", "0.01", "-o", str(tmp_path / "o")],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL,
                              env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
         time.sleep(delay)
@@ -511,7 +511,7 @@ def test_ctrl_c_and_sigterm_during_start_up(tmp_path, delay):
         (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--feed", "900"], "--feed applies to"),
         (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--lead-rate", "3"], "--lead auto"),
         (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--shank", "D=10,L=40"], "add --faces"),
-        (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--tol", "inf"], "finite number"),
+        (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--tolerance", "inf"], "finite number"),
     ],
 )
 def test_ignored_option_combinations_are_refused(tmp_path, argv, words):
@@ -548,8 +548,8 @@ def _wrong_types():
         "simulate resolution='abc'": lambda: ms.simulate(face, tp, resolution="abc"),
         "simulate toolpath=None": lambda: ms.simulate(face, None),
         "drop_cutter xy='abc'": lambda: ms.drop_cutter([face], ms.BallEndMill(10), "abc"),
-        "raster stepover='a'": lambda: ms.raster([face], "ball:D=10", stepover_mm="a"),
-        "raster stepover=1e-4": lambda: ms.raster([face], "ball:D=10", stepover_mm=1e-4),
+        "raster stepover='a'": lambda: ms.raster([face], "ball:D=10", stepover="a"),
+        "raster stepover=1e-4": lambda: ms.raster([face], "ball:D=10", stepover=1e-4),
         "tool_paths ms='x'": lambda: ms.tool_paths("x", stepover=1),
         "tool_paths stepover='a'": lambda: ms.tool_paths(res, stepover="a"),
         "reff tool=42": lambda: ms.reff(face, 42),
@@ -582,12 +582,12 @@ def test_a_raster_that_would_run_for_hours_is_refused_with_its_figure():
 
     t = time.perf_counter()
     with pytest.raises(ms.InputError, match=r"needs about .* drop-cutter points .* give a larger step-over"):
-        ms.raster([ms.example("bezier5")], "ball:D=10", stepover_mm=1e-4)
+        ms.raster([ms.example("bezier5")], "ball:D=10", stepover=1e-4)
     face, tp = _plane_path(None)
     with pytest.raises(ms.InputError, match=r"every 1e-06 mm needs .* tool placements .* give a larger motion step"):
         ms.simulate(face, tp, motion_step=1e-6)  # asked for 52 GiB before
     with pytest.raises(ms.InputError, match=r"needs .* tool placements .* give a larger step"):
-        ms.verify(face, tp, step_mm=1e-5)
+        ms.verify(face, tp, step=1e-5)
     with pytest.raises(ms.InputError, match="more than 10 times the part's size"):
         ms.drop_cutter([face], "ball:D=1e6", [[0.0, 0.0]])
     assert time.perf_counter() - t < 30
@@ -611,7 +611,9 @@ def test_a_face_no_tool_position_can_touch_is_refused_by_name(tmp_path):
 
 def test_a_large_gouge_tolerance_is_not_a_clearance_the_rapids_must_keep(tmp_path):
     out = tmp_path / "f"
-    r = run("flank", "--example", "hypar", "--tool", "cyl:D=20", "--whole", "--tol", "1e3", "--no-render", "-o", out)
+    r = run(
+        "flank", "--example", "hypar", "--tool", "cyl:D=20", "--whole", "--tolerance", "1e3", "--no-render", "-o", out
+    )
     assert r.returncode == 0, r.stdout[-800:] + r.stderr
     v = _strict((out / "report.json").read_text())["whole"]["verify"]
     assert v["n_collisions"] == 0 and v["clearance_mm"] == 0.01 and v["min_clearance_mm"] > 4.4
@@ -633,7 +635,7 @@ def test_mill3_is_the_whole_part_three_axis_command_and_the_old_route_notes_it(t
 @needs_kernel
 def test_sigterm_stops_a_long_stl_meshing_at_once(tmp_path):
     p = subprocess.Popen([sys.executable, "-m", "machsurf_cad", "machining-surface", "--example", "blade", "--tool",
-                          "ball:D=10", "--axes", "3", "--tol", "0.01", "--stl-deflection", "0.0002", "-o",
+                          "ball:D=10", "--axes", "3", "--tolerance", "0.01", "--stl-deflection", "0.0002", "-o",
                           str(tmp_path / "o")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          stdin=subprocess.DEVNULL,
                          env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
@@ -671,7 +673,7 @@ def test_a_scheduler_that_answers_http_is_refused_within_the_timeout(tmp_path):
 
 def test_an_iso_scallop_of_a_nanometre_is_refused_after_the_first_step(tmp_path):
     t = time.perf_counter()
-    r = run("machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--tol", "0.01", "--toolpath",
+    r = run("machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--tolerance", "0.01", "--toolpath",
             "--scallop", "1e-9", "-o", tmp_path / "o")  # fmt: skip
     _refused(r, "needs about", "passes on this face", "give a larger scallop height")
     assert time.perf_counter() - t < 30  # 104 s before

@@ -63,7 +63,7 @@ def test_machining_surface_command_with_scallop(tmp_path):
     out = tmp_path / "iso"
     r = run(
         "machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--axes", "3", "--toolpath",
-        "--scallop", "0.02", "--chordal", "0.002", "--clearance", "60", "--simulate", "--simulate-resolution",
+        "--scallop", "0.02", "--chordal-tolerance", "0.002", "--clearance", "60", "--simulate", "--simulate-resolution",
         "0.5", "-o", out,
     )  # fmt: skip
     assert r.returncode == 0, r.stdout + r.stderr

@@ -154,7 +154,7 @@ def test_bull_with_lead_on_a_plane_matches_the_tilted_torus_section():
 
 def test_a_path_moved_into_the_part_gouges_by_that_depth():
     tp = _plane_ball_path(5.0, 1.0, z=-0.05)
-    res = ms.simulate(_plane(), tp, resolution=0.05, tolerance=0.01)
+    res = ms.simulate(_plane(), tp, resolution=0.05, gouge_tolerance=0.01)
     assert_close(res.max_gouge, 0.05, 1e-3, "max gouge")
     assert res.gouged and res.report()["n_gouged_samples"] > 0
 

@@ -280,8 +280,8 @@ def test_raster_zigzag_on_the_mould_insert_is_exact_and_clean(mould):
     adjacent lines are linked on the part, and the tool body check finds no gouge."""
     tol = 0.01
     tp = ms.raster(
-        mould, BULL, stepover_mm=2.5, chordal_tolerance_mm=tol, extent=(-32.0, -8.0, -16.0, -2.0),
-        verify_tolerance_mm=tol,
+        mould, BULL, stepover=2.5, chordal_tolerance=tol, extent=(-32.0, -8.0, -16.0, -2.0),
+        gouge_tolerance=tol,
     )  # fmt: skip
     i = tp.info
     assert i["chordal_error_measured_mm"] <= tol
@@ -297,7 +297,7 @@ def test_raster_zigzag_on_the_mould_insert_is_exact_and_clean(mould):
     prev_same = np.linalg.norm(tp.tip[idx - 1, :2] - tp.tip[idx, :2], axis=1) < 2e-3
     next_same = np.linalg.norm(tp.tip[np.minimum(idx + 1, tp.n_positions - 1), :2] - tp.tip[idx, :2], axis=1) < 2e-3
     assert np.all(prev_same | next_same)
-    v = ms.verify(mould, tp, tolerance=tol)
+    v = ms.verify(mould, tp, gouge_tolerance=tol)
     assert v.clean and v.max_gouge <= tol
     # zig-zag: consecutive lines run in opposite directions
     p0 = tp.tip[(tp.pass_index == 0) & cut]
@@ -307,8 +307,8 @@ def test_raster_zigzag_on_the_mould_insert_is_exact_and_clean(mould):
 
 def test_raster_one_way_at_an_angle_retracts_between_lines(mould):
     tp = ms.raster(
-        mould, ms.BallEndMill(6), stepover_mm=3.0, angle_deg=30.0, direction="one-way", chordal_tolerance_mm=0.01,
-        extent=(20.0, 40.0, -20.0, -5.0), clearance_mm=3.0,
+        mould, ms.BallEndMill(6), stepover=3.0, angle=30.0, direction="one-way", chordal_tolerance=0.01,
+        extent=(20.0, 40.0, -20.0, -5.0), clearance=3.0,
     )  # fmt: skip
     i = tp.info
     assert i["n_links_on_part"] == 0 and i["n_retracts"] == i["n_passes"] - 1
@@ -324,7 +324,7 @@ def test_raster_one_way_at_an_angle_retracts_between_lines(mould):
     step = np.linalg.norm(d, axis=1) > 1e-9
     ang = np.degrees(np.arctan2(d[step, 1], d[step, 0]))
     assert np.mean(np.abs(((ang - 30.0) + 90) % 180 - 90) < 1e-6) > 0.9  # moves along 30 deg
-    assert ms.verify(mould, tp, tolerance=0.01).clean
+    assert ms.verify(mould, tp, gouge_tolerance=0.01).clean
 
 
 def test_waterline_on_the_dome_touches_at_its_levels():
@@ -333,7 +333,7 @@ def test_waterline_on_the_dome_touches_at_its_levels():
     circle rho = sqrt((Rs + r)^2 - (z + r)^2)."""
     Rs, r = 30.0, 4.0
     dome = builders.sphere_patch(Rs, (0.0, 90.0), 360.0)
-    tp = ms.waterline([dome], ms.BallEndMill(2 * r), stepdown_mm=7.0, chordal_tolerance_mm=0.005, grid_mm=1.0)
+    tp = ms.waterline([dome], ms.BallEndMill(2 * r), stepdown=7.0, chordal_tolerance=0.005, grid_step=1.0)
     cut = tp.move == ms.Move.CUT
     z = tp.tip[cut, 2]
     rho = np.hypot(*tp.tip[cut, :2].T)
@@ -347,7 +347,7 @@ def test_cl_surface_of_a_flat_end_mill_with_flat_spots():
     is certified on unseen points; checked again here at random points against the exact drop-cutter."""
     face = ms.example("bezier5")
     cutter = ms.FlatEndMill(10)
-    fit, info = ms.cl_surface([face], cutter, tolerance_mm=0.02, max_poles=4000)
+    fit, info = ms.cl_surface([face], cutter, tolerance=0.02, max_poles=4000)
     assert fit.max_error <= 0.02 and info["share_without_face"] == 0.0
     xy = np.random.default_rng(3).uniform([5, 5], [95, 95], (300, 2))
     exact = drop_cutter([face], cutter, xy).height
@@ -369,7 +369,7 @@ def test_cli_raster_on_the_mould_insert_writes_a_checked_path(tmp_path):
     out = tmp_path / "o"
     r = run(
         "machining-surface", step, "--faces", "top", "--axes", "3", "--tool", "bull:D=10,r=2", "--toolpath",
-        "--stepover", "8", "--chordal", "0.01", "-o", out,
+        "--stepover", "8", "--chordal-tolerance", "0.01", "-o", out,
     )  # fmt: skip
     assert r.returncode == 0, r.stdout + r.stderr
     rep = json.loads((out / "report.json").read_text())
@@ -453,7 +453,7 @@ def test_cli_holder_too_low_for_the_pocket_exit_2_with_the_region(tmp_path):
     out = tmp_path / "o"
     r = run(
         "machining-surface", step, "--faces", "top", "--axes", "3", "--tool", "flat:D=8,L=6", "--shank", "D=8,L=2",
-        "--holder", "D=30,L=40", "--toolpath", "--stepover", "15", "--chordal", "0.005", "-o", out,
+        "--holder", "D=30,L=40", "--toolpath", "--stepover", "15", "--chordal-tolerance", "0.005", "-o", out,
     )  # fmt: skip
     assert r.returncode == 2
     rep = json.loads((out / "report.json").read_text())
@@ -494,18 +494,18 @@ def test_gouging_moves_are_split_until_the_body_check_is_clean(mould):
     from machsurf_cad.threeaxis.paths import refine_gouging_moves
 
     tol = 0.01
-    tp = ms.raster(mould, BULL, stepover_mm=4.0, chordal_tolerance_mm=tol, extent=(-28.0, -8.0, -12.0, -8.0))
+    tp = ms.raster(mould, BULL, stepover=4.0, chordal_tolerance=tol, extent=(-28.0, -8.0, -12.0, -8.0))
     keep = np.ones(tp.n_positions, bool)
     cut = np.nonzero(tp.move == ms.Move.CUT)[0]
     keep[cut] = False
     keep[cut[::8]] = True
     keep[cut[-1]] = True
     coarse = tp.subset(np.nonzero(keep)[0])
-    assert not ms.verify(mould, coarse, tolerance=tol).clean
+    assert not ms.verify(mould, coarse, gouge_tolerance=tol).clean
     fs = face_set(mould, spacing=default_seed_spacing(BULL))
-    fixed = refine_gouging_moves(coarse, mould, BULL, fs, tolerance_mm=tol)
+    fixed = refine_gouging_moves(coarse, mould, BULL, fs, gouge_tolerance=tol)
     assert fixed.info["n_moves_split_after_body_check"] > 0
-    assert ms.verify(mould, fixed, tolerance=tol).clean
+    assert ms.verify(mould, fixed, gouge_tolerance=tol).clean
 
 
 @pytest.mark.slow
@@ -516,8 +516,8 @@ def test_waterline_on_the_mould_insert_touches_and_is_clean(mould):
     within the tolerance, and the tool body check finds every position touching the part, none gouging."""
     tol = 0.01
     tp = ms.waterline(
-        mould, BULL, stepdown_mm=3.0, chordal_tolerance_mm=tol, grid_mm=2.0, extent=(-26.0, -10.0, -6.0, 6.0),
-        verify_tolerance_mm=tol,
+        mould, BULL, stepdown=3.0, chordal_tolerance=tol, grid_step=2.0, extent=(-26.0, -10.0, -6.0, 6.0),
+        gouge_tolerance=tol,
     )  # fmt: skip
     i = tp.info
     assert i["chordal_error_measured_mm"] <= tol
@@ -529,6 +529,6 @@ def test_waterline_on_the_mould_insert_touches_and_is_clean(mould):
     for j in np.unique(tp.pass_index):
         z = tp.tip[(tp.pass_index == j) & (tp.move != ms.Move.RAPID) & (tp.move != ms.Move.RETRACT), 2]
         assert np.ptp(z) < 1e-12
-    v = ms.verify(mould, tp, tolerance=tol)
+    v = ms.verify(mould, tp, gouge_tolerance=tol)
     assert v.clean and v.max_gouge <= tol
     assert np.abs(v.cut_distance[cut]).max() <= tol  # touches: within tol of the part, never deeper

@@ -30,7 +30,7 @@ def _plane(alpha_deg):
 def test_flat_floor_gives_the_closed_form_step(tool, H):
     """On a flat floor every line is the closed-form step-over from the last, and the cusp is H exactly."""
     cutter = ms.parse_cutter(tool)
-    tp = ms.raster([_plane(0.0)], cutter, scallop_mm=H, extent=(-20, 20, -20, 20))
+    tp = ms.raster([_plane(0.0)], cutter, scallop=H, extent=(-20, 20, -20, 20))
     i = tp.info
     step = ms.scallop_stepover(cutter, H)
     gaps = np.diff(_line_offsets(tp))
@@ -47,7 +47,7 @@ def test_slope_across_the_lines_is_met_along_the_normal(alpha):
     than the largest step that does (2 cos(alpha) sqrt(2 r H - H^2))."""
     r, H = 5.0, 0.01
     ca = math.cos(math.radians(alpha))
-    tp = ms.raster([_plane(alpha)], ms.BallEndMill(10), scallop_mm=H, extent=(-10, 10, -10, 10))
+    tp = ms.raster([_plane(alpha)], ms.BallEndMill(10), scallop=H, extent=(-10, 10, -10, 10))
     gaps = np.diff(_line_offsets(tp))[:-1]  # the last line is placed at the extent
     cusp = r - np.sqrt(r * r - (gaps / (2 * ca)) ** 2)
     best = 2 * ca * math.sqrt(2 * r * H - H * H)
@@ -67,7 +67,7 @@ def test_free_form_face_simulation_stays_within_the_target():
     planner used more lines than the flat-floor step-over where the face slopes."""
     f = ms.example("bezier5")
     ext = (5.0, 30.0, 5.0, 30.0)
-    tp = ms.raster([f], ms.BallEndMill(10), scallop_mm=0.01, extent=ext, chordal_tolerance_mm=0.002)
+    tp = ms.raster([f], ms.BallEndMill(10), scallop=0.01, extent=ext, chordal_tolerance=0.002)
     sim = ms.simulate([f], tp, resolution=0.04)
     p = sim.points
     inner = (p[:, 0] > ext[0] + 5) & (p[:, 0] < ext[1] - 5) & (p[:, 1] > ext[2] + 5) & (p[:, 1] < ext[3] - 5)
@@ -85,7 +85,7 @@ def test_a_wall_is_the_cutter_limit_not_a_scallop():
     floor = builders.plane_patch((-30, -30, 0), (60, 0, 0), (0, 30, 0))
     wall = builders.plane_patch((-30, 0, 0), (60, 0, 0), (0, 0, 10))
     top = builders.plane_patch((-30, 0, 10), (60, 0, 0), (0, 30, 0))
-    tp = ms.raster([floor, wall, top], ms.BallEndMill(10), scallop_mm=0.01, extent=(-10, 10, -12, 12))
+    tp = ms.raster([floor, wall, top], ms.BallEndMill(10), scallop=0.01, extent=(-10, 10, -12, 12))
     i = tp.info
     step = ms.scallop_stepover(ms.BallEndMill(10), 0.01)
     assert i["n_scallop_unmet"] == 0 and i["n_cusps_at_cutter_limit"] > 0

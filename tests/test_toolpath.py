@@ -38,7 +38,7 @@ def test_machining_surface_path_has_post_statements_and_round_trips(tmp_path):
     res = ms.machining_surface(ms.example("bezier5"), "bull:D=28,r=4", axes=5, lead=20, tolerance=1e-3)
     tp = ms.tool_paths(res, stepover=10.0, clearance=8.0)
     _check_linking(tp, 8.0)
-    opts = ms.PostOptions(feed_mm_min=1500, plunge_mm_min=250, spindle_rpm=12000, tool_number=7, partno="BEZ")
+    opts = ms.PostOptions(feed=1500, plunge_feed=250, spindle=12000, tool_number=7, partno="BEZ")
     lines, back = _round_trip(tp, tmp_path, opts)
     assert lines[1:7] == [
         "PARTNO/BEZ",
@@ -80,7 +80,7 @@ def test_flank_path_approaches_and_retracts_sideways(tmp_path):
         w = tp.tip[a] - tp.tip[b]
         assert abs(np.linalg.norm(w) - 6.0) < 1e-12 and abs(w @ tp.axis[b]) < 1e-12
         assert w @ (s.q - np.asarray(s.contacts["M2"])) > 0
-    clear = ms.verify(ms.example("liu"), tp, tolerance=0.5)
+    clear = ms.verify(ms.example("liu"), tp, gouge_tolerance=0.5)
     assert clear.report()["n_collisions"] == 0
     lines, back = _round_trip(tp, tmp_path)
     assert lines[3] == f"CUTTER/20.0000,0.0000,10.0000,0.0000,0.0000,0.0000,{tp.cutter.length:.4f}"
@@ -93,7 +93,7 @@ def test_flank_path_approaches_and_retracts_sideways(tmp_path):
 
 
 def test_envelope_passes_as_one_tool_path(tmp_path):
-    res = ms.envelope("cone:D=10,angle=10", ms.example("sine", "motion"), passes=3, theta_deg=0.0)
+    res = ms.envelope("cone:D=10,angle=10", ms.example("sine", "motion"), passes=3, theta=0.0)
     tp = res.toolpath
     assert tp.n_passes == 3 and tp.info["chordal_error_measured_mm"] <= 0.01
     _check_linking(tp, 5.0)
@@ -173,8 +173,8 @@ def test_bad_paths_are_refused():
         ms.ToolPath(np.zeros((2, 3)), [[0, 0, 2.0]] * 2, [0, 2], [0, 0])
     with pytest.raises(ms.InputError, match="clearance"):
         ms.ToolPath.from_passes([np.zeros((2, 3))], [np.array([[0, 0, 1.0]] * 2)], clearance=0)
-    with pytest.raises(ms.InputError, match="feed_mm_min"):
-        ms.PostOptions(feed_mm_min=-1)
+    with pytest.raises(ms.InputError, match="feed must be > 0"):
+        ms.PostOptions(feed=-1)
     tp = ms.ToolPath.from_passes([np.zeros((2, 3))], [np.array([[0, 0, 1.0]] * 2)])
     with pytest.raises(ms.InputError, match="cutter"):
         ms.write_apt("never.apt", tp)
@@ -208,4 +208,4 @@ def test_passes_linked_over_a_sphere_around_the_part():
     ax = tp.axis[link]
     radial = (tp.tip[link] - centre) / d[link, None]
     assert np.all(np.einsum("ij,ij->i", ax, radial) > 0)  # the axis points out: the body stays outside
-    assert ms.verify([bez], tp, tolerance=0.01).clean
+    assert ms.verify([bez], tp, gouge_tolerance=0.01).clean

@@ -36,7 +36,7 @@ def _ball_path(r: float, length: float = 60.0):
 @pytest.mark.parametrize("r,rho", [(9.9, 10.0), (10.5, 10.0), (12.0, 10.0)])
 def test_ball_in_a_concave_cylinder_gouges_iff_r_exceeds_rho(r, rho):
     face = _trough(rho)
-    res = ms.verify(face, _ball_path(r), tolerance=1e-3)
+    res = ms.verify(face, _ball_path(r), gouge_tolerance=1e-3)
     # closed form: with the tip on the bottom line, the distance from the ball's centre to the trough's
     # points at angle t is sqrt(r^2 - 2 rho (r - rho)(1 - cos t)): the depth is largest at the edge t = 60 deg
     depth = r - math.sqrt(r * r - 2 * rho * (r - rho) * (1 - math.cos(math.radians(60.0)))) if r > rho else 0.0
@@ -73,7 +73,7 @@ def test_rear_gouge_agrees_with_an_independent_brute_force():
     face = _trough(60.0, 45.0, 100.0)
     res = ms.machining_surface(face, "bull:D=28,r=4", axes=5, lead=5, tolerance=1e-3)
     tp = ms.tool_paths(res, stepover=20.0)
-    v = ms.verify(face, tp, tolerance=0.01, step_mm=0.5)
+    v = ms.verify(face, tp, gouge_tolerance=0.01, step=0.5)
     w = v.worst(1)[0]
     i = w["index"]
     assert w["status"] == "gouge" and w["depth_mm"] > 1.0
@@ -95,7 +95,7 @@ def test_demo_path_is_clean_on_the_whole_block_and_a_shifted_one_reads_its_shift
     top = faces[0]
     res = ms.machining_surface(top, "bull:D=16,r=3", axes=5, lead=10, tolerance=1e-3)
     tp = ms.tool_paths(res, stepover=4.0, chordal_tolerance=0.005)
-    v = ms.verify(faces, tp, tolerance=0.01)
+    v = ms.verify(faces, tp, gouge_tolerance=0.01)
     assert v.clean and v.report()["n_faces"] == 8
     assert v.max_gouge <= 0.005 + 0.002  # chords and fits, within their stated tolerances
     # the cutting positions moved 0.05 mm into the part along the nominal's outward normal at the contact
@@ -104,10 +104,10 @@ def test_demo_path_is_clean_on_the_whole_block_and_a_shifted_one_reads_its_shift
     n = np.zeros_like(tp.tip)
     n[cut] = top.surface.normals(uv[cut, 0], uv[cut, 1]) * (-1.0 if top.reversed else 1.0)
     moved = ms.ToolPath(tp.tip - 0.05 * n, tp.axis, tp.move, tp.pass_index, cutter=tp.cutter)
-    at_positions = ms.verify(faces, moved, tolerance=0.01, step_mm=1e9, step_deg=180)  # the GOTOs themselves
+    at_positions = ms.verify(faces, moved, gouge_tolerance=0.01, step=1e9, angle_step=180)  # the GOTOs themselves
     assert_close(at_positions.max_gouge, 0.050, 1e-3, "gouge of a path moved 0.05 mm into the part")
     assert at_positions.report()["n_gouging_positions"] >= 0.9 * int(cut.sum())
-    along = ms.verify(faces, moved, tolerance=0.01)  # and as the CNC moves between them: chords add their sag
+    along = ms.verify(faces, moved, gouge_tolerance=0.01)  # and as the CNC moves between them: chords add their sag
     assert 0.050 - 1e-3 <= along.max_gouge <= 0.050 + 0.005 + 2e-3
 
 
@@ -121,16 +121,16 @@ def test_shank_and_holder_collisions_and_rapids():
     tp = ms.ToolPath.from_passes(
         [np.array([[50.0, 1.0, 50.0], [60.0, 1.0, 50.0]])], [np.array([[0, 1.0, 0]] * 2)], cutter=body
     )
-    assert ms.verify(face, tp, tolerance=0.01).clean
+    assert ms.verify(face, tp, gouge_tolerance=0.01).clean
     # axis parallel to the wall, 6 mm off: the cutting part (R 5) is clear but the shank (R 8) cuts 2 mm in
     tp2 = ms.ToolPath.from_passes(
         [np.array([[50.0, 6.0, 10.0], [60.0, 6.0, 10.0]])], [np.array([[0, 0, 1.0]] * 2)], cutter=body
     )
-    v2 = ms.verify(face, tp2, tolerance=0.01)
+    v2 = ms.verify(face, tp2, gouge_tolerance=0.01)
     assert v2.report()["n_collisions"] > 0 and v2.report()["n_gouging_positions"] == 0
     assert_close(v2.report()["min_clearance_mm"], -14.0, 1e-6, "holder depth (R 20, z 60..100 on a 100 mm wall)")
     no_holder = ms.BullNoseEndMill(10, 2, 20, shank=ms.Shank(16, 30))
-    v3 = ms.verify(face, tp2, no_holder, tolerance=0.01)
+    v3 = ms.verify(face, tp2, no_holder, gouge_tolerance=0.01)
     assert_close(v3.report()["min_clearance_mm"], -2.0, 1e-6, "shank depth (R 8 at 6 mm from the wall)")
 
 
@@ -143,7 +143,7 @@ def test_bad_input():
         v = ms.verify(face, tp, ms.BallEndMill(10))
     assert v.clean and v.report()["warnings"]
     with pytest.raises(ms.InputError, match="tolerance must be > 0"):
-        ms.verify(face, tp, ms.BallEndMill(10), tolerance=0)
+        ms.verify(face, tp, ms.BallEndMill(10), gouge_tolerance=0)
 
 
 @needs_kernel
@@ -197,7 +197,7 @@ def test_auto_lead_matches_the_rear_gouge_threshold_of_a_concave_cylinder():
     bull-nose body in closed form) bisected on the lead agrees within 0.1 deg; lead 5 gouges 1.8 mm."""
     face = _trough(60.0, 45.0, 100.0)
     cut = ms.BullNoseEndMill(28, 4)
-    res = ms.machining_surface(face, cut, axes=5, lead="auto", lead_margin_deg=0.0, tolerance=1e-3)
+    res = ms.machining_surface(face, cut, axes=5, lead="auto", lead_margin=0.0, tolerance=1e-3)
     auto = res.report()["auto_lead"]["lead_min_deg"]
     assert_close(auto, math.degrees(math.asin(10 / 56)), 1e-9, "closed-form threshold")
 
@@ -214,7 +214,7 @@ def test_auto_lead_matches_the_rear_gouge_threshold_of_a_concave_cylinder():
         lo, hi = (mid, hi) if depth(mid) > 1e-4 else (lo, mid)
     assert abs(hi - auto) < 0.1, (hi, auto)
     tp = ms.tool_paths(ms.machining_surface(face, cut, axes=5, lead=5, tolerance=1e-3), stepover=10)
-    assert ms.verify(face, tp, tolerance=0.01).max_gouge > 1.7  # the issue's 1.80 mm behind the contact
+    assert ms.verify(face, tp, gouge_tolerance=0.01).max_gouge > 1.7  # the issue's 1.80 mm behind the contact
 
 
 def _lowest_point(cutter, axis):
@@ -322,7 +322,7 @@ def test_trim_gouges_writes_the_clear_stretches(tmp_path):  # the command writes
         "bull:D=28,r=4",
         "--lead",
         "5",
-        "--tol",
+        "--tolerance",
         "0.001",
         "--toolpath",
         "--stepover",
@@ -348,10 +348,10 @@ def test_the_motion_between_placements_cannot_hide_a_gouge():
     right = builders.plane_patch((0, -10, 0), (10, 0, -2), (0, 20, 0))
     tips = [np.array([[-2.5, 0.0, -0.02], [2.5, 0.0, -0.02]])]
     tp = ms.ToolPath.from_passes(tips, [np.array([[0.0, 0, 1]] * 2)], cutter=ms.BallEndMill(10), clearance=5)
-    coarse = ms.verify([left, right], tp, tolerance=0.01, step_mm=1.0)
+    coarse = ms.verify([left, right], tp, gouge_tolerance=0.01, step=1.0)
     assert coarse.clean and abs(coarse.cut_distance.min() - 0.005) < 1e-3  # a 1 mm step sees 0.005 clearance
     assert abs(coarse.motion_bound_mm - 1 / 40) < 1e-12  # ... and says it may miss 0.025 mm
-    res = ms.verify([left, right], tp, tolerance=0.01)
+    res = ms.verify([left, right], tp, gouge_tolerance=0.01)
     assert math.isclose(res.step_mm, math.sqrt(4 * 5 * 0.01)) and math.isclose(res.motion_bound_mm, 0.005)
     assert not res.clean and 0.02 - res.motion_bound_mm <= res.max_gouge <= 0.02 + 1e-6
     assert res.report()["motion_bound_mm"] == res.motion_bound_mm
@@ -370,9 +370,9 @@ def test_a_tool_high_above_a_hole_is_not_buried():
     above = ms.ToolPath(np.array([[75.2, 63.66, 109.7]]), np.array([[0.0, 0.0, 1.0]]), np.array([ms.Move.RAPID]),
                         np.array([0]), cutter=cutter)  # fmt: skip
     with pytest.warns(UserWarning, match="never comes within"):  # one position far from the part: said
-        v = ms.verify(faces, above, tolerance=0.01)
+        v = ms.verify(faces, above, gouge_tolerance=0.01)
     assert v.clean and v.report()["n_collisions"] == 0
     inside = ms.ToolPath(np.array([[65.0, 30.0, 0.0]]), np.array([[0.0, 0.0, 1.0]]), np.array([ms.Move.CUT]),
                          np.array([0]), cutter=cutter)  # fmt: skip
-    w = ms.verify(faces, inside, tolerance=0.01)
+    w = ms.verify(faces, inside, gouge_tolerance=0.01)
     assert not w.clean and w.max_gouge > 1.0  # at least this deep (a bound: the nearest tangent planes)

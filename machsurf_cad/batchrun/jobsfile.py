@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import InputError
+from ..typing import PathLike
 
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
 
@@ -77,7 +78,7 @@ def parse_jobs(data, *, base_dir: str | None = None, source: str = "jobs") -> tu
     return tuple(jobs)
 
 
-def read_jobs(path) -> tuple[BatchJob, ...]:
+def read_jobs(path: PathLike) -> tuple[BatchJob, ...]:
     """Read a jobs file: JSON (``.json``) or TOML (``.toml``: ``[[jobs]]`` tables with ``name`` and
     ``argv``). Relative input paths in the command lines are taken from the file's folder."""
     p = Path(path)

@@ -13,11 +13,14 @@ import os
 import tempfile
 import time
 import uuid
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, cast
 
 from ..errors import InputError, MachsurfError
 from ..results import Result
+from ..typing import PathLike, ProgressLike
 from .jobsfile import BatchJob
 
 PATH_FIELDS = ("part", "toolpath", "path", "nominal", "candidate")
@@ -266,16 +269,16 @@ def _client(scheduler: str | None, workers: int | None, timeout_s: float):
 
 
 def batch(
-    jobs,
-    out="out/batch",
+    jobs: Iterable[BatchJob | dict[str, Any]],
+    out: PathLike = "out/batch",
     *,
     scheduler: str | None = None,
     workers: int | None = None,
     retries: int = 2,
     overwrite: bool = False,
     timeout_s: float = 10.0,
-    say=None,
-    progress=None,
+    say: Callable[[str], object] | None = None,
+    progress: ProgressLike = None,
 ) -> BatchResult:
     """Run ``jobs`` (:class:`BatchJob`) on Dask and write ``OUT/<name>/`` per job, ``batch_report.json``
     (also as ``report.json``) and ``batch_figures.csv``.
@@ -312,6 +315,7 @@ def batch(
         jobs = parse_jobs({"jobs": list(jobs)}, source="batch()")
     if not jobs or not all(isinstance(j, BatchJob) for j in jobs):
         raise InputError("batch() needs a non-empty list of BatchJob (or of {'name': ..., 'argv': [...]})")
+    jobs = cast("tuple[BatchJob, ...]", jobs)  # every one checked above (the type checker cannot see it)
     names = [j.name for j in jobs]
     if len(set(names)) != len(names):
         raise InputError("duplicate job names: " + ", ".join(sorted({n for n in names if names.count(n) > 1})))

@@ -20,21 +20,24 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..glossary import renamed, renamed_fields
 from ..results import strict_json
+from ..typing import PathLike
 from .toolpath import Move, ToolPath
 
 
+@renamed_fields(feed_mm_min="feed", plunge_mm_min="plunge_feed", spindle_rpm="spindle")
 @dataclass(frozen=True)
 class PostOptions:
     """What a post-processor needs besides the positions.
 
     Parameters
     ----------
-    feed_mm_min : float
+    feed : float
         Cutting feed, mm/min.
-    plunge_mm_min : float
+    plunge_feed : float
         Approach and retract feed along the axis, mm/min.
-    spindle_rpm : float
+    spindle : float
         Spindle speed, rev/min (clockwise).
     tool_number : int
         Tool loaded by ``LOADTL``.
@@ -42,14 +45,14 @@ class PostOptions:
         ``PARTNO`` text.
     """
 
-    feed_mm_min: float = 1000.0
-    plunge_mm_min: float = 300.0
-    spindle_rpm: float = 10000.0
+    feed: float = 1000.0
+    plunge_feed: float = 300.0
+    spindle: float = 10000.0
     tool_number: int = 1
     partno: str = "MACHSURF"
 
     def __post_init__(self) -> None:
-        for name in ("feed_mm_min", "plunge_mm_min", "spindle_rpm"):
+        for name in ("feed", "plunge_feed", "spindle"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise InputError(f"{name} must be > 0, got {v!r}")
@@ -58,7 +61,8 @@ class PostOptions:
 
 
 # ----------------------------------------------------------------------------- writers
-def write_csv(path, tp: ToolPath) -> Path:
+@renamed(tp="toolpath")
+def write_csv(path: PathLike, toolpath: ToolPath) -> Path:
     """Write the tool path as CSV, one row per position.
 
     Columns ``pass,index,move,tip_x,tip_y,tip_z,i,j,k,cc_x,cc_y,cc_z,feed_mm_min,tool`` (``tool``: the
@@ -71,7 +75,7 @@ def write_csv(path, tp: ToolPath) -> Path:
     ----------
     path : str or Path
         File to write.
-    tp : ToolPath
+    toolpath : ToolPath
         The tool path.
 
     Returns
@@ -80,17 +84,17 @@ def write_csv(path, tp: ToolPath) -> Path:
         The file written; read it back with :func:`read_csv`.
     """
     path = Path(path)
-    _check_toolpath(tp)
+    _check_toolpath(toolpath)
     extra_cols, extra_data = [], []
-    for k, v in tp.extras.items():
-        a = np.asarray(v).reshape(tp.n_positions, -1)
+    for k, v in toolpath.extras.items():
+        a = np.asarray(v).reshape(toolpath.n_positions, -1)
         extra_cols += [k] if a.shape[1] == 1 else [f"{k}_{j}" for j in range(a.shape[1])]
         extra_data.append(a)
-    X = np.concatenate(extra_data, axis=1) if extra_data else np.zeros((tp.n_positions, 0))
-    cc = tp.cc if tp.cc is not None else np.full((tp.n_positions, 3), np.nan)
-    feed = tp.feed if tp.feed is not None else np.full(tp.n_positions, np.nan)
+    X = np.concatenate(extra_data, axis=1) if extra_data else np.zeros((toolpath.n_positions, 0))
+    cc = toolpath.cc if toolpath.cc is not None else np.full((toolpath.n_positions, 3), np.nan)
+    feed = toolpath.feed if toolpath.feed is not None else np.full(toolpath.n_positions, np.nan)
     counter: dict[int, int] = {}
-    tool = tp.cutter.spec() if tp.cutter is not None else ""
+    tool = toolpath.cutter.spec() if toolpath.cutter is not None else ""
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(
@@ -112,17 +116,17 @@ def write_csv(path, tp: ToolPath) -> Path:
                 *extra_cols,
             ]
         )
-        for n in range(tp.n_positions):
-            p = int(tp.pass_index[n])
+        for n in range(toolpath.n_positions):
+            p = int(toolpath.pass_index[n])
             j = counter.get(p, 0)
             counter[p] = j + 1
             w.writerow(
                 [
                     p,
                     j,
-                    Move(int(tp.move[n])).name.lower(),
-                    *(f"{x:.6f}" for x in tp.tip[n]),
-                    *(f"{x:.9f}" for x in tp.axis[n]),
+                    Move(int(toolpath.move[n])).name.lower(),
+                    *(f"{x:.6f}" for x in toolpath.tip[n]),
+                    *(f"{x:.9f}" for x in toolpath.axis[n]),
                     *(_num(x, 6) for x in cc[n]),
                     _num(feed[n], 3),
                     tool,
@@ -137,14 +141,15 @@ def _num(x, digits: int) -> str:
     return "" if math.isnan(x) else f"{x:.{digits}f}" if digits <= 9 else f"{x:.{digits}g}"
 
 
-def write_json(path, tp: ToolPath) -> Path:
+@renamed(tp="toolpath")
+def write_json(path: PathLike, toolpath: ToolPath) -> Path:
     """Write the tool path as JSON: its ``report()`` plus per-position arrays (mm, NaN as null).
 
     Parameters
     ----------
     path : str or Path
         File to write.
-    tp : ToolPath
+    toolpath : ToolPath
         The tool path.
 
     Returns
@@ -153,16 +158,16 @@ def write_json(path, tp: ToolPath) -> Path:
         The file written.
     """
     path = Path(path)
-    _check_toolpath(tp)
+    _check_toolpath(toolpath)
     data = {
-        "report": tp.report(),
-        "tip_mm": tp.tip,
-        "axis": tp.axis,
-        "move": [Move(int(m)).name.lower() for m in tp.move],
-        "pass": tp.pass_index,
-        "cc_mm": None if tp.cc is None else _nan_to_none(tp.cc),
-        "feed_mm_min": None if tp.feed is None else _nan_to_none(tp.feed),
-        "extras": {k: np.asarray(v).tolist() for k, v in tp.extras.items()},
+        "report": toolpath.report(),
+        "tip_mm": toolpath.tip,
+        "axis": toolpath.axis,
+        "move": [Move(int(m)).name.lower() for m in toolpath.move],
+        "pass": toolpath.pass_index,
+        "cc_mm": None if toolpath.cc is None else _nan_to_none(toolpath.cc),
+        "feed_mm_min": None if toolpath.feed is None else _nan_to_none(toolpath.feed),
+        "extras": {k: np.asarray(v).tolist() for k, v in toolpath.extras.items()},
     }
     path.write_text(strict_json(data, indent=None) + "\n")
     return path
@@ -196,7 +201,7 @@ def apt_lines(tp: ToolPath, options: PostOptions = PostOptions()) -> list[str]:
         "UNITS/MM",
         "CUTTER/" + ",".join(f"{x:.4f}" for x in params),
         f"LOADTL/{int(options.tool_number)}",
-        f"SPINDL/RPM,{options.spindle_rpm:.4f},CLW",
+        f"SPINDL/RPM,{options.spindle:.4f},CLW",
         "MULTAX/ON" if multax else "MULTAX/OFF",
     ]
     cur_feed = None
@@ -209,7 +214,7 @@ def apt_lines(tp: ToolPath, options: PostOptions = PostOptions()) -> list[str]:
             f = (
                 tp.feed[n]
                 if tp.feed is not None and not math.isnan(tp.feed[n])
-                else (options.feed_mm_min if m == Move.CUT else options.plunge_mm_min)
+                else (options.feed if m == Move.CUT else options.plunge_feed)
             )
             if f != cur_feed:
                 lines.append(f"FEDRAT/{f:.4f},MMPM")
@@ -222,14 +227,15 @@ def apt_lines(tp: ToolPath, options: PostOptions = PostOptions()) -> list[str]:
     return lines
 
 
-def write_apt(path, tp: ToolPath, options: PostOptions = PostOptions()) -> Path:
+@renamed(tp="toolpath")
+def write_apt(path: PathLike, toolpath: ToolPath, options: PostOptions = PostOptions()) -> Path:
     """Write APT CLDATA (see the module docstring for the statements).
 
     Parameters
     ----------
     path : str or Path
         File to write.
-    tp : ToolPath
+    toolpath : ToolPath
         The tool path; it must carry its cutter (``CUTTER/``).
     options : PostOptions
         Feeds, spindle speed, tool number, part name.
@@ -259,7 +265,7 @@ def write_apt(path, tp: ToolPath, options: PostOptions = PostOptions()) -> Path:
     (True, True)
     """
     path = Path(path)
-    path.write_text("\n".join(apt_lines(tp, options)) + "\n")
+    path.write_text("\n".join(apt_lines(toolpath, options)) + "\n")
     return path
 
 

@@ -249,7 +249,7 @@ def _passes(mv: np.ndarray, fd: np.ndarray) -> np.ndarray:
     return pidx
 
 
-def read_apt(path, *, name: str | None = None) -> ToolPath:
+def read_apt(path: str | Path, *, name: str | None = None) -> ToolPath:
     """Read APT CLDATA into a :class:`ToolPath` (mm; see the module docstring for the statements).
 
     Moves after ``RAPID`` are rapids; in each run of feed moves between rapids, a first move
@@ -357,7 +357,7 @@ def _csv_rows(text: str, p: Path) -> tuple[list[str], list[list[str]]]:
     return rows[0], rows[1:]
 
 
-def read_csv(path) -> ToolPath:
+def read_csv(path: str | Path) -> ToolPath:
     """Read a CSV tool path: ours (:func:`~machsurf_cad.cam.cldata.write_csv`) or a spreadsheet's.
 
     Parameters

@@ -12,6 +12,7 @@ import numpy as np
 from ..cam.toolpath import ToolPath
 from ..errors import InputError, ToleranceError
 from ..results import Progress, Result
+from ..typing import FaceLike, MapChunks, ToolLike
 from .path import FlankPath
 from .ruled import RuledSurface
 from .settings import SETTINGS, Interference, NoAdmissibleSetting, Setting, interference, tool_setting
@@ -126,8 +127,8 @@ def _as_ruled(surface, ruled_tolerance: float) -> RuledSurface:
 
 
 def flank(
-    surface,
-    tool,
+    surface: RuledSurface | FaceLike,
+    tool: ToolLike | float,
     *,
     rule: float = 0.5,
     setting: SettingKind = "optimum",
@@ -142,7 +143,7 @@ def flank(
     clearance: float = 5.0,
     progress: Progress | None = None,
     chunks: int = 1,
-    map_chunks=None,
+    map_chunks: MapChunks = None,
 ) -> FlankResult:
     """Flank milling of a ruled surface by a cylindrical cutter (Redonnet et al.), as ``machsurf flank``.
 
@@ -273,7 +274,7 @@ def flank(
         from .smooth import compare_with_rule_optima
 
         t1 = time.perf_counter()
-        sm = compare_with_rule_optima(surf, R, side=side, n_rules=21, max_turn_deg_per_mm=smooth or None)
+        sm = compare_with_rule_optima(surf, R, side=side, n_rules=21, max_turn_rate=smooth or None)
         times["smooth_s"] = time.perf_counter() - t1
     times["total_s"] = time.perf_counter() - t0
     return FlankResult(

@@ -20,7 +20,9 @@ import numpy as np
 from ..cam.toolpath import ToolPath
 from ..chunking import check_chunks, map_pieces
 from ..errors import InputError
+from ..glossary import renamed
 from ..results import Result
+from ..typing import MapChunks, ProgressLike
 from .ruled import RuledSurface
 from .settings import NoAdmissibleSetting, Setting, interference, tool_setting
 
@@ -139,10 +141,11 @@ class FlankPath(Result):
         }
 
 
+@renamed(R="radius", kind="setting")
 def flank_path(
     surface: RuledSurface,
-    R: float,
-    kind: str = "optimum",
+    radius: float,
+    setting: str = "optimum",
     *,
     side: int = 1,
     tolerance: float = 0.01,
@@ -150,9 +153,9 @@ def flank_path(
     max_rules: int = 2000,
     min_rules: int = 9,
     n_rules: int | None = None,
-    progress=None,
+    progress: ProgressLike = None,
     chunks: int = 1,
-    map_chunks=None,
+    map_chunks: MapChunks = None,
 ) -> FlankPath:
     """Settings on rules along u and their CL points and axes.
 
@@ -165,9 +168,9 @@ def flank_path(
     ----------
     surface : RuledSurface
         The ruled surface.
-    R : float
+    radius : float
         Cylinder radius, mm.
-    kind : {"standard-tangent", "standard-distributed", "standard-bisector", "optimum", "minimax"}
+    setting : {"standard-tangent", "standard-distributed", "standard-bisector", "optimum", "minimax"}
         The setting on each rule.
     side : {1, -1}
         Tool side.
@@ -210,13 +213,13 @@ def flank_path(
     sets0: list[Setting] = []
     prev = None
     for u in us:  # sweep once in order so each rule continues from the previous one
-        prev = setting_or_fallback(surface, float(u), R, kind, side, prev)
+        prev = setting_or_fallback(surface, float(u), radius, setting, side, prev)
         sets0.append(prev)
     n_chunks = max(1, min(int(chunks), len(us) - 1))
     cuts = np.linspace(0, len(us) - 1, n_chunks + 1).astype(int)
     spans = [(us[a : b + 1], sets0[a : b + 1], k > 0) for k, (a, b) in enumerate(zip(cuts[:-1], cuts[1:]))]
     job = functools.partial(
-        _refine_span, surface, float(R), kind, side, float(tolerance), float(overhang), n_rules is None,
+        _refine_span, surface, float(radius), setting, side, float(tolerance), float(overhang), n_rules is None,
         max_rules - len(us), 1e-5 * (hi - lo), progress if n_chunks == 1 else None,
     )  # fmt: skip
     parts = map_pieces(job, spans, map_chunks)
@@ -227,8 +230,8 @@ def flank_path(
     tips, axes, lengths = zip(*(s.placement(overhang) for s in sets))
     return FlankPath(
         surface,
-        float(R),
-        kind,
+        float(radius),
+        setting,
         side,
         sets,
         np.array(us),

@@ -4,7 +4,7 @@ Rule-by-rule settings (the optimum, or the minimax of one rule) are each best on
 nothing bounds how fast the tool axis turns from one rule to the next: a machine's rotary axes
 then jerk, and between two rules the interpolated tool leaves the surface. Here the rules are
 visited in order and each setting minimises the largest absolute error along its rule (over ``h0``,
-``gamma``, ``phi``) subject to the axis turning by at most ``max_turn_deg_per_mm`` per mm of
+``gamma``, ``phi``) subject to the axis turning by at most ``max_turn_rate`` deg per mm of
 travel of the rule's middle from the previous rule (a penalty in the Nelder-Mead cost, the
 constraint checked afterwards). :func:`compare_with_rule_optima` puts it beside the rule-by-rule
 optimum path: largest error and largest turn rate of each.
@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..glossary import renamed
 from .path import FlankPath, _aggregate, rule_error
 from .ruled import RuledSurface
 from .settings import NoAdmissibleSetting, Setting, axis_of, interference, rule_frame, tool_setting
@@ -39,13 +40,14 @@ def axis_turn_rates(path: FlankPath) -> np.ndarray:
     return _turn_rates(path.axis, [s.frame for s in path.settings])
 
 
+@renamed(R="radius", max_turn_deg_per_mm="max_turn_rate")
 def smooth_minimax_path(
     surface: RuledSurface,
-    R: float,
+    radius: float,
     *,
     side: int = 1,
     n_rules: int = 41,
-    max_turn_deg_per_mm: float | None = None,
+    max_turn_rate: float | None = None,
     n_v: int = 41,
     overhang: float = 1.0,
 ) -> FlankPath:
@@ -55,13 +57,13 @@ def smooth_minimax_path(
     ----------
     surface : RuledSurface
         The ruled surface.
-    R : float
+    radius : float
         Cylinder radius, mm.
     side : {1, -1}
         Tool side.
     n_rules : int
         Uniform rules along u (at least 4).
-    max_turn_deg_per_mm : float, optional
+    max_turn_rate : float, optional
         Largest angle between consecutive axes per mm of travel (deg/mm). Default: 1.5 times the
         largest turn rate of the rules themselves (the surface's own twist), which any path
         following the surface needs.
@@ -77,8 +79,8 @@ def smooth_minimax_path(
     """
     if n_rules < 4:
         raise InputError("a smooth path needs at least 4 rules")
-    if max_turn_deg_per_mm is not None and not max_turn_deg_per_mm > 0:
-        raise InputError("max_turn_deg_per_mm must be > 0 deg/mm")
+    if max_turn_rate is not None and not max_turn_rate > 0:
+        raise InputError("max_turn_rate must be > 0 deg/mm")
     from scipy.optimize import minimize
 
     lo, hi = surface.u_range
@@ -88,20 +90,20 @@ def smooth_minimax_path(
     mids = np.array([0.5 * (f.p0 + f.p1) for f in frames])
     travel = np.linalg.norm(np.diff(mids, axis=0), axis=1)
     own = _turn_rates([f.z1 for f in frames], frames)
-    bound = float(max_turn_deg_per_mm) if max_turn_deg_per_mm is not None else 1.5 * float(own.max())
+    bound = float(max_turn_rate) if max_turn_rate is not None else 1.5 * float(own.max())
 
     def make(fr, x, kind="minimax-smooth"):
-        q, a = axis_of(fr, R, x[0] * fr.h_p, x[1], x[2])
-        return Setting(kind, fr, float(R), q, a, float(x[0] * fr.h_p), math.degrees(x[1]), math.degrees(x[2]),
+        q, a = axis_of(fr, radius, x[0] * fr.h_p, x[1], x[2])
+        return Setting(kind, fr, float(radius), q, a, float(x[0] * fr.h_p), math.degrees(x[1]), math.degrees(x[2]),
                        {"M2": fr.p0 + x[0] * fr.h_p * fr.z1})  # fmt: skip
 
     sets: list[Setting] = []
     prev_a = None
     for i, fr in enumerate(frames):
         try:  # start from the rule's optimum when it exists (continuing the previous one), else the standard
-            st0 = tool_setting(surface, float(us[i]), R, "optimum", side=side)
+            st0 = tool_setting(surface, float(us[i]), radius, "optimum", side=side)
         except NoAdmissibleSetting:
-            st0 = tool_setting(surface, float(us[i]), R, "standard-distributed", side=side)
+            st0 = tool_setting(surface, float(us[i]), radius, "standard-distributed", side=side)
         x0 = np.array([st0.h0 / fr.h_p, math.radians(st0.gamma_deg), math.radians(st0.phi_deg)])
         if sets:
             prev = sets[-1]
@@ -111,7 +113,7 @@ def smooth_minimax_path(
             def cost(x, fr=fr, limit=limit, prev_a=prev_a):
                 st = make(fr, x)
                 over = max(0.0, _turn_deg(st.a, prev_a) - limit)
-                return interference(surface, st, n_v=n_v).max_abs + 10.0 * R * math.radians(over)
+                return interference(surface, st, n_v=n_v).max_abs + 10.0 * radius * math.radians(over)
 
             starts = [x0, x_prev]
         else:
@@ -141,18 +143,19 @@ def smooth_minimax_path(
         "bound_met": reached <= bound * (1 + 1e-6),
     }
     return FlankPath(
-        surface, float(R), "minimax-smooth", side, tuple(sets), us, np.array(tips), axes, float(max(lengths)),
+        surface, float(radius), "minimax-smooth", side, tuple(sets), us, np.array(tips), axes, float(max(lengths)),
         *_aggregate(errs), float("nan"), smoothness=smoothness, rule_errors=errs,
     )  # fmt: skip
 
 
-def compare_with_rule_optima(surface: RuledSurface, R: float, *, side: int = 1, n_rules: int = 41, **kw) -> dict:
+@renamed(R="radius")
+def compare_with_rule_optima(surface: RuledSurface, radius: float, *, side: int = 1, n_rules: int = 41, **kw) -> dict:
     """The smooth minimax path beside the rule-by-rule optimum path on the same rules: largest gouge,
     undercut and absolute error (mm), and largest axis turn rate (deg/mm) of each."""
     from .path import flank_path
 
-    smooth = smooth_minimax_path(surface, R, side=side, n_rules=n_rules, **kw)
-    opt = flank_path(surface, R, "optimum", side=side, n_rules=n_rules)
+    smooth = smooth_minimax_path(surface, radius, side=side, n_rules=n_rules, **kw)
+    opt = flank_path(surface, radius, "optimum", side=side, n_rules=n_rules)
 
     def row(p):
         return {

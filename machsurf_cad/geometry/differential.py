@@ -19,6 +19,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..results import Result
+from ..typing import ArrayLike
 from .bspline import BSplineSurface
 from .normals import _cross, unit_normals
 
@@ -75,7 +76,7 @@ def tangent_to_parameter(props: LocalProperties, vec: np.ndarray):
     return du, dv
 
 
-def local_properties(surface: BSplineSurface, u, v, *, check: bool = True) -> LocalProperties:
+def local_properties(surface: BSplineSurface, u: ArrayLike, v: ArrayLike, *, check: bool = True) -> LocalProperties:
     """Fundamental forms, normals, principal curvatures and directions at ``(u, v)``.
 
     Parameters

@@ -21,6 +21,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..results import Progress
+from ..typing import PathLike
 from .base import EXIT_INPUT, EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, check_output_folder, quiet
 from .specs import (
     SPECS,
@@ -31,6 +32,7 @@ from .specs import (
     InspectJob,
     JobSpec,
     MachiningSurfaceJob,
+    Mill3Job,
     ReffJob,
     SimulateJob,
     VerifyJob,
@@ -40,6 +42,7 @@ _RUNNERS = {  # command -> (module, function); imported on first use (the kernel
     "info": ("run_inspect", "run_info"),
     "inspect": ("run_inspect", "run_inspect"),
     "machining-surface": ("run_machining", "run_machining_surface"),
+    "mill3": ("run_threeaxis", "run_three_axis"),
     "reff": ("run_reff", "run_reff"),
     "flank": ("run_flank", "run_flank"),
     "envelope": ("run_envelope", "run_envelope"),
@@ -58,14 +61,15 @@ def _runner(spec: JobSpec) -> Callable:
     return getattr(importlib.import_module(f"{__name__}.{module}"), name)
 
 
-def run_job(spec: JobSpec, out, *, say: Say = quiet, progress: Progress | None = None) -> JobOutcome:
+def run_job(spec: JobSpec, out: PathLike, *, say: Say = quiet, progress: Progress | None = None) -> JobOutcome:
     """Run one job and write its outputs into the folder ``out`` (staged: nothing half-written).
 
     Parameters
     ----------
     spec : JobSpec
-        :class:`InfoJob`, :class:`InspectJob`, :class:`MachiningSurfaceJob`, :class:`ReffJob`,
-        :class:`FlankJob`, :class:`EnvelopeJob` or :class:`DemoJob`.
+        :class:`InfoJob`, :class:`InspectJob`, :class:`MachiningSurfaceJob`, :class:`Mill3Job`,
+        :class:`ReffJob`, :class:`FlankJob`, :class:`EnvelopeJob`, :class:`VerifyJob`, :class:`SimulateJob`
+        or :class:`DemoJob`.
     out : str or Path
         Output folder; ``report.json`` there holds every figure the job prints.
     say : callable, optional
@@ -107,6 +111,7 @@ __all__ = [
     "InfoJob",
     "InspectJob",
     "MachiningSurfaceJob",
+    "Mill3Job",
     "ReffJob",
     "FlankJob",
     "EnvelopeJob",

@@ -271,9 +271,7 @@ def post_options(spec):
     """:class:`~machsurf_cad.cam.PostOptions` from a job spec's feed fields."""
     from ..cam import PostOptions
 
-    return PostOptions(
-        feed_mm_min=spec.feed, plunge_mm_min=spec.plunge_feed, spindle_rpm=spec.spindle, tool_number=spec.tool_number
-    )
+    return PostOptions(feed=spec.feed, plunge_feed=spec.plunge_feed, spindle=spec.spindle, tool_number=spec.tool_number)
 
 
 def write_toolpath(st: Staging, tp, spec, stem: str = "toolpath") -> list[str]:

@@ -19,12 +19,12 @@ def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
         motion,
         passes=spec.passes,
         continuity=spec.continuity,
-        theta_deg=thetas if len(thetas) > 1 else thetas[0],
-        tolerance=spec.tol,
+        theta=thetas if len(thetas) > 1 else thetas[0],
+        tolerance=spec.tolerance,
         side=spec.side,
         theta_scan=spec.theta_scan,
         compare=spec.render and spec.passes > 1,
-        chordal_tolerance=spec.chordal,
+        chordal_tolerance=spec.chordal_tolerance,
         clearance=spec.clearance,
         progress=progress,
     )
@@ -37,7 +37,7 @@ def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
         f = prow["fit"]
         say(
             f"{prow['name']}: {f['poles'][0]}x{f['poles'][1]} poles, fit error {f['max_error_mm']:.3g} mm "
-            f"(tol {spec.tol:g})"
+            f"(tol {spec.tolerance:g})"
         )
     for srow in rep["seams"]:
         ex, fi = srow["exact"], srow["fitted"]
@@ -48,13 +48,13 @@ def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
         )
     if res.max_theta_deg is not None:
         say(f"largest |theta| without fold-back or loss of envelope (5 deg steps): {res.max_theta_deg:g} deg")
-    check = res.seam_check(spec.seam_angle_tol)
+    check = res.seam_check(spec.seam_angle_tolerance)
     rep["seams_measured_on_written_faces"] = check
     code = EXIT_OK
     if spec.passes > 1:
         say(
             f"written faces: seams gap up to {check['max_gap_mm']:.3g} mm (limit {check['gap_limit_mm']:.3g}), "
-            f"normal angle up to {check['max_normal_angle_deg']:.3g} deg (G1 limit {spec.seam_angle_tol:g}): "
+            f"normal angle up to {check['max_normal_angle_deg']:.3g} deg (G1 limit {spec.seam_angle_tolerance:g}): "
             f"{check['achieved']}"
         )
         wanted_met = check["g1_met"] if spec.continuity == "g1" else check["g0_met"]
@@ -64,7 +64,7 @@ def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
     tp = res.toolpath
     say(
         f"tool path: {tp.n_passes} pass(es), {tp.n_cut} cutting positions, chordal error "
-        f"{tp.info['chordal_error_measured_mm']:.3g} mm (tol {spec.chordal:g})"
+        f"{tp.info['chordal_error_measured_mm']:.3g} mm (tol {spec.chordal_tolerance:g})"
     )
     with Staging(out) as st:
         from ..geometry.face import Face
@@ -73,13 +73,13 @@ def run_envelope(spec: EnvelopeJob, out, say: Say, progress=None) -> JobOutcome:
         chain = res.chain
         faces = [Face(f.surface, name=e.name) for e, f in zip(chain.passes, chain.fits)]
         write_step(st.path("envelopes.step"), faces)
-        write_stl(st.path("envelopes.stl"), faces, linear_deflection=spec.tol * 10)
+        write_stl(st.path("envelopes.stl"), faces, linear_deflection=spec.tolerance * 10)
         if spec.part:  # the passes' tool path against every face of the part they are for
             from .inputs import part_faces
             from .run_verify import write_checked_toolpath
 
             rep["verify"], vcode = write_checked_toolpath(
-                st, say, tp, part_faces(spec.part), spec, tolerance=spec.gouge_tol, render=spec.render
+                st, say, tp, part_faces(spec.part), spec, tolerance=spec.gouge_tolerance, render=spec.render
             )
             code = max(code, vcode)
         else:

@@ -14,7 +14,7 @@ def _ruled_input(spec: FlankJob):
     if spec.example:
         return example(spec.example, "ruled"), f"example {spec.example}"
     f = step_face(spec.part, spec.face)
-    tol = spec.fit_ruled if spec.fit_ruled is not None else 1e-6
+    tol = spec.ruled_tolerance if spec.ruled_tolerance is not None else 1e-6
     s = RuledSurface.from_surface(f.surface, tolerance=tol, name=f.name)
     return s, f"face {f.index} '{f.name}' of {spec.part} (deviation from ruled: {s.source_deviation:.3g} mm)"
 
@@ -54,8 +54,8 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
         setting=spec.setting,
         side=spec.side,
         whole=spec.whole,
-        tolerance=spec.tol,
-        envelope_tolerance=spec.envelope_tol,
+        tolerance=spec.tolerance,
+        envelope_tolerance=spec.envelope_tolerance,
         study=spec.study,
         radius_range=spec.radius_range,
         smooth=spec.smooth,
@@ -101,7 +101,7 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
             plot_rule_errors(
                 res.profiles,
                 st.path("error_along_rule.png"),
-                tolerance=spec.tol,
+                tolerance=spec.tolerance,
                 title=f"error along the rule u = {res.u_p:.5g}, {cutter.spec()}, side {spec.side:+d}",
             )
         if res.path is not None:
@@ -113,7 +113,7 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
             path, env, dev = res.path, res.envelope, res.envelope_deviation
             # the tool body against the part: every face of a STEP part, or the example's surface
             faces = part_faces(spec.part) if spec.part else [_example_face(spec.example, spec.side)]
-            gtol = spec.gouge_tol if spec.gouge_tol is not None else spec.tol
+            gtol = spec.gouge_tolerance if spec.gouge_tolerance is not None else spec.tolerance
             rep["whole"]["verify"], vcode = write_checked_toolpath(
                 st, say, res.toolpath, faces, spec, tolerance=gtol, render=spec.render
             )
@@ -134,7 +134,7 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
                     vtp_path=st.path("deviation.vtp"),
                     title=f"nominal vs {'envelope' if env is not None else 'positions'} of {cutter.spec()} "
                     f"({spec.setting}); blue gouge (negative), red undercut",
-                    tolerance=spec.tol,
+                    tolerance=spec.tolerance,
                     view_direction=mean_normal(surf, spec.side),
                 )
             say(
@@ -167,8 +167,8 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
                         else why[0] + (f"; nominal vs tool positions {d.max_abs:.4g} mm" if d is not None else "")
                     )
                 )
-            if (res.whole_error_mm or 0.0) > spec.tol:
-                say(f"tolerance {spec.tol:g} mm NOT met on the whole surface")
+            if (res.whole_error_mm or 0.0) > spec.tolerance:
+                say(f"tolerance {spec.tolerance:g} mm NOT met on the whole surface")
                 code = EXIT_TOLERANCE
             code = max(code, vcode)
         if res.study is not None:

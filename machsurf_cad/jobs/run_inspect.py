@@ -76,7 +76,7 @@ def run_inspect(spec: InspectJob, out, say: Say, progress=None) -> JobOutcome:
     if suffix == ".stl":
         pts, tris = _mesh_candidate(cand_path)
         result = deviation(
-            nominal, pts, tolerance=spec.tol, triangles=tris, progress=progress, max_memory_mb=spec.max_memory
+            nominal, pts, tolerance=spec.tolerance, triangles=tris, progress=progress, max_memory_mb=spec.max_memory_mb
         )
         cand_desc = f"STL mesh {cand_path.name} ({tris.shape[0] // 16} triangles, sampled inside triangles)"
     elif suffix in (".step", ".stp"):
@@ -86,7 +86,12 @@ def run_inspect(spec: InspectJob, out, say: Say, progress=None) -> JobOutcome:
         except InputError as exc:
             raise InputError(f"candidate: {exc}") from None
         result = deviation(
-            nominal, cand, samples=spec.samples, tolerance=spec.tol, progress=progress, max_memory_mb=spec.max_memory
+            nominal,
+            cand,
+            samples=spec.samples,
+            tolerance=spec.tolerance,
+            progress=progress,
+            max_memory_mb=spec.max_memory_mb,
         )
         cand_desc = f"STEP face {idx} '{cand.name}' of {cand_path.name}"
     else:
@@ -111,9 +116,9 @@ def run_inspect(spec: InspectJob, out, say: Say, progress=None) -> JobOutcome:
                 else ""
             )
         )
-    if spec.tol is not None:
-        say(f"tolerance {spec.tol:g} mm: {'met' if result.within_tolerance else 'NOT met'}")
-    code = EXIT_TOLERANCE if (spec.tol is not None and not result.within_tolerance) else EXIT_OK
+    if spec.tolerance is not None:
+        say(f"tolerance {spec.tolerance:g} mm: {'met' if result.within_tolerance else 'NOT met'}")
+    code = EXIT_TOLERANCE if (spec.tolerance is not None and not result.within_tolerance) else EXIT_OK
     with Staging(out) as st:
         if spec.render:
             from ..viz import render_deviation
@@ -126,7 +131,7 @@ def run_inspect(spec: InspectJob, out, say: Say, progress=None) -> JobOutcome:
                 st.path("deviation.png"),
                 vtp_path=st.path("deviation.vtp"),
                 title=f"{cand_path.name} vs {nominal.name}",
-                tolerance=spec.tol,
+                tolerance=spec.tolerance,
                 extra_points=outside,
             )
         report = {

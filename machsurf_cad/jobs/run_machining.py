@@ -16,7 +16,7 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
     if spec.faces is not None:
         from .run_threeaxis import run_three_axis
 
-        return run_three_axis(spec, out, say, progress)
+        return run_three_axis(spec.to_mill3(), out, say, progress)
     t0 = time.perf_counter()
     cutter = parse_cutter(spec.tool)
     face, desc = face_input(spec.part, spec.example, spec.face)
@@ -42,13 +42,13 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
         lead=spec.lead,
         tilt=spec.tilt,
         axis=spec.axis,
-        tolerance=spec.tol,
+        tolerance=spec.tolerance,
         loops=spec.loops,
         max_poles=spec.max_poles,
         tip=spec.tip,
-        lead_margin_deg=spec.lead_margin,
-        lead_min_deg=spec.lead_min,
-        lead_rate_deg_per_mm=spec.lead_rate,
+        lead_margin=spec.lead_margin,
+        lead_min=spec.lead_min,
+        lead_rate=spec.lead_rate,
         lead_check_faces=part() if spec.lead == "auto" else None,
         degree=(spec.degree, spec.degree),
         progress=progress,
@@ -65,7 +65,7 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
             continue
         say(
             f"{f['name']}: degree {f['degrees'][0]}x{f['degrees'][1]}, {f['poles'][0]}x{f['poles'][1]} poles, "
-            f"max error {f['max_error_mm']:.3g} mm (tol {spec.tol:g}) on {f['n_check_points']} unseen points"
+            f"max error {f['max_error_mm']:.3g} mm (tol {spec.tolerance:g}) on {f['n_check_points']} unseen points"
         )
     if ms.axes == 5:
         say(
@@ -98,7 +98,7 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
             st.path("deviation_S1.png"),
             vtp_path=st.path("deviation_S1.vtp"),
             title=f"S1 fit vs exact offset ({cutter.spec()})",
-            tolerance=spec.tol,
+            tolerance=spec.tolerance,
             extra_points=loops_pts,
         )
         rep["S1_deviation_map"] = dev.report()
@@ -110,7 +110,7 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
                 from ..machining.isoscallop import iso_scallop_paths
 
                 tp = iso_scallop_paths(
-                    ms, scallop=spec.scallop, chordal_tolerance=spec.chordal, clearance=spec.clearance,
+                    ms, scallop=spec.scallop, chordal_tolerance=spec.chordal_tolerance, clearance=spec.clearance,
                     overrun=spec.overrun,
                 )  # fmt: skip
                 i = tp.info
@@ -122,20 +122,25 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
                     "would gouge)"
                 )
             else:
-                tp = tool_paths(ms, stepover=spec.stepover_mm, chordal_tolerance=spec.chordal, clearance=spec.clearance)
+                tp = tool_paths(
+                    ms,
+                    stepover=spec.stepover_or_default,
+                    chordal_tolerance=spec.chordal_tolerance,
+                    clearance=spec.clearance,
+                )
             rep["toolpath"] = tp.report()
             say(
                 f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions ({tp.n_positions} with approach and "
-                f"retract), chordal error {tp.info['chordal_error_measured_mm']:.3g} mm (tol {spec.chordal:g})"
-                + (", MULTAX (axis not +Z)" if tp.is_multiaxis else "")
+                f"retract), chordal error {tp.info['chordal_error_measured_mm']:.3g} mm (tol "
+                f"{spec.chordal_tolerance:g})" + (", MULTAX (axis not +Z)" if tp.is_multiaxis else "")
             )
-            if spec.chordal + spec.tol >= spec.gouge_tol:
+            if spec.chordal_tolerance + spec.tolerance >= spec.gouge_tolerance:
                 say(
-                    f"warning: chordal {spec.chordal:g} + fit tolerance {spec.tol:g} mm reach the gouge tolerance "
-                    f"{spec.gouge_tol:g} mm: chords on convex regions may be refused as gouges"
+                    f"warning: chordal {spec.chordal_tolerance:g} + fit tolerance {spec.tolerance:g} mm reach the "
+                    f"gouge tolerance {spec.gouge_tolerance:g} mm: chords on convex regions may be refused as gouges"
                 )
             rep["verify"], code = write_checked_toolpath(
-                st, say, tp, part(), spec, tolerance=spec.gouge_tol, render=True
+                st, say, tp, part(), spec, tolerance=spec.gouge_tolerance, render=True
             )
         rep["nominal"] = desc
         rep["time_s"] = {"fit_s": t_fit, "total_s": time.perf_counter() - t0}

@@ -35,7 +35,7 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
         axes=spec.axes,
         lead=spec.lead,
         tilt=spec.tilt,
-        max_memory_mb=spec.max_memory,
+        max_memory_mb=spec.max_memory_mb,
         chunks=int(spec.chunks),
         map_chunks=chunk_map(spec.chunks),
     )
@@ -115,6 +115,7 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
                     mask=mask,
                     vtp_path=st.path("best_direction.vtp"),
                     view="xy",
+                    categories=sorted(dirs),
                 )
         rep["face"] = desc
         rep["time_s"]["job_total_s"] = time.perf_counter() - t0

@@ -30,7 +30,7 @@ def simulate_path(
     (rays that did not converge) with where they lie."""
     from ..simulation import simulate
 
-    res = simulate(faces, tp, cutter, tolerance=tolerance, progress=progress, **kw)
+    res = simulate(faces, tp, cutter, gouge_tolerance=tolerance, progress=progress, **kw)
     rep = res.report()
     say(
         f"cut simulated (N-buffer) on {rep['n_faces']} face(s): {rep['n_samples']:,} samples "
@@ -94,7 +94,7 @@ def run_simulate(spec: SimulateJob, out, say: Say, progress=None) -> JobOutcome:
             tp,
             faces,
             cutter=cutter,
-            tolerance=spec.tol,
+            tolerance=spec.gouge_tolerance,
             render=spec.render,
             progress=progress,
             resolution=spec.resolution,

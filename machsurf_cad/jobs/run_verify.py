@@ -4,13 +4,10 @@ from __future__ import annotations
 
 import dataclasses
 
+from ..pathcheck import COLLISION_CLEARANCE as COLLISION_CLEARANCE_MM
 from .base import EXIT_OK, EXIT_TOLERANCE, JobOutcome, Say, Staging, finish, write_toolpath
 from .inputs import part_faces, shank, toolpath_and_cutter
 from .specs import VerifyJob
-
-COLLISION_CLEARANCE_MM = 0.01
-"""The least distance rapids, shank and holder keep from the part in the jobs (or the gouge tolerance when
-smaller): a large gouge tolerance (flank's interference ``--tol``) is not a clearance."""
 
 
 def check_path(
@@ -22,9 +19,9 @@ def check_path(
     tolerance: float,
     render: bool,
     cutter=None,
-    step_mm=None,
-    step_deg=1.0,
-    spacing_mm=None,
+    step=None,
+    angle_step=1.0,
+    spacing=None,
     progress=None,
     chunks: int = 1,
 ):
@@ -33,21 +30,27 @@ def check_path(
     from ..batchrun.runner import chunk_map
     from ..gougecheck import verify
 
-    map_chunks = chunk_map(chunks)
     res = verify(
         faces,
         tp,
         cutter,
-        tolerance=tolerance,
-        step_mm=step_mm,
-        step_deg=step_deg,
-        spacing_mm=spacing_mm,
+        gouge_tolerance=tolerance,
+        step=step,
+        angle_step=angle_step,
+        spacing=spacing,
         progress=progress,
         chunks=int(chunks),
-        map_chunks=map_chunks,
-        clearance_mm=min(tolerance, COLLISION_CLEARANCE_MM),
+        map_chunks=chunk_map(chunks),
+        clearance=min(tolerance, COLLISION_CLEARANCE_MM),
     )
     rep = res.report()
+    _say_check(say, res, rep, tolerance)
+    if render:
+        _draw_check(st, tp, res, rep, tolerance)
+    return res, rep
+
+
+def _say_check(say: Say, res, rep: dict, tolerance: float) -> None:
     say(
         f"tool body against {rep['n_faces']} face(s) ({rep['n_placements_checked']} placements, motion steps "
         f"{res.step_mm:.3g} mm / {res.step_deg:g} deg, between them at most {res.motion_bound_mm:.2g} mm deeper; "
@@ -67,81 +70,78 @@ def check_path(
         )
     for w in rep["warnings"]:
         say(f"warning: {w}")
-    if render:
-        from ..viz import render_gouge_map
-        from ..viz.plots import plot_path_distance
-
-        worst = [w["part_point_mm"] for w in rep["worst"]]
-        render_gouge_map(
-            res.sample_points,
-            res.sample_depth,
-            st.path("verify_part.png"),
-            vtp_path=st.path("verify_part.vtp"),
-            tolerance=tolerance,
-            worst=worst,
-            title=f"{tp.name}: tool depth into the part (max {rep['max_gouge_mm']:.3g} mm)",
-        )
-        plot_path_distance(
-            res.cut_distance,
-            res.status,
-            st.path("verify_path.png"),
-            tolerance=tolerance,
-            title=f"{tp.name}: smallest distance between the cutting part and the part",
-        )
-    return res, rep
 
 
-def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool):
-    """Check ``tp`` against the part, then write it unless it gouges (``spec.allow_gouge`` writes it
-    anyway, listed in the report). Returns ``(verify report, exit code, the path written or None)``."""
-    res, rep = check_path(st, say, tp, faces, tolerance=tolerance, render=render)
-    if rep["clean"]:
-        write_toolpath(st, tp, spec)
-        return rep, EXIT_OK, tp
-    if spec.trim_gouges:  # keep the clear stretches, relinked; rapids that still collide go up step by step
-        from ..gougecheck import clear_runs, verify
+def _draw_check(st: Staging, tp, res, rep: dict, tolerance: float) -> None:
+    from ..viz import render_gouge_map
+    from ..viz.plots import plot_path_distance
 
-        clearance = spec.clearance
-        for _ in range(4):
-            cut = clear_runs(tp, res, clearance=clearance)
-            if cut is None:
-                break
-            again = verify(faces, cut, tolerance=tolerance, clearance_mm=min(tolerance, COLLISION_CLEARANCE_MM))
-            if again.clean:
-                n0, n1 = tp.n_cut, cut.n_cut
-                say(
-                    f"tool path cut down to its clear stretches (--trim-gouges): {n1} of {n0} cutting positions in "
-                    f"{cut.n_passes} pass(es), linking {clearance:g} mm along the axis; checked again: clean, max "
-                    f"gouge {again.max_gouge:.3g} mm"
-                )
-                write_toolpath(st, cut, spec)
-                rep["trimmed"] = {
-                    "n_cut_kept": n1,
-                    "n_cut_before": n0,
-                    "n_passes": cut.n_passes,
-                    "clearance_mm": clearance,
-                    "recheck": again.report(),
-                }
-                return rep, EXIT_OK, cut
-            clearance *= 2.0
-        say("tool path NOT written: no clear stretch is left, or its linking moves collide (--trim-gouges)")
-        return rep, EXIT_TOLERANCE, None
-    if spec.allow_gouge:
-        write_toolpath(st, tp, spec)
-        say("tool path written with its gouges and collisions (--allow-gouge): see verify.worst in the report")
-        return rep, EXIT_OK, tp
-    say(
-        "tool path NOT written: it gouges or collides beyond the tolerance (--trim-gouges keeps the clear "
-        "stretches, --allow-gouge writes it anyway)"
+    render_gouge_map(
+        res.sample_points,
+        res.sample_depth,
+        st.path("verify_part.png"),
+        vtp_path=st.path("verify_part.vtp"),
+        tolerance=tolerance,
+        worst=[w["part_point_mm"] for w in rep["worst"]],
+        title=f"{tp.name}: tool depth into the part (max {rep['max_gouge_mm']:.3g} mm)",
     )
-    return rep, EXIT_TOLERANCE, None
+    plot_path_distance(
+        res.cut_distance,
+        res.status,
+        st.path("verify_path.png"),
+        tolerance=tolerance,
+        title=f"{tp.name}: smallest distance between the cutting part and the part",
+        move=tp.move,
+    )
 
 
-def write_checked_toolpath(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool):
+def on_gouge(spec) -> str:
+    """The body check's policy of a path-writing job: ``trim`` (--trim-gouges), ``allow`` (--allow-gouge)
+    or ``refuse``."""
+    return "trim" if spec.trim_gouges else "allow" if spec.allow_gouge else "refuse"
+
+
+def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool, check=None):
+    """Check ``tp`` against the part (:func:`machsurf_cad.pathcheck.check_toolpath`), then write what may
+    be written: the clean path, its clear stretches (``spec.trim_gouges``), or the gouging path
+    (``spec.allow_gouge``, listed in the report). Returns ``(verify report, exit code, the path written or
+    None)``."""
+    from ..pathcheck import check_toolpath
+
+    pc = check or check_toolpath(
+        tp, faces, gouge_tolerance=tolerance, on_gouge=on_gouge(spec), clearance=spec.clearance
+    )
+    rep = pc.report()
+    _say_check(say, pc.check, pc.check.report(), tolerance)
+    if render:
+        _draw_check(st, tp, pc.check, rep, tolerance)
+    if pc.toolpath is not None:
+        write_toolpath(st, pc.toolpath, spec)
+    if pc.verdict == "trimmed":
+        cut, again = pc.toolpath, pc.recheck
+        assert cut is not None and again is not None
+        say(
+            f"tool path cut down to its clear stretches (--trim-gouges): {cut.n_cut} of {tp.n_cut} cutting "
+            f"positions in {cut.n_passes} pass(es), linking {pc.link_clearance:g} mm along the axis; checked "
+            f"again: clean, max gouge {again.max_gouge:.3g} mm"
+        )
+    elif pc.verdict == "gouges allowed":
+        say("tool path written with its gouges and collisions (--allow-gouge): see verify.worst in the report")
+    elif pc.verdict == "refused":
+        say(
+            "tool path NOT written: no clear stretch is left, or its linking moves collide (--trim-gouges)"
+            if spec.trim_gouges
+            else "tool path NOT written: it gouges or collides beyond the tolerance (--trim-gouges keeps the clear "
+            "stretches, --allow-gouge writes it anyway)"
+        )
+    return rep, (EXIT_TOLERANCE if pc.toolpath is None else EXIT_OK), pc.toolpath
+
+
+def write_checked_toolpath(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool, check=None):
     """Check ``tp`` against the part and write it unless it gouges (:func:`_write_checked`); with
     ``spec.simulate`` the written path's cut is simulated on the part too (report ``simulate``; a simulated
     gouge beyond ``tolerance`` exits 2). Returns ``(verify report, exit code)``."""
-    rep, code, written = _write_checked(st, say, tp, faces, spec, tolerance=tolerance, render=render)
+    rep, code, written = _write_checked(st, say, tp, faces, spec, tolerance=tolerance, render=render, check=check)
     if getattr(spec, "simulate", False):
         if written is None:
             say("--simulate: nothing written, nothing simulated")
@@ -176,12 +176,12 @@ def run_verify(spec: VerifyJob, out, say: Say, progress=None) -> JobOutcome:
             say,
             tp,
             faces,
-            tolerance=spec.tol,
+            tolerance=spec.gouge_tolerance,
             render=spec.render,
             cutter=cutter,
-            step_mm=spec.step,
-            step_deg=spec.step_deg,
-            spacing_mm=spec.spacing,
+            step=spec.step,
+            angle_step=spec.angle_step,
+            spacing=spec.spacing,
             progress=progress,
             chunks=int(spec.chunks),
         )

@@ -8,14 +8,11 @@ numbers), so it can be written to JSON, sent to another process and run there by
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
-from typing import Literal, get_args
+from typing import get_args
 
 from ..checks import positive
 from ..errors import InputError
-
-LoopPolicy = Literal["error", "flag", "trim"]
-Continuity = Literal["g0", "g1"]
-Setting = Literal["standard-tangent", "standard-distributed", "standard-bisector", "optimum", "minimax"]
+from ..glossary import Continuity, LoopPolicy, RasterDirection, RasterPattern, SettingKind, renamed_fields
 
 
 def _positive(name: str, v, allow_none: bool = False) -> None:
@@ -66,7 +63,7 @@ class JobSpec:
     @classmethod
     def from_mapping(cls, data: dict) -> JobSpec:
         """Build from a mapping with these field names (unknown keys are an error)."""
-        names = {f.name for f in fields(cls)}
+        names = {f.name for f in fields(cls)} | set(getattr(cls, "__renamed__", {}))
         unknown = set(data) - names - {"command"}
         if unknown:
             raise InputError(f"{cls.command}: unknown option(s) {', '.join(sorted(unknown))}")
@@ -85,6 +82,7 @@ class InfoJob(JobSpec):
             raise InputError("info needs a STEP file")
 
 
+@renamed_fields(tol="tolerance", max_memory="max_memory_mb")
 @dataclass(frozen=True)
 class InspectJob(JobSpec):
     """Signed deviation of a candidate (STEP face or STL) from a nominal STEP face."""
@@ -93,19 +91,20 @@ class InspectJob(JobSpec):
     candidate: str = ""
     face: int = 0
     candidate_face: int | None = None
-    tol: float | None = None
+    tolerance: float | None = None
     samples: int = 200
     render: bool = True
-    max_memory: float = 4096.0
+    max_memory_mb: float = 4096.0
     command = "inspect"
 
     def __post_init__(self) -> None:
-        _positive("tol (mm)", self.tol, allow_none=True)
-        _positive("max_memory (MB)", self.max_memory)
+        _positive("tolerance (mm)", self.tolerance, allow_none=True)
+        _positive("max_memory_mb (MB)", self.max_memory_mb)
         if int(self.samples) < 2:
             raise InputError("samples must be >= 2")
 
 
+@renamed_fields(tol="tolerance", chordal="chordal_tolerance", gouge_tol="gouge_tolerance", grid="grid_step")
 @dataclass(frozen=True)
 class MachiningSurfaceJob(_Post, JobSpec):
     """Guiding S1 and orientation S2 surfaces (Table 1 of Tournier et al.) and optionally a tool path."""
@@ -123,7 +122,7 @@ class MachiningSurfaceJob(_Post, JobSpec):
     lead_min: float = 0.0
     lead_rate: float = 2.0
     tip: bool = False
-    tol: float = 1e-3
+    tolerance: float = 1e-3
     degree: int = 3
     max_poles: int = 40000
     loops: LoopPolicy = "error"
@@ -132,10 +131,10 @@ class MachiningSurfaceJob(_Post, JobSpec):
     toolpath: bool = False
     stepover: float | None = None
     """Distance between passes, mm (default 2; not with ``scallop``)."""
-    chordal: float = 0.005
+    chordal_tolerance: float = 0.005
     scallop: float | None = None
     overrun: float | None = None
-    gouge_tol: float = 0.01
+    gouge_tolerance: float = 0.01
     allow_gouge: bool = False
     trim_gouges: bool = False
     faces: str | None = None
@@ -144,7 +143,7 @@ class MachiningSurfaceJob(_Post, JobSpec):
     angle: float = 0.0
     direction: str = "zigzag"
     stepdown: float | None = None
-    grid: float | None = None
+    grid_step: float | None = None
     cl_surface: bool = False
     shank: str | None = None
     holder: str | None = None
@@ -161,12 +160,12 @@ class MachiningSurfaceJob(_Post, JobSpec):
         _choice("pattern", self.pattern, ("raster", "waterline"))
         _choice("direction", self.direction, ("zigzag", "one-way"))
         _positive("stepdown (mm)", self.stepdown, allow_none=True)
-        _positive("grid (mm)", self.grid, allow_none=True)
+        _positive("grid_step (mm)", self.grid_step, allow_none=True)
         _choice("loops", self.loops, ("error", "flag", "trim"))
         _positive("scallop (mm)", self.scallop, allow_none=True)
         if self.overrun is not None and not self.overrun >= 0:
             raise InputError(f"overrun must be >= 0 mm, got {self.overrun!r}")
-        for n in ("tol", "chordal"):
+        for n in ("tolerance", "chordal_tolerance"):
             _positive(n + " (mm)", getattr(self, n))
         _positive("stl_deflection (mm)", self.stl_deflection, allow_none=True)
         _positive("stepover (mm)", self.stepover, allow_none=True)
@@ -187,7 +186,8 @@ class MachiningSurfaceJob(_Post, JobSpec):
         if not self.toolpath:
             path_only = [
                 name for name, value, default in (
-                    ("--chordal", self.chordal, 0.005), ("--gouge-tol", self.gouge_tol, 0.01),
+                    ("--chordal-tolerance", self.chordal_tolerance, 0.005),
+                    ("--gouge-tolerance", self.gouge_tolerance, 0.01),
                     ("--allow-gouge", self.allow_gouge, False), ("--trim-gouges", self.trim_gouges, False),
                     ("--clearance", self.clearance, 5.0), ("--feed", self.feed, 1000.0),
                     ("--plunge-feed", self.plunge_feed, 300.0), ("--spindle", self.spindle, 10000.0),
@@ -206,7 +206,7 @@ class MachiningSurfaceJob(_Post, JobSpec):
                 name for name, value, default in (
                     ("--pattern", self.pattern, "raster"), ("--angle", self.angle, 0.0),
                     ("--direction", self.direction, "zigzag"), ("--stepdown", self.stepdown, None),
-                    ("--grid", self.grid, None), ("--cl-surface", self.cl_surface, False),
+                    ("--grid-step", self.grid_step, None), ("--cl-surface", self.cl_surface, False),
                     ("--check-faces", self.check_faces, "rest"), ("--shank", self.shank, None),
                     ("--holder", self.holder, None),
                 ) if value != default
@@ -215,11 +215,83 @@ class MachiningSurfaceJob(_Post, JobSpec):
                 raise InputError(f"{given[0]} applies to the whole-part 3-axis engine: add --faces (e.g. --faces top)")
 
     @property
-    def stepover_mm(self) -> float:
+    def stepover_or_default(self) -> float:
+        """The distance between passes, mm (2 when neither it nor ``scallop`` is given)."""
+        return 2.0 if self.stepover is None else float(self.stepover)
+
+    def to_mill3(self) -> Mill3Job:
+        """The :class:`Mill3Job` of a ``--faces`` invocation (the whole-part engine's own spec)."""
+        same = {f.name for f in fields(Mill3Job)} & {f.name for f in fields(self)}
+        kw = {n: getattr(self, n) for n in same if n not in ("faces", "toolpath", "cl_surface")}
+        return Mill3Job(
+            **kw, faces=str(self.faces), toolpath=bool(self.toolpath), cl_surface=self.cl_surface or not self.toolpath
+        )
+
+
+@dataclass(frozen=True)
+class Mill3Job(_Post, JobSpec):
+    """3-axis (and 3+2) tool paths on a whole part: the exact drop-cutter on the B-rep, any cutter.
+
+    Machines ``faces`` (top: the faces seen along the axis, all, or indices) while the tool body keeps
+    out of ``check_faces`` (rest of the part by default); the path is checked against every face of the
+    part before it is written.
+    """
+
+    part: str | None = None
+    example: str | None = None
+    tool: str = "ball:D=10"
+    faces: str = "top"
+    check_faces: str = "rest"
+    axis: tuple | None = None
+    pattern: RasterPattern = "raster"
+    stepover: float | None = None
+    """Distance between raster lines (waterline: between levels unless ``stepdown``), mm (default 2)."""
+    scallop: float | None = None
+    angle: float = 0.0
+    direction: RasterDirection = "zigzag"
+    stepdown: float | None = None
+    grid_step: float | None = None
+    chordal_tolerance: float = 0.005
+    toolpath: bool = True
+    cl_surface: bool = False
+    tolerance: float = 1e-3
+    """Fit tolerance of the CL surface (``cl_surface``), max norm on unseen points, mm."""
+    degree: int = 3
+    max_poles: int = 40000
+    shank: str | None = None
+    holder: str | None = None
+    gouge_tolerance: float = 0.01
+    allow_gouge: bool = False
+    trim_gouges: bool = False
+    command = "mill3"
+
+    def __post_init__(self) -> None:
+        _one_input(self.part, self.example)
+        if not str(self.faces).strip():
+            raise InputError("--faces names no face: give all, top or indices like 0,3")
+        _choice("pattern", self.pattern, get_args(RasterPattern))
+        _choice("direction", self.direction, get_args(RasterDirection))
+        if self.scallop is not None and self.stepover is not None:
+            raise InputError("give --stepover or --scallop, not both (--scallop sets the distance between passes)")
+        for n in ("stepover", "scallop", "stepdown", "grid_step"):
+            _positive(n + " (mm)", getattr(self, n), allow_none=True)
+        for n in ("chordal_tolerance", "tolerance", "gouge_tolerance"):
+            _positive(n + " (mm)", getattr(self, n))
+        if not (isinstance(self.max_poles, int) and self.max_poles >= 16):
+            raise InputError(f"max_poles must be an integer >= 16, got {self.max_poles!r}")
+        if self.axis is not None and len(self.axis) != 3:
+            raise InputError("axis must be x,y,z")
+        if not (self.toolpath or self.cl_surface):
+            raise InputError("nothing to do: give a tool path (the default) or --cl-surface")
+        self._check_post()
+
+    @property
+    def stepover_or_default(self) -> float:
         """The distance between passes, mm (2 when neither it nor ``scallop`` is given)."""
         return 2.0 if self.stepover is None else float(self.stepover)
 
 
+@renamed_fields(max_memory="max_memory_mb")
 @dataclass(frozen=True)
 class ReffJob(JobSpec):
     """Effective cutter radius (relation (30)) and step-over (31) maps over a face."""
@@ -236,7 +308,7 @@ class ReffJob(JobSpec):
     lead: float = 0.0
     tilt: float = 0.0
     render: bool = True
-    max_memory: float = 4096.0
+    max_memory_mb: float = 4096.0
     chunks: int = 1
     command = "reff"
 
@@ -248,6 +320,9 @@ class ReffJob(JobSpec):
             raise InputError(f"chunks must be >= 1, got {self.chunks}")
 
 
+@renamed_fields(
+    tol="tolerance", envelope_tol="envelope_tolerance", gouge_tol="gouge_tolerance", fit_ruled="ruled_tolerance"
+)
 @dataclass(frozen=True)
 class FlankJob(_Post, JobSpec):
     """Flank milling settings of a cylindrical cutter on a ruled surface (Redonnet et al.)."""
@@ -255,42 +330,45 @@ class FlankJob(_Post, JobSpec):
     part: str | None = None
     example: str | None = None
     face: int = 0
-    fit_ruled: float | None = None
+    ruled_tolerance: float | None = None
     tool: str = "cyl:D=20"
     rule: float = 0.5
-    setting: Setting = "optimum"
+    setting: SettingKind = "optimum"
     side: int = 1
     whole: bool = False
-    tol: float = 0.01
-    envelope_tol: float = 1e-3
+    tolerance: float = 0.01
+    envelope_tolerance: float = 1e-3
     study: bool = False
     radius_range: float | None = None
     smooth: float | None = None
     """Smooth minimax path compared with the rule optima: axis turn bound in deg/mm (0: the default bound)."""
     chunks: int = 1
     render: bool = True
-    gouge_tol: float | None = None
+    gouge_tolerance: float | None = None
     allow_gouge: bool = False
     trim_gouges: bool = False
     command = "flank"
 
     def __post_init__(self) -> None:
         _one_input(self.part, self.example)
-        _choice("setting", self.setting, get_args(Setting))
+        _choice("setting", self.setting, get_args(SettingKind))
         _choice("side", self.side, (1, -1))
         if not 0.0 <= self.rule <= 1.0:
             raise InputError(f"rule {self.rule:g} is outside [0, 1] (fraction of the u range)")
-        _positive("tol (mm)", self.tol)
-        _positive("envelope_tol (mm)", self.envelope_tol)
+        _positive("tolerance (mm)", self.tolerance)
+        _positive("envelope_tolerance (mm)", self.envelope_tolerance)
         _positive("radius_range (mm)", self.radius_range, allow_none=True)
         if self.smooth is not None and not (isinstance(self.smooth, (int, float)) and self.smooth >= 0):
             raise InputError(f"smooth must be an axis turn bound >= 0 deg/mm (0: the default), got {self.smooth!r}")
-        _positive("fit_ruled (mm)", self.fit_ruled, allow_none=True)
+        _positive("ruled_tolerance (mm)", self.ruled_tolerance, allow_none=True)
         if int(self.chunks) < 1:
             raise InputError(f"chunks must be >= 1, got {self.chunks}")
         self._check_post()
 
 
+@renamed_fields(
+    tol="tolerance", chordal="chordal_tolerance", gouge_tol="gouge_tolerance", seam_angle_tol="seam_angle_tolerance"
+)
 @dataclass(frozen=True)
 class EnvelopeJob(_Post, JobSpec):
     """Swept envelopes of a rotational tool and G1/G0 adjacent passes (Aranda Bassegoda, eq. (21))."""
@@ -299,18 +377,18 @@ class EnvelopeJob(_Post, JobSpec):
     path: str | None = None
     example: str | None = None
     part: str | None = None
-    gouge_tol: float = 0.01
+    gouge_tolerance: float = 0.01
     allow_gouge: bool = False
     trim_gouges: bool = False
     passes: int = 2
     continuity: Continuity = "g1"
     theta: str = "0"
     side: int = 1
-    tol: float = 1e-3
-    seam_angle_tol: float = 0.05
+    tolerance: float = 1e-3
+    seam_angle_tolerance: float = 0.05
     theta_scan: bool = True
     render: bool = True
-    chordal: float = 0.01
+    chordal_tolerance: float = 0.01
     command = "envelope"
 
     def __post_init__(self) -> None:
@@ -319,9 +397,9 @@ class EnvelopeJob(_Post, JobSpec):
         _choice("side", self.side, (1, -1))
         if int(self.passes) < 1:
             raise InputError("passes must be >= 1")
-        _positive("tol (mm)", self.tol)
-        _positive("chordal (mm)", self.chordal)
-        _positive("seam_angle_tol (deg)", self.seam_angle_tol)
+        _positive("tolerance (mm)", self.tolerance)
+        _positive("chordal_tolerance (mm)", self.chordal_tolerance)
+        _positive("seam_angle_tolerance (deg)", self.seam_angle_tolerance)
         self._check_post()
 
     def thetas(self) -> list[float]:
@@ -340,6 +418,7 @@ class EnvelopeJob(_Post, JobSpec):
         return th
 
 
+@renamed_fields(tol="gouge_tolerance", step_deg="angle_step")
 @dataclass(frozen=True)
 class VerifyJob(JobSpec):
     """Gouges and collisions of a tool path's tool body against every face of a part."""
@@ -350,9 +429,9 @@ class VerifyJob(JobSpec):
     shank: str | None = None
     holder: str | None = None
     faces: str = "all"
-    tol: float = 0.01
+    gouge_tolerance: float = 0.01
     step: float | None = None
-    step_deg: float = 1.0
+    angle_step: float = 1.0
     spacing: float | None = None
     chunks: int = 1
     render: bool = True
@@ -361,14 +440,15 @@ class VerifyJob(JobSpec):
     def __post_init__(self) -> None:
         if not self.part or not self.toolpath:
             raise InputError("verify needs a STEP part and --toolpath")
-        _positive("tol (mm)", self.tol)
+        _positive("gouge_tolerance (mm)", self.gouge_tolerance)
         _positive("step (mm)", self.step, allow_none=True)
-        _positive("step_deg (deg)", self.step_deg)
+        _positive("angle_step (deg)", self.angle_step)
         _positive("spacing (mm)", self.spacing, allow_none=True)
         if int(self.chunks) < 1:
             raise InputError(f"chunks must be >= 1, got {self.chunks}")
 
 
+@renamed_fields(tol="gouge_tolerance")
 @dataclass(frozen=True)
 class SimulateJob(JobSpec):
     """What a tool path leaves on the part: the N-buffer cut simulation (scallops and gouges)."""
@@ -378,7 +458,7 @@ class SimulateJob(JobSpec):
     tool: str | None = None
     faces: str = "all"
     resolution: float | None = None
-    tol: float = 0.01
+    gouge_tolerance: float = 0.01
     depth: float = 1.0
     stock: float = 1.0
     motion_step: float | None = None
@@ -392,7 +472,7 @@ class SimulateJob(JobSpec):
         if not self.part or not self.toolpath:
             raise InputError("simulate needs a STEP part and --toolpath")
         _positive("resolution (mm)", self.resolution, allow_none=True)
-        _positive("tol (mm)", self.tol)
+        _positive("gouge_tolerance (mm)", self.gouge_tolerance)
         _positive("depth (mm)", self.depth)
         _positive("stock (mm)", self.stock)
         _positive("motion_step (mm)", self.motion_step, allow_none=True)
@@ -421,7 +501,18 @@ class DemoJob(JobSpec):
 
 SPECS: dict[str, type[JobSpec]] = {
     c.command: c
-    for c in (InfoJob, InspectJob, MachiningSurfaceJob, ReffJob, FlankJob, EnvelopeJob, VerifyJob, SimulateJob, DemoJob)
+    for c in (
+        InfoJob,
+        InspectJob,
+        MachiningSurfaceJob,
+        Mill3Job,
+        ReffJob,
+        FlankJob,
+        EnvelopeJob,
+        VerifyJob,
+        SimulateJob,
+        DemoJob,
+    )
 }
 """Spec type by command name."""
 
@@ -437,7 +528,5 @@ __all__ = [
     "SimulateJob",
     "DemoJob",
     "SPECS",
-    "LoopPolicy",
-    "Continuity",
-    "Setting",
+    "Mill3Job",
 ]

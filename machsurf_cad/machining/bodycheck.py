@@ -27,7 +27,7 @@ def gouging_placements(maps, us, vs, inside, faces, *, tolerance: float):
             np.arange(sel.size),
             cutter=maps.cutter,
         )
-        res = verify(faces, tp, tolerance=tolerance, step_mm=1e9, step_deg=180.0)  # each placement alone
+        res = verify(faces, tp, gouge_tolerance=tolerance, step=1e9, angle_step=180.0)  # each placement alone
         bad.ravel()[sel] = res.status == GOUGE
         depth.ravel()[sel] = res.gouge_depth
     return bad, depth, tips

@@ -417,7 +417,7 @@ def _drop_gouging_overruns(ms: MachiningSurface, runs: list) -> int:
         cutter=ms.cutter,
         clearance=1.0,
     )
-    res = verify(ms.nominal, chk, tolerance=1e-3, step_mm=0.25, step_deg=0.5, spacing_mm=0.5)
+    res = verify(ms.nominal, chk, gouge_tolerance=1e-3, step=0.25, angle_step=0.5, spacing=0.5)
     depth = np.maximum(0.0, -np.asarray(res.cut_distance))
     bad: dict[int, list] = {}
     n_bad = 0

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..glossary import renamed_fields
 
 
 def _unit(v, what="vector") -> np.ndarray:
@@ -115,6 +116,7 @@ class FixedAxis:
         return "fixed axis ({:.4g}, {:.4g}, {:.4g})".format(*self.direction)
 
 
+@renamed_fields(lead_deg="lead", tilt_deg="tilt")
 @dataclass(frozen=True)
 class LeadTilt:
     """5-axis axis from lead ``Omega_t`` and tilt ``Omega_n`` (degrees) in the local frame.
@@ -122,26 +124,26 @@ class LeadTilt:
     See the module docstring for the sign conventions.
     """
 
-    lead_deg: float
-    tilt_deg: float
+    lead: float
+    tilt: float
     feed: Any
 
     def __post_init__(self):
         from ..checks import lead_tilt
 
-        lead, tilt = lead_tilt(self.lead_deg, self.tilt_deg)
-        object.__setattr__(self, "lead_deg", lead)
-        object.__setattr__(self, "tilt_deg", tilt)
+        lead, tilt = lead_tilt(self.lead, self.tilt)
+        object.__setattr__(self, "lead", lead)
+        object.__setattr__(self, "tilt", tilt)
 
     def axis(self, frame: LocalFrame) -> np.ndarray:
         f = self.feed.feed(frame)
         n = frame.normal
-        lt, tn = np.radians(self.lead_deg), np.radians(self.tilt_deg)
+        lt, tn = np.radians(self.lead), np.radians(self.tilt)
         lean = np.cos(tn) * f + np.sin(tn) * np.cross(n, f)
         return np.cos(lt) * n + np.sin(lt) * lean
 
     def describe(self) -> str:
-        return f"lead {self.lead_deg:g} deg, tilt {self.tilt_deg:g} deg, feed {self.feed.describe()}"
+        return f"lead {self.lead:g} deg, tilt {self.tilt:g} deg, feed {self.feed.describe()}"
 
 
 @dataclass(frozen=True)

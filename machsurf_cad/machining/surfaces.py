@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -38,7 +39,9 @@ from ..geometry.bspline import BSplineSurface
 from ..geometry.differential import local_properties_grid
 from ..geometry.face import Face
 from ..geometry.normals import unit_normals
+from ..glossary import LoopPolicy, renamed
 from ..results import Result
+from ..typing import ArrayLike, FaceLike, PartLike, ProgressLike, StrategyLike, ToolLike, Vector3
 from .bodycheck import gouging_placements
 from .loops import LoopError, LoopReport, fold_mask, region_from_mask
 from .strategies import AxisField, FixedAxis, IsoFeed, LeadTilt, LocalFrame, PlanesFeed, as_feed
@@ -152,7 +155,7 @@ class MachiningMaps:
         a non-zero winding number around a grid cell finds it even when no sample hits it.
         """
         em = self.cutter.end_mill_radii(_PURPOSE)
-        if em.is_ball or (self.axes == 5 and isinstance(self.strategy, LeadTilt) and self.strategy.lead_deg != 0):
+        if em.is_ball or (self.axes == 5 and isinstance(self.strategy, LeadTilt) and self.strategy.lead != 0):
             return
         u0, u1, v0, v1 = self.face.uv_bounds
         us, vs = np.linspace(u0, u1, n), np.linspace(v0, v1, n)
@@ -310,28 +313,29 @@ def lead_field_gouges(face, cutter, field, us, vs, inside, check_faces, toleranc
     return bad, depth
 
 
+@renamed(lead_margin_deg="lead_margin", lead_min_deg="lead_min", lead_rate_deg_per_mm="lead_rate")
 def machining_surface(
-    face,
-    tool,
+    face: FaceLike,
+    tool: ToolLike,
     *,
     axes: int = 5,
-    strategy="planes:x",
+    strategy: StrategyLike = "planes:x",
     lead: float | Literal["auto"] = 0.0,
     tilt: float = 0.0,
-    axis=None,
-    axis_field=None,
+    axis: Vector3 | None = None,
+    axis_field: Callable[[np.ndarray, np.ndarray], ArrayLike] | AxisField | None = None,
     tolerance: float = 1e-3,
-    lead_margin_deg: float = 1.0,
-    lead_min_deg: float = 0.0,
-    lead_rate_deg_per_mm: float = 2.0,
-    lead_check_faces=None,
-    degree=(3, 3),
+    lead_margin: float = 1.0,
+    lead_min: float = 0.0,
+    lead_rate: float = 2.0,
+    lead_check_faces: PartLike | None = None,
+    degree: Sequence[int] = (3, 3),
     max_poles: int = 40000,
-    loops: Literal["error", "flag", "trim"] = "error",
+    loops: LoopPolicy = "error",
     axis_length: float | None = None,
     tip: bool = False,
     loop_grid: int = 121,
-    progress=None,
+    progress: ProgressLike = None,
 ) -> MachiningSurface:
     """Guiding surface S1 and orientation surface S2 of a face, as certified B-spline faces.
 
@@ -349,8 +353,8 @@ def machining_surface(
     lead, tilt : float
         Lead ``Omega_t`` and tilt ``Omega_n`` in degrees (5 axes); conventions in
         :mod:`machsurf_cad.machining.strategies`. ``lead="auto"``: per point the smallest lead free
-        of local gouging plus ``lead_margin_deg``, at least ``lead_min_deg``, changing by at most
-        ``lead_rate_deg_per_mm`` per mm, raised where the tool body still gouges ``lead_check_faces``
+        of local gouging plus ``lead_margin``, at least ``lead_min``, changing by at most
+        ``lead_rate`` per mm, raised where the tool body still gouges ``lead_check_faces``
         (default: the face itself) at a grid of placements (:mod:`machsurf_cad.machining.autolead`;
         reported as ``auto_lead``); a fixed lead is checked by the tool-body check, never changed.
     axis_field : callable or AxisField, optional
@@ -416,9 +420,9 @@ def machining_surface(
             face,
             cutter,
             feed,
-            margin_deg=lead_margin_deg,
-            min_deg=lead_min_deg,
-            rate_deg_per_mm=lead_rate_deg_per_mm,
+            margin_deg=lead_margin,
+            min_deg=lead_min,
+            rate_deg_per_mm=lead_rate,
             check_faces=[face] if lead_check_faces is None else lead_check_faces,
             gouging=functools.partial(lead_field_gouges, face, cutter),
         )

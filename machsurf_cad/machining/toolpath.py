@@ -14,6 +14,7 @@ GOTO statements, u the tool axis.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 
 import numpy as np
 
@@ -21,16 +22,19 @@ from ..cam.chordal import chord_error, douglas_peucker
 from ..cam.toolpath import ToolPath
 from ..errors import InputError
 from ..geometry.normals import unit_normals
+from ..glossary import renamed
+from ..typing import FaceLike, StrategyLike
 from .strategies import IsoFeed, PlanesFeed
 from .surfaces import MachiningSurface, recover_axis
 
 
+@renamed(ms="surface")
 def tool_paths(
-    ms: MachiningSurface,
+    surface: MachiningSurface,
     *,
     stepover: float,
     chordal_tolerance: float = 0.005,
-    strategy=None,
+    strategy: StrategyLike | None = None,
     grid: int = 401,
     zigzag: bool = True,
     clearance: float = 5.0,
@@ -41,7 +45,7 @@ def tool_paths(
 
     Parameters
     ----------
-    ms : MachiningSurface
+    surface : MachiningSurface
         The certified S1/S2 surfaces.
     stepover : float
         Distance between planes (mm) or, for iso lines, the approximate distance between lines
@@ -84,20 +88,20 @@ def tool_paths(
     from .. import checks
     from .strategies import as_feed
 
-    if not isinstance(ms, MachiningSurface):
-        raise InputError(f"tool_paths needs a MachiningSurface (ms.machining_surface), got {type(ms).__name__}")
+    if not isinstance(surface, MachiningSurface):
+        raise InputError(f"tool_paths needs a MachiningSurface (ms.machining_surface), got {type(surface).__name__}")
     stepover = checks.positive("stepover", stepover)
     checks.positive("chordal tolerance", chordal_tolerance)
     checks.positive("clearance", clearance)
     grid = checks.index("grid", grid, low=3)
-    feed = as_feed(strategy) if strategy is not None else getattr(ms.strategy, "feed", None)
+    feed = as_feed(strategy) if strategy is not None else getattr(surface.strategy, "feed", None)
     if feed is None:
         feed = IsoFeed("u")
-    s1 = ms.s1.surface
-    u0, u1, v0, v1 = ms.s1.uv_bounds
+    s1 = surface.s1.surface
+    u0, u1, v0, v1 = surface.s1.uv_bounds
     us, vs = np.linspace(u0, u1, grid), np.linspace(v0, v1, grid)
     U, V = np.meshgrid(us, vs, indexing="ij")
-    inside = ms.s1.contains_uv(U, V)  # the trimmed face, loop holes included
+    inside = surface.s1.contains_uv(U, V)  # the trimmed face, loop holes included
     if isinstance(feed, PlanesFeed):
         N = np.asarray(feed.plane_normal)
         g = np.einsum("ijk,k->ij", s1.evaluate_grid(us, vs), N)
@@ -142,13 +146,13 @@ def tool_paths(
             if len(line) < 2:
                 continue
             uv = np.stack([line[:, 1], line[:, 0]], 1)
-            uv = _densify(uv, ms, float(level), kind, N if kind == "planes" else None)
+            uv = _densify(uv, surface, float(level), kind, N if kind == "planes" else None)
             if uv.shape[0] < 2:
                 continue
-            p = _positions(ms, uv)
+            p = _positions(surface, uv)
             # the chords must hold for the whole tool, not only its tip: a point one diameter up the axis
             # is sampled with the tip (a 5-axis lead that turns between positions moves the body)
-            six = np.concatenate([p["tip"], p["tip"] + ms.cutter.D * p["axis"]], axis=1)
+            six = np.concatenate([p["tip"], p["tip"] + surface.cutter.D * p["axis"]], axis=1)
             idx = douglas_peucker(six, chordal_tolerance)
             chord_err = max(chord_err, chord_error(six, idx))
             axis_err = max(axis_err, p["axis_err"])
@@ -167,7 +171,7 @@ def tool_paths(
         "stepover_mm": float(stepover),
         "chordal_tolerance_mm": float(chordal_tolerance),
         "chordal_error_measured_mm": chord_err,
-        "axis_error_deg_measured": axis_err if ms.axes == 5 else None,
+        "axis_error_deg_measured": axis_err if surface.axes == 5 else None,
         "n_cut_positions": int(sum(t.shape[0] for t in tips)),
     }
     return ToolPath.from_passes(
@@ -176,14 +180,14 @@ def tool_paths(
         cc=ccs,
         extras=extras,
         clearance=clearance,
-        cutter=ms.cutter,
+        cutter=surface.cutter,
         name="machining_surface",
         info=info,
         safe_sphere=safe_sphere,
     )
 
 
-def part_sphere(faces, clearance: float = 5.0) -> tuple:
+def part_sphere(faces: Iterable[FaceLike], clearance: float = 5.0) -> tuple:
     """(centre, radius) of a sphere holding every face (their poles' bounding box: a B-spline with positive
     weights lies in its poles' convex hull) with ``clearance`` mm to spare: the sphere 5-axis passes are
     linked over (``tool_paths(..., safe_sphere=...)``)."""

@@ -65,7 +65,7 @@ def raster_on_faces(faces, tool, *, check_faces=(), **kwargs):
     >>> solid = box.val()
     >>> top = [f for f in solid.Faces() if f.Center().z > 4.9]
     >>> tp = raster_on_faces(top, "ball:D=6", check_faces=[f for f in solid.Faces() if f not in top],
-    ...                      stepover_mm=5.0, chordal_tolerance_mm=0.01)
+    ...                      stepover=5.0, chordal_tolerance=0.01)
     >>> z = tp.tip[tp.move == 2, 2]
     >>> bool(abs(z.max() - 5.0) < 1e-9), bool(z.min() < 5.0)  # on the top face; into the hole near it
     (True, True)

@@ -15,8 +15,10 @@ from ..chunking import check_chunks, split_map
 from ..errors import InputError
 from ..geometry.face import Face
 from ..geometry.normals import unit_normals
+from ..glossary import renamed
 from ..gougecheck import _faces, face_size, motion_radius
 from ..results import Progress, Result
+from ..typing import MapChunks, PartLike, ToolLike
 from .nbuffer import motion_poses, nbuffer
 from .region import machined_region, sample_curvature
 
@@ -310,20 +312,21 @@ def sample_faces(faces, resolution: float, *, max_samples: int):
     return np.concatenate(P), np.concatenate(Nn), np.concatenate(F), np.concatenate(Q)
 
 
+@renamed(cutter="tool", tolerance="gouge_tolerance")
 def simulate(
-    part,
+    part: PartLike,
     toolpath: ToolPath,
-    cutter=None,
+    tool: ToolLike | None = None,
     *,
     resolution: float | None = None,
-    tolerance: float = 0.01,
+    gouge_tolerance: float = 0.01,
     depth: float = 1.0,
     stock: float = 1.0,
     motion_step: float | None = None,
     heights: tuple = DEFAULT_HEIGHTS_MM,
     max_samples: int = 10_000_000,
     chunks: int = 1,
-    map_chunks=None,
+    map_chunks: MapChunks = None,
     progress: Progress | None = None,
 ) -> SimulationResult:
     """Simulate the cut of a tool path on the nominal faces (N-buffer) and measure what it leaves.
@@ -340,12 +343,12 @@ def simulate(
         The faces to simulate (trimmed regions respected); outward normals from the faces.
     toolpath : ToolPath
         Every move is simulated (the tool removes material whatever the move kind).
-    cutter : Cutter, optional
+    tool : Cutter, optional
         The tool; the path's own cutter when not given. Its cutting part cuts (shank and holder
         collisions are :func:`~machsurf_cad.verify`'s).
     resolution : float, optional
         Distance between nominal samples, mm; default: about 200,000 samples over the faces.
-    tolerance : float
+    gouge_tolerance : float
         A cut deeper than this below the nominal is a gouge (mm).
     depth, stock : float
         Length of each sample's blade inside and outside the part, mm: a placement is looked for within
@@ -396,12 +399,12 @@ def simulate(
     from .. import checks
 
     toolpath = checks.toolpath(toolpath)
-    c = checks.tool(cutter) if cutter is not None else toolpath.cutter
+    c = checks.tool(tool) if tool is not None else toolpath.cutter
     if c is None:
         raise InputError("simulate needs the tool: the path carries no cutter (give --tool)")
     resolution = None if resolution is None else checks.positive("resolution", resolution)
     motion_step = None if motion_step is None else checks.positive("motion step", motion_step)
-    tolerance = checks.positive("tolerance", tolerance)
+    gouge_tolerance = checks.positive("tolerance", gouge_tolerance)
     for name, val in (("depth", depth), ("stock", stock)):
         if checks.positive(name, val) > 10 * float(c.D):  # the rays march through it: kilometres march for ever
             raise InputError(f"{name} {val:g} mm is more than 10 times the tool's diameter ({c.D:g} mm)")
@@ -430,7 +433,7 @@ def simulate(
             "(wrong part, faces or tool path?)"
         )
     machined = machined_region(
-        c, toolpath, P, N, out["reached"], depth=depth, stock=stock, touch=tolerance,
+        c, toolpath, P, N, out["reached"], depth=depth, stock=stock, touch=gouge_tolerance,
         curvature=sample_curvature(P, N, Q),
     )  # fmt: skip
     t3 = time.perf_counter()
@@ -439,7 +442,7 @@ def simulate(
         resolution_mm=float(resolution),
         depth_mm=float(depth),
         stock_mm=float(stock),
-        tolerance_mm=float(tolerance),
+        tolerance_mm=float(gouge_tolerance),
         motion_step_mm=step,
         motion_bound_smooth_mm=step * step / (8 * rho) if smooth else None,
         heights_mm=tuple(float(h) for h in heights),

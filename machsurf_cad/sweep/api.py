@@ -11,7 +11,9 @@ import numpy as np
 from ..cam.chordal import chord_error, douglas_peucker
 from ..cam.toolpath import ToolPath
 from ..errors import InputError
+from ..glossary import renamed
 from ..results import Result
+from ..typing import ArrayLike, ProgressLike, ToolLike
 from .core import Motion, make_envelope
 from .passes import PassChain, build_chain, max_theta
 
@@ -105,20 +107,21 @@ def chain_toolpath(
     )
 
 
+@renamed(theta_deg="theta")
 def envelope(
-    tool,
+    tool: ToolLike,
     motion: Motion,
     *,
     passes: int = 1,
     continuity: Continuity = "g1",
-    theta_deg=0.0,
+    theta: ArrayLike = 0.0,
     tolerance: float = 1e-3,
     side: int = 1,
     theta_scan: bool = False,
     compare: bool = False,
     chordal_tolerance: float = 0.01,
     clearance: float = 5.0,
-    progress=None,
+    progress: ProgressLike = None,
 ) -> EnvelopeResult:
     """Swept envelopes of a rotational tool along a motion, chained G1 or G0 (Aranda Bassegoda, eq. (21)).
 
@@ -132,7 +135,7 @@ def envelope(
         Number of passes (>= 1).
     continuity : {"g1", "g0"}
         Between adjacent passes.
-    theta_deg : float or sequence of float
+    theta : float or sequence of float
         Turn of each next axis about the seam normal, degrees (one, or one per seam).
     tolerance : float
         Fit tolerance of each pass's face, max-norm mm (measured on unseen points).
@@ -172,9 +175,9 @@ def envelope(
     checks.positive("clearance", clearance)
     if continuity not in ("g0", "g1"):
         raise InputError("continuity must be 'g0' or 'g1'")
-    thetas = np.atleast_1d(np.asarray(theta_deg, float))
+    thetas = np.atleast_1d(np.asarray(theta, float))
     if np.any(~np.isfinite(thetas)) or np.any(np.abs(thetas) >= 180):
-        raise InputError(f"theta must be in (-180, 180) degrees, got {theta_deg!r}")
+        raise InputError(f"theta must be in (-180, 180) degrees, got {theta!r}")
     if thetas.size not in (1, max(passes - 1, 1)):
         raise InputError(f"theta needs one angle or one per new pass ({passes - 1}); got {thetas.size}")
     th = thetas.tolist() if thetas.size > 1 else float(thetas[0])

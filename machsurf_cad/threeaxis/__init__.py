@@ -6,6 +6,7 @@ from .faceset import FaceSet, axis_frame, face_set
 from .heightfield import cl_surface
 from .paths import Direction, Pattern, raster, scallop_stepover
 from .select import select_faces, top_faces
+from .wholepart import Mill3Result, mill3
 from .zlevel import waterline
 
 __all__ = [
@@ -13,12 +14,14 @@ __all__ = [
     "Direction",
     "DropCutterResult",
     "FaceSet",
+    "Mill3Result",
     "Pattern",
     "axis_frame",
     "cl_surface",
     "default_seed_spacing",
     "drop_cutter",
     "face_set",
+    "mill3",
     "raster",
     "scallop_stepover",
     "select_faces",

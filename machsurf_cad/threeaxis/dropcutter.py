@@ -35,8 +35,11 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
+from ..glossary import renamed
 from ..results import Progress, Result
-from .faceset import FaceSet, face_set
+from ..typing import ArrayLike, FacesLike, ToolLike, Vector3
+from .faceset import FaceSet
+from .faceset import face_set as build_face_set
 from .solves import (
     _edge_search,
     _face_newton,
@@ -394,48 +397,49 @@ def default_seed_spacing(cutter) -> float:
     return float(np.clip(cutter.radius / 3, 0.2, 2.0))
 
 
-def machining_face_set(faces, check_faces, cutter, *, axis, seed_spacing_mm=None, what: str = "a 3-axis job"):
+def machining_face_set(faces, check_faces, cutter, *, axis, seed_spacing=None, what: str = "a 3-axis job"):
     """The face set of the faces to machine followed by the faces to avoid (frame of ``axis``), and the
     plan box ``(x0, x1, y0, y1)`` of the machined faces' samples in that frame (mm)."""
     machined = list(faces)
     if not machined:
         raise InputError(f"{what} needs at least one face to machine")
-    spacing = default_seed_spacing(cutter) if seed_spacing_mm is None else float(seed_spacing_mm)
-    fs = face_set(machined + list(check_faces), axis=axis, spacing=spacing)
+    spacing = default_seed_spacing(cutter) if seed_spacing is None else float(seed_spacing)
+    fs = build_face_set(machined + list(check_faces), axis=axis, spacing=spacing)
     xy = fs.sample_xyz[fs.sample_face < len(machined), :2]
     return fs, (float(xy[:, 0].min()), float(xy[:, 0].max()), float(xy[:, 1].min()), float(xy[:, 1].max()))
 
 
+@renamed(cutter="tool", seed_spacing_mm="seed_spacing", face_set_="face_set", chunk="batch_size")
 def drop_cutter(
-    faces,
-    cutter,
-    xy,
+    faces: FacesLike | None,
+    tool: ToolLike,
+    xy: ArrayLike,
     *,
-    axis=(0.0, 0.0, 1.0),
-    seed_spacing_mm: float | None = None,
-    face_set_: FaceSet | None = None,
-    chunk: int = 8192,
+    axis: Vector3 = (0.0, 0.0, 1.0),
+    seed_spacing: float | None = None,
+    face_set: FaceSet | None = None,
+    batch_size: int = 8192,
     progress: Progress | None = None,
 ) -> DropCutterResult:
-    """Exact drop-cutter heights of ``cutter`` on ``faces`` at the points ``xy`` (module docstring).
+    """Exact drop-cutter heights of ``tool`` on ``faces`` at the points ``xy`` (module docstring).
 
     Parameters
     ----------
     faces : sequence of Face or BSplineSurface
         The faces the tool must not cut into (trimmed regions respected).
-    cutter : Cutter or str
+    tool : Cutter or str
         Any profile cutter (ball, flat, bull, cone, drum, APT), or its string (``ball:D=10``).
     xy : array_like (n, 2)
         Query points in the tool frame (for ``axis = +z``: world x, y), mm.
     axis : 3-vector
         Fixed tool axis (3+2 machining); queries and heights are in its frame
         (:func:`~machsurf_cad.threeaxis.faceset.axis_frame`).
-    seed_spacing_mm : float, optional
+    seed_spacing : float, optional
         Seed sample spacing on faces and edges (default :func:`default_seed_spacing`). Contacts are
         solved on the exact surfaces; a smaller spacing only seeds more local solves.
-    face_set_ : FaceSet, optional
+    face_set : FaceSet, optional
         A prepared face set (reused across calls with the same faces, axis and spacing).
-    chunk : int
+    batch_size : int
         Queries per vectorised batch (bounds memory).
     progress : Progress, optional
         ``progress(done, total, message)`` over the queries.
@@ -455,24 +459,22 @@ def drop_cutter(
     from .. import checks
 
     t0 = time.perf_counter()
-    cutter = checks.tool(cutter)
+    tool = checks.tool(tool)
     xy = checks.points("drop-cutter query points (x, y in mm)", xy, 2)
     if not np.all(np.isfinite(xy)):
         raise InputError("drop-cutter query points must be a finite (n, 2) array of x, y in mm")
-    spacing = (
-        default_seed_spacing(cutter) if seed_spacing_mm is None else checks.positive("seed spacing", seed_spacing_mm)
-    )
-    fs = face_set_ if face_set_ is not None else face_set(faces, axis=axis, spacing=spacing)
+    spacing = default_seed_spacing(tool) if seed_spacing is None else checks.positive("seed spacing", seed_spacing)
+    fs = face_set if face_set is not None else build_face_set(faces, axis=axis, spacing=spacing)
     t1 = time.perf_counter()
-    prof = _Profile(cutter)
+    prof = _Profile(tool)
     n = xy.shape[0]
     height = np.full(n, np.nan)
     kind = np.zeros(n, np.int8)
     face = np.full(n, -1)
     point = np.full((n, 3), np.nan)
-    chunk = _chunk_size(fs, prof, n, int(chunk))
-    for s in range(0, n, chunk):
-        e = min(n, s + chunk)
+    batch_size = _chunk_size(fs, prof, n, int(batch_size))
+    for s in range(0, n, batch_size):
+        e = min(n, s + batch_size)
         height[s:e], kind[s:e], face[s:e], point[s:e] = _drop_chunk(fs, prof, xy[s:e])
         if progress is not None:
             progress(e, n, "drop-cutter")
@@ -487,6 +489,6 @@ def drop_cutter(
         kind,
         fs.frame[2].copy(),
         fs.frame.copy(),
-        cutter.spec(),
+        tool.spec(),
         {"prepare_s": t1 - t0, "drop_s": t2 - t1},
     )

@@ -11,26 +11,30 @@ height found (their share is reported).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
 from ..approx import SurfaceFit, fit_surface
 from ..errors import InputError
+from ..glossary import renamed
 from ..results import Progress
+from ..typing import FacesLike, ToolLike, Vector3
 from .dropcutter import drop_cutter, machining_face_set
 
 
+@renamed(cutter="tool", tolerance_mm="tolerance", seed_spacing_mm="seed_spacing")
 def cl_surface(
-    faces,
-    cutter,
+    faces: FacesLike,
+    tool: ToolLike,
     *,
-    check_faces=(),
-    tolerance_mm: float,
-    axis=(0.0, 0.0, 1.0),
-    extent=None,
+    check_faces: FacesLike = (),
+    tolerance: float,
+    axis: Vector3 = (0.0, 0.0, 1.0),
+    extent: Sequence[float] | None = None,
     degree: int = 3,
     max_poles: int = 40000,
-    seed_spacing_mm: float | None = None,
+    seed_spacing: float | None = None,
     progress: Progress | None = None,
 ) -> tuple[SurfaceFit, dict]:
     """Certified height-field B-spline of the tool tips over the machined faces' plan box.
@@ -40,9 +44,9 @@ def cl_surface(
     :class:`~machsurf_cad.errors.ToleranceError` (with the error reached) when the pole budget ends
     first.
     """
-    if not (tolerance_mm > 0 and math.isfinite(tolerance_mm)):
-        raise InputError(f"tolerance must be > 0 mm, got {tolerance_mm}")
-    fs, box = machining_face_set(faces, check_faces, cutter, axis=axis, seed_spacing_mm=seed_spacing_mm,
+    if not (tolerance > 0 and math.isfinite(tolerance)):
+        raise InputError(f"tolerance must be > 0 mm, got {tolerance}")
+    fs, box = machining_face_set(faces, check_faces, tool, axis=axis, seed_spacing=seed_spacing,
                                  what="the CL surface")  # fmt: skip
     extent = box if extent is None else extent
     frame = fs.frame
@@ -51,7 +55,7 @@ def cl_surface(
 
     def f(us, vs):
         X, Y = np.meshgrid(us, vs, indexing="ij")
-        r = drop_cutter(None, cutter, np.column_stack([X.ravel(), Y.ravel()]), face_set_=fs)
+        r = drop_cutter(None, tool, np.column_stack([X.ravel(), Y.ravel()]), face_set=fs)
         z = r.height
         miss = ~np.isfinite(z)
         stats["n_evaluated"] += int(z.size)
@@ -67,7 +71,7 @@ def cl_surface(
     fit = fit_surface(
         f,
         extent,
-        tolerance=tolerance_mm,
+        tolerance=tolerance,
         degree=(degree, degree),
         max_poles=max_poles,
         name="cl_surface",

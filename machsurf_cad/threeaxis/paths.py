@@ -9,6 +9,7 @@ chordal error between positions is measured on the exact drop-cutter at points t
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from enum import Enum
 
 import numpy as np
@@ -17,7 +18,9 @@ from .. import checks
 from ..cam.chordal import douglas_peucker
 from ..cam.toolpath import Move, ToolPath
 from ..errors import InputError
+from ..glossary import renamed
 from ..results import Progress
+from ..typing import FacesLike, ToolLike, Vector3
 from .dropcutter import DropCutterResult, drop_cutter, machining_face_set
 from .faceset import FaceSet
 from .scallop import plan_lines
@@ -41,18 +44,20 @@ class Direction(Enum):
     """Every line in the same direction; a retract and a rapid between lines."""
 
 
-def scallop_stepover(cutter, scallop: float) -> float:
+@renamed(cutter="tool")
+def scallop_stepover(tool: ToolLike, scallop: float) -> float:
     """Step-over (mm) leaving a cusp of ``scallop`` mm between two passes of the cutter's smallest
     corner arc on a flat floor, ``2 sqrt(2 r H - H^2)`` (ball: ``r = D/2``). The flat bottom of a
     bull-nose adds ``2 R_t``; a flat end mill has no arc and is refused (its scallop on slopes depends on
     the slope, not on a radius)."""
+    tool = checks.tool(tool)
     if not scallop > 0:
         raise InputError(f"scallop must be > 0 mm, got {scallop}")
-    r = float(cutter.corner_radius)
+    r = float(tool.corner_radius)
     if r <= 0:
-        raise InputError(f"a scallop height needs a cutter with a corner radius, not {cutter.spec()}: give --stepover")
+        raise InputError(f"a scallop height needs a cutter with a corner radius, not {tool.spec()}: give --stepover")
     h = min(scallop, r)
-    return 2 * math.sqrt(2 * r * h - h * h) + 2 * float(cutter.torus_radius if r < cutter.radius else 0.0)
+    return 2 * math.sqrt(2 * r * h - h * h) + 2 * float(tool.torus_radius if r < tool.radius else 0.0)
 
 
 def _lines(extent, angle_deg: float, stepover: float):
@@ -70,29 +75,40 @@ def _lines(extent, angle_deg: float, stepover: float):
 
 
 def _drop(fs, cutter, xy, progress=None) -> DropCutterResult:
-    return drop_cutter(None, cutter, xy, face_set_=fs, progress=progress)
+    return drop_cutter(None, cutter, xy, face_set=fs, progress=progress)
 
 
 MAX_DROP_POINTS = 20_000_000
 """Most drop-cutter points a raster or waterline plans before it refuses (about 1 ms a point: hours)."""
 
 
+@renamed(
+    cutter="tool",
+    stepover_mm="stepover",
+    scallop_mm="scallop",
+    angle_deg="angle",
+    chordal_tolerance_mm="chordal_tolerance",
+    clearance_mm="clearance",
+    sample_step_mm="sample_step",
+    seed_spacing_mm="seed_spacing",
+    verify_tolerance_mm="gouge_tolerance",
+)
 def raster(
-    faces,
-    cutter,
+    faces: FacesLike,
+    tool: ToolLike,
     *,
-    check_faces=(),
-    stepover_mm: float | None = None,
-    scallop_mm: float | None = None,
-    angle_deg: float = 0.0,
+    check_faces: FacesLike = (),
+    stepover: float | None = None,
+    scallop: float | None = None,
+    angle: float = 0.0,
     direction: Direction | str = Direction.ZIGZAG,
-    chordal_tolerance_mm: float = 0.01,
-    clearance_mm: float = 5.0,
-    axis=(0.0, 0.0, 1.0),
-    extent=None,
-    sample_step_mm: float | None = None,
-    seed_spacing_mm: float | None = None,
-    verify_tolerance_mm: float | None = None,
+    chordal_tolerance: float = 0.01,
+    clearance: float = 5.0,
+    axis: Vector3 = (0.0, 0.0, 1.0),
+    extent: Sequence[float] | None = None,
+    sample_step: float | None = None,
+    seed_spacing: float | None = None,
+    gouge_tolerance: float | None = None,
     progress: Progress | None = None,
 ) -> ToolPath:
     """Raster tool path over ``faces``, avoiding ``faces`` and ``check_faces``.
@@ -101,31 +117,31 @@ def raster(
     ----------
     faces : sequence of Face
         Faces to machine: the raster covers their plan extent (tool frame).
-    cutter : Cutter
+    tool : Cutter
         Any profile cutter.
     check_faces : sequence of Face
         Further faces the tool must not cut into (not machined: they only lift the tool).
-    stepover_mm, scallop_mm : float
+    stepover, scallop_mm : float
         Distance between lines, or the largest scallop (cusp height above the part along its normal) the
         path may leave: then each line is placed as far from the last as the cusp between the two allows
         (:func:`~machsurf_cad.threeaxis.scallop.plan_lines`; the flat-floor step-over of
         :func:`scallop_stepover` is the first guess) and ``info`` holds the planned largest scallop.
-    angle_deg : float
+    angle : float
         Line direction in the tool frame's plane (0: along x).
     direction : Direction
         ``zigzag`` or ``one-way``.
-    chordal_tolerance_mm : float
+    chordal_tolerance : float
         Largest height of the exact drop-cutter above the straight move between two positions,
         measured at every move's middle (never used as a position).
-    clearance_mm : float
+    clearance : float
         Rapids run this far above the highest point of the part (along the axis).
     axis : 3-vector
         Fixed tool axis (3+2).
     extent : (x0, x1, y0, y1), optional
         Plan box in the tool frame (default: the machined faces' extent).
-    sample_step_mm : float, optional
+    sample_step : float, optional
         Dense sampling along lines before chordal reduction (default ``min(0.25, D/20)``).
-    verify_tolerance_mm : float, optional
+    gouge_tolerance : float, optional
         Check the tool body against the faces and split cutting moves that gouge deeper than this
         (:func:`refine_gouging_moves`); the caller still checks the path it writes.
 
@@ -134,22 +150,22 @@ def raster(
     ToolPath
         ``info`` holds the step-over, the chordal error measured, the numbers of lines and links.
     """
-    cutter = checks.tool(cutter)
-    for name, val in (("chordal tolerance", chordal_tolerance_mm), ("clearance", clearance_mm)):
+    tool = checks.tool(tool)
+    for name, val in (("chordal tolerance", chordal_tolerance), ("clearance", clearance)):
         checks.positive(name, val)
-    if (stepover_mm is None) == (scallop_mm is None):
+    if (stepover is None) == (scallop is None):
         raise InputError("give a step-over or a scallop height (one of them)")
-    if scallop_mm is not None:
-        step = scallop_stepover(cutter, checks.positive("scallop height", scallop_mm))
+    if scallop is not None:
+        step = scallop_stepover(tool, checks.positive("scallop height", scallop))
     else:
-        step = checks.positive("step-over", stepover_mm)
+        step = checks.positive("step-over", stepover)
     direction = Direction(direction)
     machined = list(faces)
-    fs, box = machining_face_set(machined, check_faces, cutter, axis=axis, seed_spacing_mm=seed_spacing_mm,
+    fs, box = machining_face_set(machined, check_faces, tool, axis=axis, seed_spacing=seed_spacing,
                                  what="a raster path")  # fmt: skip
     extent = box if extent is None else extent
-    d, nrm, offsets, (s0, s1) = _lines(extent, angle_deg, step)
-    ds = float(sample_step_mm) if sample_step_mm is not None else min(0.25, cutter.D / 20)
+    d, nrm, offsets, (s0, s1) = _lines(extent, angle, step)
+    ds = float(sample_step) if sample_step is not None else min(0.25, tool.D / 20)
     if not ds > 0:
         raise InputError(f"sample step must be > 0 mm, got {ds}")
     n_lines = (s1 - s0) / ds * (abs(offsets[-1] - offsets[0]) / step + 1)
@@ -161,14 +177,14 @@ def raster(
         )
     s = np.linspace(s0, s1, max(2, math.ceil((s1 - s0) / ds) + 1))
     plan_info: dict = {}
-    if scallop_mm is not None:  # each line as far from the last as the cusp between them allows
-        offsets, H, CC, plan_info = plan_lines(fs, cutter, scallop_mm, d, nrm, (offsets[0], offsets[-1]), s, _drop,
+    if scallop is not None:  # each line as far from the last as the cusp between them allows
+        offsets, H, CC, plan_info = plan_lines(fs, tool, scallop, d, nrm, (offsets[0], offsets[-1]), s, _drop,
                                                step, progress)  # fmt: skip
         step = float(np.diff(offsets).max())
     else:
         S, T = np.meshgrid(s, offsets, indexing="ij")
         pts = S.T.reshape(-1, 1) * d + T.T.reshape(-1, 1) * nrm
-        res = _drop(fs, cutter, pts, progress)
+        res = _drop(fs, tool, pts, progress)
         H = res.height.reshape(len(offsets), len(s))
         CC = res.contact.reshape(len(offsets), len(s), 3)
     z_top = float(max(fs.sample_xyz[:, 2].max(), fs.edge_xyz[:, 2].max()))
@@ -182,17 +198,17 @@ def raster(
             passes.append([s[a : b + 1], H[i, a : b + 1], CC[i, a : b + 1], i])
     if not passes:
         raise InputError("no face lies under the tool anywhere in the raster's extent")
-    passes = _reduce_chordal(fs, cutter, passes, d, nrm, offsets, chordal_tolerance_mm)
+    passes = _reduce_chordal(fs, tool, passes, d, nrm, offsets, chordal_tolerance)
     if direction is Direction.ZIGZAG:
         for p in passes:
             if p[3] % 2 == 1:
                 p[0], p[1], p[2] = p[0][::-1], p[1][::-1], p[2][::-1]
-    tp = _link(fs, cutter, passes, d, nrm, offsets, step, z_top + clearance_mm, chordal_tolerance_mm, direction,
-               info={"pattern": "raster", "direction": direction.value, "angle_deg": float(angle_deg),
-                     "stepover_mm": step, "scallop_target_mm": scallop_mm, "n_lines": int(len(offsets)),
+    tp = _link(fs, tool, passes, d, nrm, offsets, step, z_top + clearance, chordal_tolerance, direction,
+               info={"pattern": "raster", "direction": direction.value, "angle_deg": float(angle),
+                     "stepover_mm": step, "scallop_target_mm": scallop, "n_lines": int(len(offsets)),
                      "sample_step_mm": ds, "extent_mm": [float(e) for e in extent], **plan_info})  # fmt: skip
-    if verify_tolerance_mm is not None:
-        tp = refine_gouging_moves(tp, machined + list(check_faces), cutter, fs, tolerance_mm=verify_tolerance_mm)
+    if gouge_tolerance is not None:
+        tp = refine_gouging_moves(tp, machined + list(check_faces), tool, fs, gouge_tolerance=gouge_tolerance)
     return tp
 
 
@@ -214,9 +230,9 @@ def _insert(tp: ToolPath, k, tips, ccs) -> ToolPath:
     )
 
 
-def refine_gouging_moves(tp: ToolPath, faces, cutter, fs: FaceSet, *, tolerance_mm: float, rounds: int = 6,
+def refine_gouging_moves(tp: ToolPath, faces, cutter, fs: FaceSet, *, gouge_tolerance: float, rounds: int = 6,
                          n_sub: int = 8, jump_mm: float = 2e-3) -> ToolPath:  # fmt: skip
-    """Cutting moves the tool body check finds gouging (deeper than ``tolerance_mm``) are split into
+    """Cutting moves the tool body check finds gouging (deeper than ``gouge_tolerance``) are split into
     ``n_sub`` moves at exact drop-cutter heights, and the path is checked again, up to ``rounds`` times.
     The chordal check samples each move at three points; a narrow rise of the heights between them (a
     thin blade's edge) is only seen by the body check. ``info`` gets ``n_moves_split``."""
@@ -224,7 +240,7 @@ def refine_gouging_moves(tp: ToolPath, faces, cutter, fs: FaceSet, *, tolerance_
 
     split_total = 0
     for _ in range(rounds):
-        v = verify(faces, tp, cutter, tolerance=tolerance_mm)
+        v = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance)
         k = np.nonzero((v.status == GOUGE) & (tp.move == Move.CUT))[0]  # gouge at the move ending at k
         k = k[k > 0]  # a cutting move (a line's or a link's on the part) from the position before
         if k.size == 0:
@@ -243,7 +259,7 @@ def refine_gouging_moves(tp: ToolPath, faces, cutter, fs: FaceSet, *, tolerance_
         b = fb_[:, :2]
         w = (np.arange(1, n_sub) / n_sub)[None, :, None]
         q = (a[:, None, :] * (1 - w) + b[:, None, :] * w).reshape(-1, 2)
-        r = drop_cutter(None, cutter, q, face_set_=fs)
+        r = drop_cutter(None, cutter, q, face_set=fs)
         z = r.height.reshape(k.size, n_sub - 1)
         za = fs.to_frame(tp.tip[k - 1])[:, 2]
         zb = fs.to_frame(tp.tip[k])[:, 2]

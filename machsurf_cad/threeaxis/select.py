@@ -6,6 +6,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..geometry.face import Face
+from ..typing import FacesLike, Vector3
 from .faceset import axis_frame
 
 
@@ -36,7 +37,7 @@ def _as_faces(faces) -> list[Face]:
     return out
 
 
-def top_faces(faces, *, axis=(0.0, 0.0, 1.0), min_fraction: float = 0.05) -> list[int]:
+def top_faces(faces: FacesLike, *, axis: Vector3 = (0.0, 0.0, 1.0), min_fraction: float = 0.05) -> list[int]:
     """Indices of the faces seen from above along ``axis``: at least ``min_fraction`` of a face's samples
     face the axis (outward normal . axis > 0.01) and have no other face above them along the axis
     (a vertical ray to the sky, tested on the exact surfaces by a drop of a 0.002 mm ball)."""
@@ -58,7 +59,7 @@ def top_faces(faces, *, axis=(0.0, 0.0, 1.0), min_fraction: float = 0.05) -> lis
     frame = axis_frame(axis)
     local = P @ frame.T
     probe = BallEndMill(0.002)
-    res = drop_cutter(faces, probe, local[:, :2], axis=axis, seed_spacing_mm=2.0)
+    res = drop_cutter(faces, probe, local[:, :2], axis=axis, seed_spacing=2.0)
     seen = res.height <= local[:, 2] + 1e-4
     out = []
     for i in range(len(faces)):

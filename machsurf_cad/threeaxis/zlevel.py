@@ -4,13 +4,16 @@ height crosses each level, refined on the exact faces, linked level by level (mm
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
 from .. import checks
 from ..cam.toolpath import Move, ToolPath
 from ..errors import InputError
+from ..glossary import renamed
 from ..results import Progress
+from ..typing import FacesLike, ToolLike, Vector3
 from .dropcutter import machining_face_set
 from .paths import MAX_DROP_POINTS, _drop
 
@@ -62,38 +65,48 @@ def _crossing(fs, cutter, a, b, fa, fb, level, iters: int = 40, tol: float = 1e-
     return x_out, np.where(done[:, None], c_last, np.where(a_safe[:, None], ca, cb))
 
 
+@renamed(
+    cutter="tool",
+    stepdown_mm="stepdown",
+    chordal_tolerance_mm="chordal_tolerance",
+    clearance_mm="clearance",
+    grid_mm="grid_step",
+    z_min_mm="z_min",
+    seed_spacing_mm="seed_spacing",
+    verify_tolerance_mm="gouge_tolerance",
+)
 def waterline(
-    faces,
-    cutter,
+    faces: FacesLike,
+    tool: ToolLike,
     *,
-    check_faces=(),
-    stepdown_mm: float,
-    chordal_tolerance_mm: float = 0.01,
-    clearance_mm: float = 5.0,
-    axis=(0.0, 0.0, 1.0),
-    extent=None,
-    grid_mm: float | None = None,
-    z_min_mm: float | None = None,
-    seed_spacing_mm: float | None = None,
-    verify_tolerance_mm: float | None = None,
+    check_faces: FacesLike = (),
+    stepdown: float,
+    chordal_tolerance: float = 0.01,
+    clearance: float = 5.0,
+    axis: Vector3 = (0.0, 0.0, 1.0),
+    extent: Sequence[float] | None = None,
+    grid_step: float | None = None,
+    z_min: float | None = None,
+    seed_spacing: float | None = None,
+    gouge_tolerance: float | None = None,
     progress: Progress | None = None,
 ) -> ToolPath:
     """Waterline (constant-z) tool path: at each level, the closed contours where the exact drop-cutter
     height equals the level (found on a plan grid of exact heights with contourpy, each vertex then
     moved onto the exact crossing by regula falsi); moves whose quarter points rise above the level by
-    more than ``chordal_tolerance_mm`` get the exact crossing next to their middle inserted.
+    more than ``chordal_tolerance`` get the exact crossing next to their middle inserted.
 
     Parameters
     ----------
-    stepdown_mm : float
-        Distance between levels, from the part's top down to ``z_min_mm`` (default: the lowest tool
+    stepdown : float
+        Distance between levels, from the part's top down to ``z_min`` (default: the lowest tool
         height over the machined faces).
-    grid_mm : float, optional
+    grid_step : float, optional
         Plan grid of exact heights the contours are found on (default ``min(1, D/10)``). A feature
         narrower than the grid may leave moves above their level after refinement: they are dropped
         (the contour is cut open, the tool retracts and plunges again) and counted in ``info``
         (``n_moves_dropped_above_level``, ``length_dropped_above_level_mm``).
-    verify_tolerance_mm : float, optional
+    gouge_tolerance : float, optional
         Check the tool body against the faces and drop cutting moves that gouge deeper than this
         (counted in ``info``); the caller still checks the path it writes.
 
@@ -101,19 +114,19 @@ def waterline(
     """
     import contourpy
 
-    cutter = checks.tool(cutter)
+    tool = checks.tool(tool)
     for name, val in (
-        ("chordal tolerance", chordal_tolerance_mm),
-        ("clearance", clearance_mm),
-        ("step-down", stepdown_mm),
+        ("chordal tolerance", chordal_tolerance),
+        ("clearance", clearance),
+        ("step-down", stepdown),
     ):
         checks.positive(name, val)
-    fs, (x0, x1, y0, y1) = machining_face_set(faces, check_faces, cutter, axis=axis,
-                                               seed_spacing_mm=seed_spacing_mm, what="a waterline path")  # fmt: skip
-    R = float(cutter.profile_points(16)[:, 0].max())
+    fs, (x0, x1, y0, y1) = machining_face_set(faces, check_faces, tool, axis=axis,
+                                               seed_spacing=seed_spacing, what="a waterline path")  # fmt: skip
+    R = float(tool.profile_points(16)[:, 0].max())
     if extent is None:
         extent = (x0 - R, x1 + R, y0 - R, y1 + R)
-    g = checks.positive("grid", grid_mm) if grid_mm is not None else min(1.0, cutter.D / 10)
+    g = checks.positive("grid", grid_step) if grid_step is not None else min(1.0, tool.D / 10)
     n_grid = ((extent[1] - extent[0]) / g + 1) * ((extent[3] - extent[2]) / g + 1)
     if n_grid > MAX_DROP_POINTS:
         raise InputError(
@@ -124,7 +137,7 @@ def waterline(
     xs = np.linspace(extent[0], extent[1], max(3, math.ceil((extent[1] - extent[0]) / g) + 1))
     ys = np.linspace(extent[2], extent[3], max(3, math.ceil((extent[3] - extent[2]) / g) + 1))
     X, Y = np.meshgrid(xs, ys, indexing="xy")
-    res = _drop(fs, cutter, np.column_stack([X.ravel(), Y.ravel()]), progress)
+    res = _drop(fs, tool, np.column_stack([X.ravel(), Y.ravel()]), progress)
     Z = res.height.reshape(X.shape)
     fin = np.isfinite(Z)
     if not fin.any():
@@ -132,10 +145,10 @@ def waterline(
     z_low = float(np.nanmin(Z)) - 1.0
     Zf = np.where(fin, Z, z_low)
     z_top = float(max(fs.sample_xyz[:, 2].max(), fs.edge_xyz[:, 2].max()))
-    z_bottom = float(np.nanmin(Z[fin])) if z_min_mm is None else float(z_min_mm)
-    levels = np.arange(float(np.nanmax(Z)) - stepdown_mm, z_bottom - 1e-9, -stepdown_mm)
+    z_bottom = float(np.nanmin(Z[fin])) if z_min is None else float(z_min)
+    levels = np.arange(float(np.nanmax(Z)) - stepdown, z_bottom - 1e-9, -stepdown)
     if levels.size == 0:
-        raise InputError(f"step-down {stepdown_mm:g} mm leaves no level between the top and {z_bottom:g} mm")
+        raise InputError(f"step-down {stepdown:g} mm leaves no level between the top and {z_bottom:g} mm")
     gen = contourpy.contour_generator(xs, ys, Zf, line_type=contourpy.LineType.Separate)
     lines, lv = [], []
     for level in levels:
@@ -146,21 +159,21 @@ def waterline(
                 lv.append(float(level))
     if not lines:
         raise InputError("no waterline contour: the part is flat under every level")
-    pts, ccs, rise, lv = _refine_contours(fs, cutter, xs, ys, Zf, lines, np.array(lv), chordal_tolerance_mm, g)
+    pts, ccs, rise, lv = _refine_contours(fs, tool, xs, ys, Zf, lines, np.array(lv), chordal_tolerance, g)
     # moves still above their level (a feature narrower than the grid the contours were found on) are
     # dropped: the contour is cut open there, the tool retracts and plunges again (material left there)
-    pts, ccs, lv, n_drop, l_drop = _split_at(pts, ccs, lv, [r > chordal_tolerance_mm for r in rise])
-    above = max([0.0] + [float(r[r <= chordal_tolerance_mm].max(initial=0.0)) for r in rise])
-    info = {"pattern": "waterline", "stepdown_mm": float(stepdown_mm), "grid_mm": g, "n_levels": int(levels.size),
+    pts, ccs, lv, n_drop, l_drop = _split_at(pts, ccs, lv, [r > chordal_tolerance for r in rise])
+    above = max([0.0] + [float(r[r <= chordal_tolerance].max(initial=0.0)) for r in rise])
+    info = {"pattern": "waterline", "stepdown_mm": float(stepdown), "grid_mm": g, "n_levels": int(levels.size),
             "extent_mm": [float(e) for e in extent], "n_moves_dropped_above_level": n_drop,
             "length_dropped_above_level_mm": l_drop}  # fmt: skip
     if not pts:
         raise InputError("no waterline contour stays at its level: refine --grid")
-    z_safe = z_top + clearance_mm
-    tp = _link_levels(fs, cutter, list(zip(pts, lv, ccs)), z_safe, chordal_tolerance_mm, above, info=info)
-    if verify_tolerance_mm is not None:
-        tp = _drop_gouging_moves(tp, fs, cutter, list(faces) + list(check_faces), pts, ccs, lv, z_safe,
-                                 chordal_tolerance_mm, above, info, verify_tolerance_mm)  # fmt: skip
+    z_safe = z_top + clearance
+    tp = _link_levels(fs, tool, list(zip(pts, lv, ccs)), z_safe, chordal_tolerance, above, info=info)
+    if gouge_tolerance is not None:
+        tp = _drop_gouging_moves(tp, fs, tool, list(faces) + list(check_faces), pts, ccs, lv, z_safe,
+                                 chordal_tolerance, above, info, gouge_tolerance)  # fmt: skip
     return tp
 
 
@@ -172,7 +185,7 @@ def _drop_gouging_moves(tp, fs, cutter, faces, pts, ccs, lv, z_safe, tol, above,
 
     n_total, l_total = 0, 0.0
     for _ in range(rounds):
-        v = verify(faces, tp, cutter, tolerance=verify_tol)
+        v = verify(faces, tp, cutter, gouge_tolerance=verify_tol)
         k = np.nonzero((v.status == GOUGE) & (tp.move == Move.CUT))[0]
         if k.size == 0:
             break
@@ -307,7 +320,9 @@ def _split_at(pts, ccs, levels, drop):
     out_p, out_c, out_l, n, length = [], [], [], 0, 0.0
     for p, c, lv, d in zip(pts, ccs, levels, drop):
         if not d.any():
-            out_p.append(p), out_c.append(c), out_l.append(lv)
+            out_p.append(p)
+            out_c.append(c)
+            out_l.append(lv)
             continue
         n += int(d.sum())
         length += float(np.linalg.norm(np.diff(p, axis=0)[d], axis=1).sum())
@@ -320,7 +335,9 @@ def _split_at(pts, ccs, levels, drop):
         cut = np.flatnonzero(d) + 1  # a dropped move i runs from position i to i + 1
         for pp, cc in zip(np.split(p, cut), np.split(c, cut)):
             if pp.shape[0] >= 2:
-                out_p.append(pp), out_c.append(cc), out_l.append(lv)
+                out_p.append(pp)
+                out_c.append(cc)
+                out_l.append(lv)
     return out_p, out_c, np.array(out_l, float), n, length
 
 

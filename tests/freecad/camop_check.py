@@ -63,8 +63,8 @@ try:
     # the same path from machsurf_cad directly, written as CSV: every non-rapid row is one G1, same point
     faces = [face_to_numpy(f, f"Block.Face{i + 1}") for i, f in enumerate(part.Shape.Faces)]
     rest = [f for i, f in enumerate(faces) if i != top]
-    tp = ms.raster([faces[top]], ms.parse_cutter(op.CutterUsed), check_faces=rest, stepover_mm=4.0,
-                   chordal_tolerance_mm=0.01, clearance_mm=5.0, verify_tolerance_mm=0.01)  # fmt: skip
+    tp = ms.raster([faces[top]], ms.parse_cutter(op.CutterUsed), check_faces=rest, stepover=4.0,
+                   chordal_tolerance=0.01, clearance=5.0, gouge_tolerance=0.01)  # fmt: skip
     csv_path = os.path.join(os.path.dirname(out_path), "cam.csv")
     ms.write_csv(csv_path, tp)
     rows = [r for r in csv.DictReader(open(csv_path)) if r["move"] != "rapid"]

@@ -99,6 +99,26 @@ def find_job(doc, part=None, create=True):
     return PathJob.Create("Job", [part], None)
 
 
+def verdict_text(vr: dict) -> str:
+    """One line of a body check's report: clean, or what gouges and collides and where (never a crash on
+    a figure that is None: no collision has no closest distance)."""
+    if vr["clean"]:
+        return "clean: no gouge or collision beyond the tolerance"
+    close = vr.get("min_clearance_mm")
+    w = vr["worst"][0] if vr.get("worst") else None
+    return (
+        f"{vr['n_gouging_positions']} gouging position(s) (deepest {vr['max_gouge_mm']:.4g} mm), "
+        f"{vr['n_collisions']} collision(s)"
+        + (f" (closest {close:.4g} mm)" if close is not None else "")
+        + (
+            f"; worst at position {w['index']} ({w['move']}) near "
+            f"({', '.join(f'{x:.3f}' for x in w['part_point_mm'])}) mm"
+            if w
+            else ""
+        )
+    )
+
+
 class CamOperationFeature(_Base):
     """machsurf's 3-axis raster or waterline path on the selected faces, checked against the whole part."""
 
@@ -182,21 +202,22 @@ class CamOperationFeature(_Base):
         bar = self.bar  # FreeCAD's progress bar (the GUI's status bar, the console headless); Esc cancels
         tp = self.toolpath(obj, ms, faces, others, cutter, bar)
         bar.stop()
-        v = ms.verify(faces + others, tp, tolerance=gtol, progress=bar)
+        pc = ms.check_toolpath(
+            tp,
+            faces + others,
+            gouge_tolerance=gtol,
+            on_gouge="allow" if obj.AllowGouge else "refuse",
+            clearance=value_of(obj.Clearance),
+            progress=bar,
+        )
         bar.stop()
+        v = pc.check
         vr = v.report()
-        rep = {"toolpath": tp.report(), "verify": v.report(), "cutter": cutter.spec()}
+        rep = {"toolpath": tp.report(), "verify": pc.report(), "cutter": cutter.spec()}
         obj.MaxGouge = float(v.max_gouge)
         obj.CutterUsed = cutter.spec()
-        obj.Verdict = (
-            "clean: no gouge or collision beyond the tolerance"
-            if v.clean
-            else f"{vr['n_gouging_positions']} gouging position(s) (deepest {v.max_gouge:.4g} mm), "
-            f"{vr['n_collisions']} collision(s) (closest {vr['min_clearance_mm']:.4g} mm); worst at position "
-            f"{vr['worst'][0]['index']} ({vr['worst'][0]['move']}) near "
-            f"({', '.join(f'{x:.3f}' for x in vr['worst'][0]['part_point_mm'])}) mm"
-        )
-        if not v.clean and not obj.AllowGouge:
+        obj.Verdict = verdict_text(vr)
+        if pc.toolpath is None:
             obj.Path = Path.Path()
             raise InputError(f"the path gouges the part ({obj.Verdict}): not written (AllowGouge writes it)")
         obj.Path = Path.Path(self.commands(obj, tp))
@@ -208,7 +229,7 @@ class CamOperationFeature(_Base):
         if obj.SimulateScallops:
             # about SIMULATION_SAMPLES nominal samples: a map FreeCAD draws and saves at ease, a few seconds
             res = max(math.sqrt(area / SIMULATION_SAMPLES), 1e-3)
-            sim = ms.simulate(faces, tp, tolerance=gtol, resolution=res, progress=bar)
+            sim = ms.simulate(faces, tp, gouge_tolerance=gtol, resolution=res, progress=bar)
             bar.stop()
             maps.simulation_map(obj, sim, gtol)
             obj.MaxScallop = sim.max_scallop
@@ -226,16 +247,16 @@ class CamOperationFeature(_Base):
         pattern = str(obj.Pattern)
         common = dict(
             check_faces=others,
-            chordal_tolerance_mm=value_of(obj.ChordalTolerance),
-            clearance_mm=value_of(obj.Clearance),
-            verify_tolerance_mm=value_of(obj.GougeTolerance),
+            chordal_tolerance=value_of(obj.ChordalTolerance),
+            clearance=value_of(obj.Clearance),
+            gouge_tolerance=value_of(obj.GougeTolerance),
             progress=bar,
         )
         if pattern == "raster":
-            return ms.raster(faces, cutter, stepover_mm=value_of(obj.StepOver), angle_deg=value_of(obj.Angle),
+            return ms.raster(faces, cutter, stepover=value_of(obj.StepOver), angle=value_of(obj.Angle),
                              **common)  # fmt: skip
         if pattern == "waterline":
-            return ms.waterline(faces, cutter, stepdown_mm=value_of(obj.StepDown), **common)
+            return ms.waterline(faces, cutter, stepdown=value_of(obj.StepDown), **common)
         if len(faces) != 1:
             raise InputError(f"the {pattern} pattern machines one face: select one (got {len(faces)})")
         if pattern == "flank":
@@ -270,8 +291,8 @@ class CamOperationFeature(_Base):
         horiz, vert = self.feeds(obj)
         rpm = float(getattr(tc, "SpindleSpeed", 0) or 0) if tc is not None else 0.0
         number = int(getattr(tc, "ToolNumber", 1) or 1) if tc is not None else 1
-        return ms.PostOptions(feed_mm_min=horiz * 60.0, plunge_mm_min=vert * 60.0,
-                              spindle_rpm=rpm if rpm > 0 else 10000.0, tool_number=number,
+        return ms.PostOptions(feed=horiz * 60.0, plunge_feed=vert * 60.0,
+                              spindle=rpm if rpm > 0 else 10000.0, tool_number=number,
                               partno=str(obj.Label).upper()[:40])  # fmt: skip
 
     def commands(self, obj, tp):

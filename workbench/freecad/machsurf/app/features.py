@@ -456,7 +456,7 @@ class EnvelopeFeature(_Base):
             tool_text(obj.Tool),
             example(str(obj.Motion), "motion"),
             passes=int(obj.Passes),
-            theta_deg=value_of(obj.PassTurn),
+            theta=value_of(obj.PassTurn),
             tolerance=value_of(obj.Tolerance),
             progress=self.bar,
         )

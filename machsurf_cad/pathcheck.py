@@ -1,0 +1,132 @@
+"""Check-before-write: a tool path's tool body against every face of its part, and what may be written.
+
+One core step used by the command line, the batch runner and the FreeCAD operation alike: the path
+is verified (:func:`machsurf_cad.verify`); a clean path is written as is; a gouging one is refused,
+cut down to its clear stretches and relinked (``on_gouge="trim"``, the new links checked again), or
+written with its gouges listed (``on_gouge="allow"``). A gouge is never written silently: the
+verdict says which of these happened.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from .cam.toolpath import ToolPath
+from .checks import positive
+from .errors import InputError
+from .gougecheck import VerifyResult, clear_runs, verify
+from .results import Progress, Result
+from .typing import MapChunks, PartLike, ToolLike
+
+OnGouge = Literal["refuse", "trim", "allow"]
+"""What to do with a path that gouges or collides: refuse it, keep its clear stretches, or write it anyway."""
+
+COLLISION_CLEARANCE = 0.01
+"""Least distance (mm) rapids, shank and holder keep from the part, or the gouge tolerance when smaller:
+a large gouge tolerance (flank's interference tolerance) is not a clearance."""
+
+
+@dataclass(frozen=True, eq=False)
+class PathCheck(Result):
+    """The verdict of :func:`check_toolpath`.
+
+    ``toolpath`` is what may be written (the path, its clear stretches, or the gouging path when
+    allowed), ``None`` when refused; ``check`` is the whole-part check of the path as planned and
+    ``recheck`` that of the trimmed path.
+    """
+
+    planned: ToolPath
+    toolpath: ToolPath | None
+    check: VerifyResult
+    recheck: VerifyResult | None
+    verdict: Literal["clean", "trimmed", "gouges allowed", "refused"]
+    link_clearance: float
+
+    @property
+    def written(self) -> bool:
+        return self.toolpath is not None
+
+    def report(self) -> dict:
+        rep = dict(self.check.report(), verdict=self.verdict)
+        if self.recheck is not None and self.toolpath is not None:
+            rep["trimmed"] = {
+                "n_cut_kept": self.toolpath.n_cut,
+                "n_cut_before": self.planned.n_cut,
+                "n_passes": self.toolpath.n_passes,
+                "clearance_mm": self.link_clearance,
+                "recheck": self.recheck.report(),
+            }
+        return rep
+
+
+def check_toolpath(
+    toolpath: ToolPath,
+    part: PartLike,
+    *,
+    gouge_tolerance: float = 0.01,
+    on_gouge: OnGouge = "refuse",
+    clearance: float = 5.0,
+    tool: ToolLike | None = None,
+    step: float | None = None,
+    angle_step: float = 1.0,
+    spacing: float | None = None,
+    chunks: int = 1,
+    map_chunks: MapChunks = None,
+    progress: Progress | None = None,
+) -> PathCheck:
+    """Verify ``toolpath`` against every face of ``part`` and decide what may be written.
+
+    Parameters
+    ----------
+    toolpath : ToolPath
+        The path as planned.
+    part : sequence of Face
+        Every face of the part.
+    gouge_tolerance : float
+        Deepest the cutting part may go into the part, mm.
+    on_gouge : {"refuse", "trim", "allow"}
+        A gouging path is refused (``toolpath`` None), cut to its clear stretches relinked ``clearance``
+        mm along the axis and checked again (the link height doubles up to 3 times when the links
+        collide), or kept with its gouges listed.
+    clearance : float
+        Approach and retract of the relinked stretches, mm.
+    tool, step, angle_step, spacing, chunks, map_chunks, progress
+        As :func:`machsurf_cad.verify`.
+
+    Returns
+    -------
+    PathCheck
+    """
+    if on_gouge not in ("refuse", "trim", "allow"):
+        raise InputError(f"on_gouge must be refuse, trim or allow, got {on_gouge!r}")
+    gouge_tolerance = positive("gouge_tolerance", gouge_tolerance)
+    clear = min(gouge_tolerance, COLLISION_CLEARANCE)
+    res = verify(
+        part,
+        toolpath,
+        tool,
+        gouge_tolerance=gouge_tolerance,
+        step=step,
+        angle_step=angle_step,
+        spacing=spacing,
+        progress=progress,
+        chunks=chunks,
+        map_chunks=map_chunks,
+        clearance=clear,
+    )
+    if res.clean:
+        return PathCheck(toolpath, toolpath, res, None, "clean", float(clearance))
+    if on_gouge == "allow":
+        return PathCheck(toolpath, toolpath, res, None, "gouges allowed", float(clearance))
+    if on_gouge == "trim":
+        link = float(clearance)
+        for _ in range(4):
+            cut = clear_runs(toolpath, res, clearance=link)
+            if cut is None:
+                break
+            again = verify(part, cut, tool, gouge_tolerance=gouge_tolerance, clearance=clear)
+            if again.clean:
+                return PathCheck(toolpath, cut, res, again, "trimmed", link)
+            link *= 2.0
+    return PathCheck(toolpath, None, res, None, "refused", float(clearance))
