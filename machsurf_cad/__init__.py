@@ -41,7 +41,7 @@ if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``im
         FlatEndMill,
         Shank,
     )
-    from .effradius import DirectionMap, ReffMaps, effective_radius, reff_maps, stepover
+    from .effradius import DirectionMap, ReffMaps, effective_radius, reff_maps
     from .effradius import reff_maps as reff
     from .errors import DegenerateGeometryError, InputError, MachsurfError, ToleranceError
     from .examples import EXAMPLES, example
@@ -89,6 +89,7 @@ if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``im
     from .measure import DeviationResult, deviation, project_points
     from .pathcheck import PathCheck, check_toolpath
     from .results import Progress
+    from .scallop import scallop_stepover, stepover
     from .simulation import SimulationResult, simulate
     from .sweep import Envelope, EnvelopeResult, Motion, PassChain, envelope
     from .threeaxis import (
@@ -101,7 +102,6 @@ if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``im
         drop_cutter,
         mill3,
         raster,
-        scallop_stepover,
         top_faces,
         waterline,
     )

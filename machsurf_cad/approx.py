@@ -155,19 +155,7 @@ def fit_surface(
     u0, u1, v0, v1 = (float(x) for x in bounds)
     if not (u1 > u0 and v1 > v0):
         raise InputError("empty parameter domain")
-    bu = np.linspace(u0, u1, max(1, initial_spans[0]) + 1)
-    bv = np.linspace(v0, v1, max(1, initial_spans[1]) + 1)
-    fixed_u, fixed_v = {}, {}
-    if breaks is not None:
-        (ku_, mu_), (kv_, mv_) = breaks
-        for k, m in zip(np.asarray(ku_, float), np.asarray(mu_, int)):
-            if u0 < k < u1:
-                fixed_u[float(k)] = int(m)
-        for k, m in zip(np.asarray(kv_, float), np.asarray(mv_, int)):
-            if v0 < k < v1:
-                fixed_v[float(k)] = int(m)
-        bu = _merge_breaks(bu, np.array(sorted(fixed_u)))
-        bv = _merge_breaks(bv, np.array(sorted(fixed_v)))
+    bu, bv, fixed_u, fixed_v = _initial_breaks(u0, u1, v0, v1, initial_spans, breaks)
     fu, cu = _fractions(p)
     fv, cv = _fractions(q)
     # an independent uniform grid shifted by an irrational fraction of its step, so that it never
@@ -179,17 +167,7 @@ def fit_surface(
     _check_map_values(f_grid, "the map")
     history = []
     for it in range(max_iter):
-        ku, mu, tu = _knot_vectors(bu, p, fixed_u)
-        kv, mv, tv = _knot_vectors(bv, q, fixed_v)
-        nu, nv = tu.size - p - 1, tv.size - q - 1
-        us, vs = _params(bu, fu, True), _params(bv, fv, True)
-        vals = np.asarray(f(us, vs), dtype=float)
-        _check_map_values(vals, "the map")
-        Bu = collocation_matrix(tu, p, nu, us)
-        Bv = collocation_matrix(tv, q, nv, vs)
-        tmp = _lstsq(Bu, vals.reshape(us.size, -1)).reshape(nu, vs.size, 3)
-        poles = _lstsq(Bv, tmp.transpose(1, 0, 2).reshape(vs.size, -1)).reshape(nv, nu, 3).transpose(1, 0, 2)
-        surf = BSplineSurface(p, q, ku, mu, kv, mv, poles, name=name)
+        surf, mu, mv, nu, nv = _least_squares(f, bu, bv, p, q, fu, fv, fixed_u, fixed_v, name)
         # error on the span interiors between fit samples (never seen) ...
         cus, cvs = _params(bu, cu, False), _params(bv, cv, False)
         err = np.linalg.norm(surf.evaluate_grid(cus, cvs) - np.asarray(f(cus, cvs), dtype=float), axis=-1)
@@ -200,27 +178,9 @@ def fit_surface(
         if progress is not None:
             progress(it, None, f"{nu * nv} poles, error {max_err:.3g} mm")
         if max_err <= tolerance:
-            if err.max() >= err_g.max():
-                i, j = np.unravel_index(np.argmax(err), err.shape)
-                worst = (float(cus[i]), float(cvs[j]))
-            else:
-                i, j = np.unravel_index(np.argmax(err_g), err_g.shape)
-                worst = (float(gu[i]), float(gv[j]))
-            rms = float(np.sqrt((np.sum(err**2) + np.sum(err_g**2)) / (err.size + err_g.size)))
-            return SurfaceFit(surf, float(tolerance), max_err, rms, int(err.size + err_g.size), worst, tuple(history))
+            return _surface_fit(surf, tolerance, max_err, err, err_g, (cus, cvs), (gu, gv), history)
         # refine: split every knot span that holds a point above tolerance, per direction
-        k_u, k_v = cu.size, cv.size
-        bad_u = np.zeros(bu.size - 1, bool)
-        bad_v = np.zeros(bv.size - 1, bool)
-        e4 = err.reshape(bu.size - 1, k_u, bv.size - 1, k_v)
-        bad_u |= e4.max(axis=(1, 2, 3)) > tolerance
-        bad_v |= e4.max(axis=(0, 1, 3)) > tolerance
-        iu = np.clip(np.searchsorted(bu, gu, side="right") - 1, 0, bu.size - 2)
-        iv = np.clip(np.searchsorted(bv, gv, side="right") - 1, 0, bv.size - 2)
-        gi, gj = np.nonzero(err_g > tolerance)
-        bad_u[iu[gi]] = True
-        bad_v[iv[gj]] = True
-        bad_u, bad_v = _directional(bad_u, bad_v, e4, tolerance)
+        bad_u, bad_v = _spans_to_split(err, err_g, bu, bv, cu.size, cv.size, gu, gv, tolerance)
         new_u = int(mu.sum()) - p - 1 + int(bad_u.sum())
         new_v = int(mv.sum()) - q - 1 + int(bad_v.sum())
         if new_u * new_v > max_poles:
@@ -235,6 +195,68 @@ def fit_surface(
         f"surface fit did not reach {tolerance:g} mm in {max_iter} refinements (reached {history[-1][2]:.3g} mm)",
         history[-1][2],
     )
+
+
+def _initial_breaks(u0: float, u1: float, v0: float, v1: float, initial_spans, breaks):
+    """The first span breaks along u and v, with the given ``breaks`` inside the domain and their multiplicities."""
+    bu = np.linspace(u0, u1, max(1, initial_spans[0]) + 1)
+    bv = np.linspace(v0, v1, max(1, initial_spans[1]) + 1)
+    fixed_u, fixed_v = {}, {}
+    if breaks is not None:
+        (ku_, mu_), (kv_, mv_) = breaks
+        for k, m in zip(np.asarray(ku_, float), np.asarray(mu_, int)):
+            if u0 < k < u1:
+                fixed_u[float(k)] = int(m)
+        for k, m in zip(np.asarray(kv_, float), np.asarray(mv_, int)):
+            if v0 < k < v1:
+                fixed_v[float(k)] = int(m)
+        bu = _merge_breaks(bu, np.array(sorted(fixed_u)))
+        bv = _merge_breaks(bv, np.array(sorted(fixed_v)))
+    return bu, bv, fixed_u, fixed_v
+
+
+def _least_squares(f: GridMap, bu, bv, p: int, q: int, fu, fv, fixed_u: dict, fixed_v: dict, name: str):
+    """The least-squares B-spline surface on the breaks ``bu`` x ``bv``, its multiplicities and pole counts."""
+    ku, mu, tu = _knot_vectors(bu, p, fixed_u)
+    kv, mv, tv = _knot_vectors(bv, q, fixed_v)
+    nu, nv = tu.size - p - 1, tv.size - q - 1
+    us, vs = _params(bu, fu, True), _params(bv, fv, True)
+    vals = np.asarray(f(us, vs), dtype=float)
+    _check_map_values(vals, "the map")
+    Bu = collocation_matrix(tu, p, nu, us)
+    Bv = collocation_matrix(tv, q, nv, vs)
+    tmp = _lstsq(Bu, vals.reshape(us.size, -1)).reshape(nu, vs.size, 3)
+    poles = _lstsq(Bv, tmp.transpose(1, 0, 2).reshape(vs.size, -1)).reshape(nv, nu, 3).transpose(1, 0, 2)
+    return BSplineSurface(p, q, ku, mu, kv, mv, poles, name=name), mu, mv, nu, nv
+
+
+def _surface_fit(surf, tolerance: float, max_err: float, err, err_g, check, grid, history: list) -> SurfaceFit:
+    """The fit within tolerance: its worst point (on the span check points or the uniform grid) and RMS error."""
+    cus, cvs = check
+    gu, gv = grid
+    if err.max() >= err_g.max():
+        i, j = np.unravel_index(np.argmax(err), err.shape)
+        worst = (float(cus[i]), float(cvs[j]))
+    else:
+        i, j = np.unravel_index(np.argmax(err_g), err_g.shape)
+        worst = (float(gu[i]), float(gv[j]))
+    rms = float(np.sqrt((np.sum(err**2) + np.sum(err_g**2)) / (err.size + err_g.size)))
+    return SurfaceFit(surf, float(tolerance), max_err, rms, int(err.size + err_g.size), worst, tuple(history))
+
+
+def _spans_to_split(err, err_g, bu, bv, k_u: int, k_v: int, gu, gv, tolerance: float):
+    """The knot spans along u and along v that hold a check point above tolerance (:func:`_directional`)."""
+    bad_u = np.zeros(bu.size - 1, bool)
+    bad_v = np.zeros(bv.size - 1, bool)
+    e4 = err.reshape(bu.size - 1, k_u, bv.size - 1, k_v)
+    bad_u |= e4.max(axis=(1, 2, 3)) > tolerance
+    bad_v |= e4.max(axis=(0, 1, 3)) > tolerance
+    iu = np.clip(np.searchsorted(bu, gu, side="right") - 1, 0, bu.size - 2)
+    iv = np.clip(np.searchsorted(bv, gv, side="right") - 1, 0, bv.size - 2)
+    gi, gj = np.nonzero(err_g > tolerance)
+    bad_u[iu[gi]] = True
+    bad_v[iv[gj]] = True
+    return _directional(bad_u, bad_v, e4, tolerance)
 
 
 def _directional(bad_u, bad_v, e4, tol):

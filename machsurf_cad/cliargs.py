@@ -163,14 +163,35 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     p = parser_class(prog="machsurf", description="Free-form surface machining geometry (mm, degrees).")
     p.add_argument("--version", action="version", version=f"machsurf_cad {__version__}")
     sub = p.add_subparsers(dest="command", parser_class=parser_class)
+    _demo_parser(sub)
+    _info_parser(sub)
+    _inspect_parser(sub)
+    _machining_surface_parser(sub)
+    _mill3_parser(sub)
+    _reff_parser(sub)
+    _flank_parser(sub)
+    _verify_parser(sub)
+    _simulate_parser(sub)
+    _envelope_parser(sub)
+    _batch_parser(sub)
+    return p
 
+
+def _demo_parser(sub) -> None:
+    """``machsurf demo``: the main job on the embedded example part."""
     d = sub.add_parser("demo", help="main job on the embedded example part: STEP, STL, deviation map, report")
     d.add_argument("-o", "--out", default="out/demo", help="output folder (default: out/demo)")
 
+
+def _info_parser(sub) -> None:
+    """``machsurf info``: the faces of a STEP part."""
     i = sub.add_parser("info", help="faces of a STEP part: types, degrees, bounds, areas")
     i.add_argument("part", help="STEP file")
     i.add_argument("-o", "--out", default="out/info", help="folder for report.json (default: out/info)")
 
+
+def _inspect_parser(sub) -> None:
+    """``machsurf inspect``: a candidate's deviation from a nominal face."""
     n = sub.add_parser("inspect", help="deviation of a candidate (STEP face or STL) from a nominal STEP face")
     n.add_argument("nominal", help="nominal STEP file")
     n.add_argument("candidate", help="candidate STEP (.step/.stp) or mesh (.stl)")
@@ -184,6 +205,9 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     n.add_argument("--max-memory-mb", type=_finite, default=4096.0, help="memory budget, MB: bigger work is refused")
     n.add_argument("-o", "--out", default="out/inspect", help="output folder (default: out/inspect)")
 
+
+def _machining_surface_parser(sub) -> None:
+    """``machsurf machining-surface``: S1 and S2 of a face, and their tool path."""
     m = sub.add_parser("machining-surface", help="guiding S1 and orientation S2 surfaces of a face (Table 1)")
     _face_input(m, "example surface instead of a STEP: bezier5, blade, hypar, liu, eq18")
     m.add_argument("--tool", required=True, help="ball:D=..|flat:D=..|bull:D=..,r=.. (mm)")
@@ -232,6 +256,14 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
         default=0.005,
         help="chordal tolerance of the positions, mm (default 0.005)",
     )
+    _whole_part_group(m)
+    _gouge(m, "0.01")
+    _post(m)
+    m.add_argument("-o", "--out", default="out/machining_surface", help="output folder")
+
+
+def _whole_part_group(m) -> None:
+    """``machining-surface --axes 3`` on whole parts: the exact drop-cutter options."""
     t = m.add_argument_group("3 axes on whole parts: exact drop-cutter on several faces (with --axes 3)")
     t.add_argument(
         "--faces", default=None, help="faces to machine: all | top (seen along the axis) | 0,3,5 (instead of --face)"
@@ -251,12 +283,10 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
         "--shank", default=None, help="shank above the cutting length, D=..,L=.. (mm): checked for collisions"
     )
     t.add_argument("--holder", default=None, help="holder above the shank, D=..,L=.. (mm): checked for collisions")
-    _gouge(m, "0.01")
-    _post(m)
-    m.add_argument("-o", "--out", default="out/machining_surface", help="output folder")
 
-    _mill3_parser(sub)
 
+def _reff_parser(sub) -> None:
+    """``machsurf reff``: effective radius and step-over maps."""
     e = sub.add_parser("reff", help="effective cutter radius and step-over maps over a face")
     _face_input(e, "example surface instead of a STEP: blade, bezier5, ...")
     e.add_argument("--tool", required=True, help="bull:D=..,r=.. | flat:D=.. | ball:D=.. (mm)")
@@ -274,6 +304,9 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     )
     e.add_argument("-o", "--out", default="out/reff", help="output folder")
 
+
+def _flank_parser(sub) -> None:
+    """``machsurf flank``: flank milling of a ruled surface."""
     f = sub.add_parser("flank", help="flank milling settings of a cylindrical cutter on a ruled surface")
     _face_input(f, "eq18 | hypar | liu (the paper's surfaces, exact)", "STEP file with a ruled face (or use --example)")
     f.add_argument("--ruled-tolerance", type=_finite, default=None, help="accept a non-ruled face within this many mm")
@@ -319,6 +352,9 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     _post(f)
     f.add_argument("-o", "--out", default="out/flank", help="output folder")
 
+
+def _verify_parser(sub) -> None:
+    """``machsurf verify``: tool-body gouges and collisions of a tool path."""
     w = sub.add_parser("verify", help="tool-body gouges and collisions of a tool path against every face of a part")
     w.add_argument("part", help="STEP file of the part")
     w.add_argument("--toolpath", required=True, help="tool path: our CSV, or APT CLDATA (.apt, .cls)")
@@ -344,6 +380,9 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     w.add_argument("--no-render", dest="render", action="store_false", help="numbers only")
     w.add_argument("-o", "--out", default="out/verify", help="output folder")
 
+
+def _simulate_parser(sub) -> None:
+    """``machsurf simulate``: what a tool path leaves on the part."""
     s = sub.add_parser("simulate", help="what a tool path leaves on the part: scallops and gouges (N-buffer)")
     s.add_argument("part", help="STEP file of the part")
     s.add_argument("--toolpath", required=True, help="tool path: our CSV, or APT CLDATA (.apt, .cls)")
@@ -371,6 +410,9 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     s.add_argument("--no-render", dest="render", action="store_false", help="numbers and VTP-free report only")
     s.add_argument("-o", "--out", default="out/simulate", help="output folder")
 
+
+def _envelope_parser(sub) -> None:
+    """``machsurf envelope``: swept envelopes and adjacent passes."""
     v = sub.add_parser("envelope", help="swept envelopes of a rotational tool and G1/G0 adjacent passes")
     v.add_argument(
         "--tool",
@@ -404,8 +446,6 @@ def build_parser(parser_class=None) -> argparse.ArgumentParser:
     _gouge(v, "0.01")
     _post(v)
     v.add_argument("-o", "--out", default="out/envelope", help="output folder")
-    _batch_parser(sub)
-    return p
 
 
 def _mill3_parser(sub) -> None:

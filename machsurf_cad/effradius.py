@@ -18,16 +18,7 @@ feed): infinite, reported as ``inf`` and counted; ``alpha = +-90 deg``: ``r``; `
 (vertical feed): ``R`` (for ``alpha != 90 deg``). Ball end mill: ``R`` everywhere. Flat end mill:
 the torus with ``r = 0``, i.e. ``R / sin(phi)`` for a feed along the steepest slope.
 
-Step-over from scallop height (relation (31), re-derived from the triangle O, C, H; the
-extracted text lost a square root and a factor): two tool circles of radius ``R_eff`` tangent
-to a surface circle of signed radius ``rho``, scallop height ``h`` at their intersection:
-
-    d = sqrt(h (2 R_eff - h) (2 rho + h) (2 rho + 2 R_eff + h)) / |rho + h|
-
-``d`` is the distance between adjacent tool centres (passes) in the plane normal to the feed.
-Sign of ``rho``: **positive for a convex surface** (the tool outside the surface circle),
-negative for a concave one, ``inf`` for flat, where ``d = 2 sqrt(h (2 R_eff - h))``. Where a
-concave radius is not larger than ``R_eff + h/2`` the cutter cannot reach: NaN with a mask.
+Step-over from scallop height: :mod:`machsurf_cad.scallop`.
 """
 
 from __future__ import annotations
@@ -49,6 +40,7 @@ from .geometry.face import Face
 from .geometry.normals import unit_normals
 from .glossary import renamed
 from .results import Result
+from .scallop import stepover
 from .toolspec import parse_cutter
 from .typing import ArrayLike, FaceLike, MapChunks, ToolLike
 
@@ -120,57 +112,6 @@ def effective_radius(tool: ToolLike, slope: ArrayLike, alpha: ArrayLike) -> np.n
     val = np.where(perp, r, val)
     val = np.where(flat & ~perp, np.inf, val)
     return val
-
-
-def stepover(scallop: float, r_eff: ArrayLike, rho: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    """Distance between adjacent passes (mm) for scallop height ``scallop`` (mm).
-
-    Parameters
-    ----------
-    scallop : float
-        Scallop height h, mm (> 0).
-    r_eff : float or array_like
-        Effective cutter radius, mm.
-    rho : float or array_like
-        Signed radius of the surface's normal section in the plane normal to the feed (mm):
-        positive convex, negative concave, ``inf`` flat.
-
-    Returns
-    -------
-    d : ndarray
-        ``sqrt(h (2 R_eff - h)(2 rho + h)(2 rho + 2 R_eff + h)) / |rho + h|`` (relation (31)
-        re-derived), mm; NaN where the cutter cannot reach (concave radius not larger than
-        ``R_eff + h/2``); infinite for an infinite ``R_eff`` (flat spot).
-    reachable : ndarray of bool
-        False where ``d`` is NaN.
-
-    Examples
-    --------
-    >>> d, ok = stepover(0.01, 5.0, np.inf)
-    >>> round(float(d), 9) == round(2 * math.sqrt(0.01 * (10 - 0.01)), 9)
-    True
-    """
-    h = float(scallop)
-    if not h > 0:
-        raise InputError("scallop height must be > 0 mm")
-    R, rho = np.broadcast_arrays(np.asarray(r_eff, dtype=float), np.asarray(rho, dtype=float))
-    if np.any(np.isfinite(R) & (h >= 2 * R)):
-        raise InputError(
-            f"scallop height {h:g} mm is not smaller than the effective diameter (min 2 R_eff = "
-            f"{2 * float(np.nanmin(R)):g} mm)"
-        )
-    flat = ~np.isfinite(rho)
-    rr = np.where(flat, 1.0, rho)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        prod = h * (2 * R - h) * (2 * rr + h) * (2 * rr + 2 * R + h)
-        d_curved = np.sqrt(prod) / np.abs(rr + h)
-        d_flat = 2 * np.sqrt(h * (2 * R - h))
-    d = np.where(flat, d_flat, d_curved)
-    reach = flat | (rho > 0) | (-rho > R + h / 2)
-    infinite_r = ~np.isfinite(R)
-    d = np.where(infinite_r, np.inf, d)
-    d = np.where(reach | infinite_r, d, np.nan)
-    return d, reach | infinite_r
 
 
 # ----------------------------------------------------------------------------- maps
@@ -398,6 +339,49 @@ def reff_maps(
     t0 = time.perf_counter()
     timings = {}
     face = _as_face(face)
+    cutter, comp, lead, tilt, grid, dirs = _reff_inputs(
+        tool, compare, axes, lead, tilt, grid, directions, max_memory_mb, scallop
+    )
+    u0, u1, v0, v1 = face.uv_bounds
+    us = u0 + (u1 - u0) * (np.arange(grid) + 0.5) / grid  # tile centres
+    vs = v0 + (v1 - v0) * (np.arange(grid) + 0.5) / grid
+    U, V = np.meshgrid(us, vs, indexing="ij")
+    inside = face.contains_uv(U, V) if face.is_trimmed else np.ones(U.shape, bool)
+    t = time.perf_counter()
+    d = face.surface.derivatives_grid(us, vs, 2)  # the curvature across the feed decides reachability
+    timings["evaluate_s"] = time.perf_counter() - t
+    n = _outward_normals(face, d, us, vs, U, V, inside)
+    area = np.linalg.norm(np.cross(d.su, d.sv), axis=-1)
+    forms = _Forms(d, n, True)
+    t = time.perf_counter()
+    job = functools.partial(_direction_maps, fm=forms, cutter=cutter, comp=comp, scallop=scallop, axes=axes,
+                            lead=lead, tilt=tilt, inside=inside)  # fmt: skip
+    maps = [m for group in split_map(job, [np.asarray(dirs, float)], chunks, map_chunks) for m in group]
+    timings["maps_s"] = time.perf_counter() - t
+    best_t, best_v = _best_direction(maps, dirs, scallop)
+    return ReffMaps(
+        face,
+        cutter,
+        comp,
+        axes,
+        float(lead),
+        float(tilt),
+        scallop,
+        us,
+        vs,
+        d.point,
+        inside,
+        area,
+        tuple(maps),
+        best_t,
+        best_v,
+        time.perf_counter() - t0,
+        timings,
+    )
+
+
+def _reff_inputs(tool, compare, axes, lead, tilt, grid, directions, max_memory_mb, scallop):
+    """Check :func:`reff_maps`' options: the cutter and reference cutter, lead and tilt, grid and directions."""
     from . import checks
 
     cutter = checks.tool(tool)
@@ -426,14 +410,11 @@ def reff_maps(
         raise InputError("scallop height must be > 0 mm")
     if scallop is not None and scallop >= min(R, comp.D / 2 if comp else R):
         raise InputError(f"scallop height {scallop:g} mm is larger than the tool radius")
-    u0, u1, v0, v1 = face.uv_bounds
-    us = u0 + (u1 - u0) * (np.arange(grid) + 0.5) / grid  # tile centres
-    vs = v0 + (v1 - v0) * (np.arange(grid) + 0.5) / grid
-    U, V = np.meshgrid(us, vs, indexing="ij")
-    inside = face.contains_uv(U, V) if face.is_trimmed else np.ones(U.shape, bool)
-    t = time.perf_counter()
-    d = face.surface.derivatives_grid(us, vs, 2)  # the curvature across the feed decides reachability
-    timings["evaluate_s"] = time.perf_counter() - t
+    return cutter, comp, lead, tilt, grid, dirs
+
+
+def _outward_normals(face: Face, d, us, vs, U, V, inside) -> np.ndarray:
+    """The face's outward unit normals on the grid; a singular point inside the face is refused."""
     n = unit_normals(d.su, d.sv, face.surface.scale, U, V, check=False)
     bad = ~np.isfinite(n).all(axis=-1) & inside
     if np.any(bad):
@@ -446,13 +427,11 @@ def reff_maps(
     _check_singular(face, us, vs, n, inside)
     if face.reversed:
         n = -n
-    area = np.linalg.norm(np.cross(d.su, d.sv), axis=-1)
-    forms = _Forms(d, n, True)
-    t = time.perf_counter()
-    job = functools.partial(_direction_maps, fm=forms, cutter=cutter, comp=comp, scallop=scallop, axes=axes,
-                            lead=lead, tilt=tilt, inside=inside)  # fmt: skip
-    maps = [m for group in split_map(job, [np.asarray(dirs, float)], chunks, map_chunks) for m in group]
-    timings["maps_s"] = time.perf_counter() - t
+    return n
+
+
+def _best_direction(maps: list, dirs, scallop):
+    """Several directions: per grid point the direction with the largest step-over (or R_eff) and that value."""
     best_t = best_v = None
     if len(maps) > 1:
         crit = np.stack([m.stepover if scallop is not None else m.r_eff for m in maps])
@@ -460,25 +439,7 @@ def reff_maps(
         idx = np.argmax(crit, axis=0)
         best_t = np.asarray(dirs)[idx]
         best_v = np.take_along_axis(crit, idx[None], 0)[0]
-    return ReffMaps(
-        face,
-        cutter,
-        comp,
-        axes,
-        float(lead),
-        float(tilt),
-        scallop,
-        us,
-        vs,
-        d.point,
-        inside,
-        area,
-        tuple(maps),
-        best_t,
-        best_v,
-        time.perf_counter() - t0,
-        timings,
-    )
+    return best_t, best_v
 
 
 def _check_singular(face: Face, us, vs, n, inside) -> None:
@@ -597,7 +558,7 @@ def _direction_map(theta, fm: _Forms, cutter, comp, scallop, axes, lead, tilt, i
     unreach &= inside
     so = sob = reach = ss = ssb = None
     if scallop is not None:
-        from .simulation.scallop import spacing_for_scallop
+        from .scallop import spacing_for_scallop
 
         with np.errstate(invalid="ignore"):
             so, reach = stepover(scallop, np.where(unreach, np.nan, r_eff), rho)

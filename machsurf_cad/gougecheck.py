@@ -29,6 +29,7 @@ import functools
 import math
 import warnings
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -390,6 +391,66 @@ def verify(
     faces = _faces(part)
     h = positive("spacing", spacing) if spacing is not None else _auto_spacing(faces, c, max_samples)
     _check_placements(toolpath, step, angle_step)
+    smp = _sample_part(faces, h, max_samples)
+    tree = cKDTree(smp.P)
+    T, A, owner = _placements(toolpath, step, angle_step)
+    m = T.shape[0]
+    t1 = time.perf_counter()
+    cut_d, hold_d, seed, hold_seed, depth = _coarse_pass(
+        c, tree, smp.P, h, gouge_tolerance, T, A, chunks, map_chunks, progress
+    )
+    t2 = time.perf_counter()
+    best_face, best_xyz = _refine_close(faces, c, smp, T, A, seed, cut_d, gouge_tolerance, h)
+    _buried(faces, c, tree, smp, T, A, h, gouge_tolerance, cut_d, seed, best_face, best_xyz)
+    far = seed < 0
+    best_face[far] = -1
+    pos_cut, pos_hold, pos_face, pos_xyz, status = _per_position(
+        toolpath, owner, smp, cut_d, hold_d, hold_seed, best_face, best_xyz, gouge_tolerance, clear
+    )
+    warns = []
+    if np.all(~np.isfinite(pos_cut)) or (np.isfinite(pos_cut).any() and np.nanmin(pos_cut) > c.D):
+        warns.append(f"the tool never comes within {c.D:g} mm of the part: is this the part the path was made for?")
+    for w in warns:
+        warnings.warn(w, stacklevel=2)
+    t3 = time.perf_counter()
+    times = {"sample_s": t1 - t0, "coarse_s": t2 - t1, "refine_s": t3 - t2, "total_s": t3 - t0}
+    return VerifyResult(
+        toolpath,
+        c,
+        float(gouge_tolerance),
+        pos_cut,
+        pos_hold,
+        pos_face,
+        pos_xyz,
+        status,
+        smp.P,
+        smp.F,
+        depth,
+        tuple(f.name or f"face_{i}" for i, f in enumerate(faces)),
+        float(h),
+        float(step),
+        float(angle_step),
+        int(m),
+        tuple(warns),
+        times,
+        float(step) * float(step) / (8.0 * rho_motion),  # inf, not OverflowError, for an absurd step
+        float(clear),
+    )
+
+
+class _Samples(NamedTuple):
+    """The part's samples: points, face index, (u, v) of each, and each face's parameter steps."""
+
+    P: np.ndarray
+    F: np.ndarray
+    SU: np.ndarray
+    SV: np.ndarray
+    dus: list
+    dvs: list
+
+
+def _sample_part(faces: list[Face], h: float, max_samples: int) -> _Samples:
+    """Sample every face about ``h`` mm apart (trimmed regions only), refusing more than ``max_samples``."""
     pts, fid, us, vs, dus, dvs = [], [], [], [], [], []
     total = 0
     for i, f in enumerate(faces):
@@ -411,12 +472,11 @@ def verify(
     SU, SV = np.concatenate(us), np.concatenate(vs)
     if P.shape[0] == 0:
         raise InputError("the part's faces have no sample inside their trimmed regions")
-    tree = cKDTree(P)
-    T, A, owner = _placements(toolpath, step, angle_step)
-    m = T.shape[0]
-    L_cut = float(c.length)
-    r_cut = float(c.profile_points(16)[:, 0].max())
-    t1 = time.perf_counter()
+    return _Samples(P, F, SU, SV, dus, dvs)
+
+
+def _coarse_pass(c, tree, P, h, gouge_tolerance, T, A, chunks, map_chunks, progress):
+    """The sampled pass (:func:`_coarse`) over the placements in chunks; per sample the deepest depth."""
     one = check_chunks(chunks) == 1
     parts = split_map(
         functools.partial(_coarse, c, tree, P, h, gouge_tolerance, progress=progress if one else None),
@@ -427,8 +487,13 @@ def verify(
     cut_d, hold_d, seed, d_idx, d_val, hold_seed = (np.concatenate([q[k] for q in parts]) for k in range(6))
     depth = np.zeros(P.shape[0])
     np.maximum.at(depth, d_idx, d_val)
-    t2 = time.perf_counter()
-    # refine every close approach on the exact surfaces
+    return cut_d, hold_d, seed, hold_seed, depth
+
+
+def _refine_close(faces, c, smp: _Samples, T, A, seed, cut_d, gouge_tolerance, h):
+    """Refine every close approach on the exact surfaces (``cut_d`` lowered in place); its face and point."""
+    P, F, SU, SV, dus, dvs = smp
+    m = T.shape[0]
     close = np.nonzero((seed >= 0) & (cut_d < gouge_tolerance + h))[0]
     best_xyz = np.full((m, 3), np.nan)
     best_face = np.full(m, -1)
@@ -441,10 +506,18 @@ def verify(
             better = d_new < cut_d[sel]
             cut_d[sel[better]] = d_new[better]
             best_xyz[sel[better]] = xyz[better]
+    return best_face, best_xyz
+
+
+def _buried(faces, c, tree, smp: _Samples, T, A, h, gouge_tolerance, cut_d, seed, best_face, best_xyz) -> None:
+    """Mark the placements buried in the material as gouges (``cut_d``, ``seed`` and the worst points, in place)."""
     # a tool buried in the material touches no face: behind the nearest face (its outward normal) by
     # more than the sampling can explain, with no face point inside the cutting part, is a gouge too
     # behind every one of its nearest samples: the nearest alone can be a wall facing away (a tool high
     # above a hole's edge is "behind" the hole's wall, not in the material)
+    P, F, SU, SV = smp.P, smp.F, smp.SU, smp.SV
+    L_cut = float(c.length)
+    r_cut = float(c.profile_points(16)[:, 0].max())
     mid = T + A * min(L_cut, c.D) / 2
     kn = min(8, P.shape[0])
     _, nk = tree.query(mid, k=kn, workers=-1)
@@ -464,9 +537,12 @@ def verify(
         best_face[buried] = F[ni[buried]]
         best_xyz[buried] = P[ni[buried]]
         seed[buried] = ni[buried]
-    far = seed < 0
-    best_face[far] = -1
-    # per position: the worst placement of the motion ending there
+
+
+def _per_position(
+    toolpath, owner, smp: _Samples, cut_d, hold_d, hold_seed, best_face, best_xyz, gouge_tolerance, clear
+):
+    """Per position, the worst placement of the motion ending there: distances, face, part point and status."""
     n = toolpath.n_positions
     pos_cut = np.full(n, np.inf)
     pos_hold = np.full(n, np.inf)
@@ -493,37 +569,9 @@ def verify(
         by_pos[owner[wh]] = hold_seed[wh]
         hs = by_pos[hold_pos]
         ok = hs >= 0
-        pos_face[hold_pos[ok]] = F[hs[ok]]
-        pos_xyz[hold_pos[ok]] = P[hs[ok]]
-    warns = []
-    if np.all(~np.isfinite(pos_cut)) or (np.isfinite(pos_cut).any() and np.nanmin(pos_cut) > c.D):
-        warns.append(f"the tool never comes within {c.D:g} mm of the part: is this the part the path was made for?")
-    for w in warns:
-        warnings.warn(w, stacklevel=2)
-    t3 = time.perf_counter()
-    times = {"sample_s": t1 - t0, "coarse_s": t2 - t1, "refine_s": t3 - t2, "total_s": t3 - t0}
-    return VerifyResult(
-        toolpath,
-        c,
-        float(gouge_tolerance),
-        pos_cut,
-        pos_hold,
-        pos_face,
-        pos_xyz,
-        status,
-        P,
-        F,
-        depth,
-        tuple(f.name or f"face_{i}" for i, f in enumerate(faces)),
-        float(h),
-        float(step),
-        float(angle_step),
-        int(m),
-        tuple(warns),
-        times,
-        float(step) * float(step) / (8.0 * rho_motion),  # inf, not OverflowError, for an absurd step
-        float(clear),
-    )
+        pos_face[hold_pos[ok]] = smp.F[hs[ok]]
+        pos_xyz[hold_pos[ok]] = smp.P[hs[ok]]
+    return pos_cut, pos_hold, pos_face, pos_xyz, status
 
 
 def _refine(face: Face, c, T, A, u, v, du, dv, levels: int = 3, k: int = 5):

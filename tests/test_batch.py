@@ -64,6 +64,19 @@ def test_jobs_files_in_json_and_toml_read_the_same(tmp_path):
         read_jobs(tmp_path / "bad.json")
 
 
+def test_a_job_is_a_spec_or_a_command_line_not_both():
+    spec = ms.ReffJob(example="bezier5", tool="ball:D=10")
+    with pytest.raises(ms.InputError, match="spec or argv, not both"):
+        BatchJob("r", ("reff",), spec=spec)
+    with pytest.raises(ms.InputError, match="not the demo"):
+        BatchJob("d", spec=ms.DemoJob())
+    with pytest.raises(ms.InputError, match="non-empty list of strings"):
+        BatchJob("e")
+    from machsurf_cad.batchrun.runner import prepare
+
+    assert prepare(BatchJob("r", spec=spec))[0] is spec
+
+
 def test_a_job_command_line_is_parsed_as_the_cli_does_and_takes_no_output():
     with pytest.raises(ms.InputError, match="takes no -o"):
         prepare(BatchJob("a", ("reff", "--example", "bezier5", "--tool", "ball:D=10", "-o", "x")))
@@ -194,6 +207,8 @@ def test_local_cluster_runs_every_job_like_the_cli_and_reports_the_bad_one(tmp_p
         "flank": ["flank", "--example", "liu", "--tool", "cyl:D=20", "--whole", "--chunks", "3", "--no-render"],
     }
     jobs = [BatchJob(k, tuple(v)) for k, v in argvs.items()]
+    # from Python a job is its spec (the same job as the command line's, no argv)
+    jobs[1] = BatchJob("surface", spec=ms.MachiningSurfaceJob(part=str(PART), tool="ball:D=10", axes=3))
     res = ms.batch(jobs, tmp_path / "b", workers=2)
     by = {j.name: j for j in res.jobs}
     assert [j.name for j in res.jobs] == list(argvs) and res.n_workers == 2

@@ -9,6 +9,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import machsurf_cad as ms
@@ -115,3 +116,49 @@ def test_an_old_option_on_the_command_line_works_and_says_so(tmp_path):
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert "note: --max-memory is now --max-memory-mb" in r.stderr
+
+
+def test_scallop_relations_have_one_home_and_one_argument_order():
+    from machsurf_cad import scallop
+
+    assert ms.stepover is scallop.stepover and ms.scallop_stepover is scallop.scallop_stepover
+    # the flat-floor step of a ball equals relation (31) on a plane with R_eff = R (two circles, exact)
+    d, _ = ms.stepover(0.01, 5.0, np.inf)
+    assert abs(ms.scallop_stepover(0.01, "ball:D=10") - float(d)) < 1e-12
+    assert abs(float(scallop.spacing_for_scallop(0.01, 5.0, 0.0)) - float(d)) < 1e-12
+    assert abs(float(scallop.scallop_height(float(d), 5.0, 0.0)) - 0.01) < 1e-12
+    with pytest.warns(DeprecationWarning, match="is now scallop_stepover"):
+        old = ms.scallop_stepover("ball:D=10", 0.01)
+    assert old == ms.scallop_stepover(0.01, "ball:D=10")
+
+
+def test_every_command_line_in_the_docs_parses():
+    """Each `machsurf ...` command printed in README.md and docs/*.md (not the synopses with [ | ...]) is a
+    valid command line of this version: no retired option, no option that does not exist."""
+    import re
+    import shlex
+
+    parser = build_parser()
+    found, bad = 0, []
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")), ROOT / "workbench" / "README.md"]:
+        text = page.read_text()
+        lines = re.findall(r"`(machsurf [^`]+)`", text) + re.findall(r"^(machsurf [^\n`#]+)", text, flags=re.M)
+        for line in lines:
+            if any(ch in line for ch in "[]|<>") or "..." in line or line.startswith("machsurf run"):
+                continue
+            argv = [a for a in shlex.split(line)[1:] if a != "\\"]
+            if (
+                len(argv) < 2
+                or (len(argv) == 2 and argv[1].startswith("--"))
+                or argv[0] not in {a for act in parser._actions if act.dest == "command" for a in act.choices}
+            ):
+                continue  # a command's name in a sentence
+            if modernise_argv(argv) != argv:
+                bad.append(f"{page.name}: retired option in `{line}`")
+            try:
+                parser.parse_args(argv)
+            except SystemExit:
+                bad.append(f"{page.name}: `{line}` does not parse")
+            found += 1
+    assert not bad, bad
+    assert found >= 6  # the README's chained examples and the guide's

@@ -180,7 +180,10 @@ def test_trimmed_face_gives_trimmed_s1_s2():
     cc = np.concatenate([p.cc for p in tp.cutting_passes()])
     assert np.hypot(cc[:, 0] - 70, cc[:, 1] - 45).min() >= 12.0 - 1e-6
     uv = np.concatenate([p.extras["uv"] for p in tp.cutting_passes()])
-    assert top.contains_uv(uv[:, 0], uv[:, 1]).all()
+    inside = top.contains_uv(uv[:, 0], uv[:, 1])
+    # a pass ends on the face's boundary: such a point may fall either side of the loop by a rounding
+    on_loop = [min(np.abs(np.linalg.norm(p - q, axis=1)).min() for p in top.trim_polygons()) for q in uv[~inside]]
+    assert np.all(np.array(on_loop) < 1e-5)
     # some plane crosses the hole: it is split in two passes on the same level
     levels = [round(p.extras["level"][0], 9) for p in tp.cutting_passes()]
     assert len(levels) > len(set(levels))

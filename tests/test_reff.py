@@ -236,7 +236,7 @@ def test_a_concave_section_tighter_than_the_tool_is_unreachable():
     """A ball R 8 in a trough of radius 6 (feed along the trough): cannot reach; R 5: can, and the step-over
     on the surface is the circle-circle spacing (arc length), the chord between centres relation (31)."""
     from machsurf_cad.geometry import builders
-    from machsurf_cad.simulation.scallop import spacing_for_scallop
+    from machsurf_cad.scallop import spacing_for_scallop
 
     arc = builders.circular_arc(6.0, -150.0, -30.0, center=(0.0, 6.0))
     c0 = ms.BSplineCurve(arc.degree, arc.knots, arc.mults, np.c_[np.zeros(len(arc.poles)), arc.poles], arc.weights)

@@ -10,7 +10,7 @@ from scipy.spatial import cKDTree
 
 import machsurf_cad as ms
 from machsurf_cad.geometry import builders
-from machsurf_cad.simulation.scallop import scallop_height, spacing_for_scallop
+from machsurf_cad.scallop import scallop_height, spacing_for_scallop
 
 
 def _passes(lines, axes, cutter, clearance=5.0):

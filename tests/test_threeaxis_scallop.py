@@ -32,7 +32,7 @@ def test_flat_floor_gives_the_closed_form_step(tool, H):
     cutter = ms.parse_cutter(tool)
     tp = ms.raster([_plane(0.0)], cutter, scallop=H, extent=(-20, 20, -20, 20))
     i = tp.info
-    step = ms.scallop_stepover(cutter, H)
+    step = ms.scallop_stepover(H, cutter)
     gaps = np.diff(_line_offsets(tp))
     assert i["stepover_flat_floor_mm"] == step
     assert np.abs(gaps[:-1] - step).max() < 1e-6 and gaps[-1] <= step + 1e-6  # the last line at the extent
@@ -87,7 +87,7 @@ def test_a_wall_is_the_cutter_limit_not_a_scallop():
     top = builders.plane_patch((-30, 0, 10), (60, 0, 0), (0, 30, 0))
     tp = ms.raster([floor, wall, top], ms.BallEndMill(10), scallop=0.01, extent=(-10, 10, -12, 12))
     i = tp.info
-    step = ms.scallop_stepover(ms.BallEndMill(10), 0.01)
+    step = ms.scallop_stepover(0.01, ms.BallEndMill(10))
     assert i["n_scallop_unmet"] == 0 and i["n_cusps_at_cutter_limit"] > 0
     assert i["scallop_planned_max_mm"] <= 0.01 * (1 + 1e-9)
     gaps = np.diff(_line_offsets(tp))

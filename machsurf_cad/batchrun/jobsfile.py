@@ -1,4 +1,4 @@
-"""Batch jobs: a name and one ``machsurf`` command line each, read from JSON or TOML."""
+"""Batch jobs: a name and a job spec (from Python) or one ``machsurf`` command line (JSON or TOML files) each."""
 
 from __future__ import annotations
 
@@ -6,28 +6,37 @@ import json
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import InputError
 from ..typing import PathLike
+
+if TYPE_CHECKING:
+    from ..jobs.specs import JobSpec
 
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
 
 
 @dataclass(frozen=True)
 class BatchJob:
-    """One batch job: ``name`` (its output folder ``OUT/<name>/``) and ``argv``, a ``machsurf`` command
-    line without ``-o``. Relative input paths in ``argv`` are read from ``base_dir`` (the jobs file's
-    folder) when given, else from the current folder.
+    """One batch job: ``name`` (its output folder ``OUT/<name>/``) and what to run, either ``spec`` (a job
+    spec built in Python, e.g. ``ms.Mill3Job(part=..., tool=...)``) or ``argv`` (a ``machsurf`` command line
+    without ``-o``, as a jobs file holds it). Relative input paths are read from ``base_dir`` (the jobs
+    file's folder) when given, else from the current folder.
 
     Examples
     --------
     >>> BatchJob("reff-ball", ("reff", "--example", "bezier5", "--tool", "ball:D=10")).argv[0]
     'reff'
+    >>> from machsurf_cad.jobs import ReffJob
+    >>> BatchJob("reff-ball", spec=ReffJob(example="bezier5", tool="ball:D=10")).spec.command
+    'reff'
     """
 
     name: str
-    argv: tuple
+    argv: tuple = ()
     base_dir: str | None = None
+    spec: JobSpec | None = None
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not _NAME.match(self.name):
@@ -35,8 +44,16 @@ class BatchJob:
                 f"job name {self.name!r}: letters, digits, '.', '_' or '-' (it names the output folder), "
                 "up to 100 characters"
             )
+        if self.spec is not None:
+            from ..jobs.specs import DemoJob, JobSpec
+
+            if not isinstance(self.spec, JobSpec) or isinstance(self.spec, DemoJob):
+                raise InputError(f"job {self.name!r}: spec must be a job spec (not the demo), got {self.spec!r}")
+            if self.argv:
+                raise InputError(f"job {self.name!r}: give spec or argv, not both")
+            return
         if isinstance(self.argv, str) or not all(isinstance(a, str) for a in self.argv) or not self.argv:
-            raise InputError(f"job {self.name!r}: field 'argv' must be a non-empty list of strings")
+            raise InputError(f"job {self.name!r}: field 'argv' must be a non-empty list of strings (or give spec)")
         object.__setattr__(self, "argv", tuple(self.argv))
 
 

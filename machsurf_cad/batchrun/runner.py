@@ -102,7 +102,7 @@ def prepare(job: BatchJob):
     """The job's spec (parsed as the CLI would) and its input files ``{field: (absolute path, sha256)}``."""
     from ..cliargs import spec_from_argv
 
-    spec = spec_from_argv(job.argv)
+    spec = job.spec if job.spec is not None else spec_from_argv(job.argv)
     inputs = {}
     for name in PATH_FIELDS:
         value = getattr(spec, name, None)
@@ -286,7 +286,8 @@ def batch(
     Parameters
     ----------
     jobs : sequence of BatchJob or of dict
-        From :func:`read_jobs`, built in Python, or mappings ``{"name": ..., "argv": [...]}``; names unique.
+        From :func:`read_jobs`, built in Python (``BatchJob(name, spec=ms.Mill3Job(...))``), or mappings
+        ``{"name": ..., "argv": [...]}``; names unique.
     out : str or Path
         Output folder (default ``out/batch``; written whole when the batch ends; an earlier batch there
         needs ``overwrite``).

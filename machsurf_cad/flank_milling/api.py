@@ -195,17 +195,8 @@ def flank(
     >>> abs(res.interference.max_abs - 10 * (1 - math.cos(math.radians(30)))) < 1e-9  # R (1 - cos alpha0)
     True
     """
-    from ..cutters import FlatEndMill
-    from ..toolspec import parse_cutter
-
     t0 = time.perf_counter()
-    cutter: Any
-    if isinstance(tool, (int, float)):
-        cutter = FlatEndMill(2.0 * float(tool))
-    else:
-        cutter = parse_cutter(tool) if isinstance(tool, str) else tool
-        if not isinstance(cutter, FlatEndMill):
-            raise InputError("flank milling needs a cylindrical cutter: cyl:D=.. (or flat:D=..)")
+    cutter = _flank_cutter(tool)
     if not 0.0 <= rule <= 1.0:
         raise InputError(f"rule {rule:g} is outside [0, 1] (fraction of the u range)")
     if side not in (1, -1):
@@ -229,31 +220,9 @@ def flank(
     path = tp = env = dev = None
     segment_envelopes: tuple = ()
     if whole:
-        from .path import envelope_deviation, envelope_surface, flank_path, positions_deviation
-
         t1 = time.perf_counter()
-        path = flank_path(
-            surf, R, setting, side=side, tolerance=tolerance, progress=progress, chunks=chunks, map_chunks=map_chunks
-        )
-        tp = path.toolpath(FlatEndMill(cutter.D, max(cutter.length, path.length)), clearance=clearance)
-        segs = []
-        for seg in path.segments():  # one envelope per continuous segment (a jump has no envelope)
-            fit = None
-            if len(seg.settings) < 4:
-                why = f"{len(seg.settings)} rule(s): too short for an envelope"
-            else:
-                try:
-                    fit = envelope_surface(seg, tolerance=envelope_tolerance)
-                except ToleranceError as exc:  # the motion folds its envelope: measured on the positions
-                    why = f"swept envelope not fitted ({exc})"
-            if fit is not None:
-                segs.append((seg, fit, envelope_deviation(seg, fit.surface)))
-            else:
-                segs.append((seg, None, positions_deviation(seg) if len(seg.settings) >= 2 else None, why))
-        # envelope and map of the longest segment with an envelope (else of the longest segment)
-        main = max([x for x in segs if x[1] is not None] or segs, key=lambda x: len(x[0].settings))
-        env, dev = main[1], main[2]
-        segment_envelopes = tuple(segs)
+        path, tp = _whole_path(surf, cutter, setting, side, tolerance, clearance, progress, chunks, map_chunks)
+        env, dev, segment_envelopes = _segment_envelopes(path, envelope_tolerance)
         times["whole_s"] = time.perf_counter() - t1
     data = None
     if study:
@@ -281,6 +250,57 @@ def flank(
         surf, cutter, float(rule), float(u_p), st, e, comparison, path, tp, env, dev, data, rr, times, profiles,
         segment_envelopes, sm,
     )  # fmt: skip
+
+
+def _flank_cutter(tool) -> Any:
+    """The cylindrical cutter from a spec, a cutter or a radius (mm); anything else is refused."""
+    from ..cutters import FlatEndMill
+    from ..toolspec import parse_cutter
+
+    cutter: Any
+    if isinstance(tool, (int, float)):
+        cutter = FlatEndMill(2.0 * float(tool))
+    else:
+        cutter = parse_cutter(tool) if isinstance(tool, str) else tool
+        if not isinstance(cutter, FlatEndMill):
+            raise InputError("flank milling needs a cylindrical cutter: cyl:D=.. (or flat:D=..)")
+    return cutter
+
+
+def _whole_path(surf: RuledSurface, cutter, setting, side, tolerance, clearance, progress, chunks, map_chunks):
+    """The settings on the whole surface (:func:`flank_path`) and their tool path."""
+    from ..cutters import FlatEndMill
+    from .path import flank_path
+
+    R = cutter.D / 2
+    path = flank_path(
+        surf, R, setting, side=side, tolerance=tolerance, progress=progress, chunks=chunks, map_chunks=map_chunks
+    )
+    tp = path.toolpath(FlatEndMill(cutter.D, max(cutter.length, path.length)), clearance=clearance)
+    return path, tp
+
+
+def _segment_envelopes(path, envelope_tolerance: float):
+    """One envelope per continuous segment of the path and its deviation; those of the longest segment."""
+    from .path import envelope_deviation, envelope_surface, positions_deviation
+
+    segs = []
+    for seg in path.segments():  # one envelope per continuous segment (a jump has no envelope)
+        fit = None
+        if len(seg.settings) < 4:
+            why = f"{len(seg.settings)} rule(s): too short for an envelope"
+        else:
+            try:
+                fit = envelope_surface(seg, tolerance=envelope_tolerance)
+            except ToleranceError as exc:  # the motion folds its envelope: measured on the positions
+                why = f"swept envelope not fitted ({exc})"
+        if fit is not None:
+            segs.append((seg, fit, envelope_deviation(seg, fit.surface)))
+        else:
+            segs.append((seg, None, positions_deviation(seg) if len(seg.settings) >= 2 else None, why))
+    # envelope and map of the longest segment with an envelope (else of the longest segment)
+    main = max([x for x in segs if x[1] is not None] or segs, key=lambda x: len(x[0].settings))
+    return main[1], main[2], tuple(segs)
 
 
 def _segment_report(seg, fit, dev, why: str = "") -> dict:

@@ -249,70 +249,22 @@ def optimum_setting(
     # surfaces, only repeats on degenerate rules: these 12 are kept for the time)
     wide = [(h, g) for h in (0.25, 0.6) for g in np.radians([-45, -25, -12, 12, 25, 45])]
 
-    def admissible(sols: tangency.Solutions) -> list[tuple]:
-        out: list[tuple] = []
-        for i in range(sols.h0.size):
-            h0, gamma = float(sols.h0[i]), float(sols.gamma[i])
-            r0, r1 = ((float(c.u[i]), float(c.dist[i]), c.point[i], float(c.slope[i])) for c in (sols.c0, sols.c1))
-            # a true tangency: the distance is stationary there (not a minimum clipped at the domain's edge)
-            tangent = all(
-                abs(r_[3]) <= 1e-7 * R * max(1.0, float(np.linalg.norm(d(np.array([r_[0]]), 1)[0, 1])))
-                for r_, d in ((r0, surface.c0), (r1, surface.c1))
-            )
-            ok = (
-                -1e-9 <= h0 <= fr.h_p + 1e-9
-                and abs(gamma) < math.radians(80)
-                and tangent
-                and abs(r0[0] - u_p) < 0.5 * span
-                and abs(r1[0] - u_p) < 0.5 * span
-                and np.all(np.isfinite(r0[2]))
-                and np.all(np.isfinite(r1[2]))
-            )
-            if ok and all(abs(h0 - f[0]) > 1e-6 * fr.h_p or abs(gamma - f[1]) > 1e-9 for f in out):
-                q, a = axis_of(fr, R, h0, gamma)
-                out.append((h0, gamma, q, a, r0, r1))
-        return out
-
-    def make(sol, others=()):
-        h0, gamma, q, a, r0, r1 = sol
-        return Setting(
-            "optimum",
-            fr,
-            float(R),
-            q,
-            a,
-            float(h0),
-            math.degrees(gamma),
-            0.0,
-            {
-                "u0": r0[0],
-                "u1": r1[0],
-                "M0": r0[2],
-                "M1": r1[2],
-                "M2": fr.p0 + h0 * fr.z1,
-                "tangency_residual_mm": max(abs(r0[1] - R), abs(r1[1] - R)),
-                "contact_outside_surface": bool(not (lo0 <= r0[0] <= hi0 and lo0 <= r1[0] <= hi0)),
-                "tangency_slope_residual": max(abs(r0[3]), abs(r1[3])),
-                "other_solutions": list(others),
-            },
-        )
-
     if start is not None:  # continuation along a path: the branch of the neighbouring rule, when it holds
         x0 = (start.h0 / start.frame.h_p, math.radians(start.gamma_deg))
         warm = None
         if start.kind == "optimum":  # the tangency points move little between neighbouring rules
             du = u_p - start.frame.u_p
             warm = (start.contacts["u0"] + du, start.contacts["u1"] + du)
-        found = admissible(tangency.solve(surface, fr, R, [x0], (lo, hi), warm=warm))
+        found = _admissible(surface, fr, R, u_p, tangency.solve(surface, fr, R, [x0], (lo, hi), warm=warm))
         if found:
-            return make(found[0])
+            return _optimum(surface, fr, R, found[0])
         starts.insert(0, x0)
     # every three-tangency solution from starts over the admissible (h0, gamma) range (all advanced
     # together), then the best by the interference along the rule (the first found is not always the
     # best: Liu's surface, side -1)
     # (scipy's hybrid solver from the same starts found nothing more on the paper's surfaces: 24 rules
     # without a solution over 3 radii per surface, both sides)
-    found = admissible(tangency.solve(surface, fr, R, starts + wide, (lo, hi)))
+    found = _admissible(surface, fr, R, u_p, tangency.solve(surface, fr, R, starts + wide, (lo, hi)))
     if not found:
         raise NoAdmissibleSetting(
             f"no admissible optimum setting for R = {R:g} mm on side {side:+d} at u = {u_p:g}: the three-tangency "
@@ -326,15 +278,70 @@ def optimum_setting(
             )
         )
     if len(found) == 1:
-        return make(found[0])
-    settings = [make(f) for f in found]
+        return _optimum(surface, fr, R, found[0])
+    settings = [_optimum(surface, fr, R, f) for f in found]
     errors = [interference(surface, st, n_v=41).max_abs for st in settings]  # ranking: 41 samples along the rule
     order = np.argsort(errors)
     others = [
         {"h0_mm": float(found[i][0]), "gamma_deg": math.degrees(found[i][1]), "max_abs_mm": float(errors[i])}
         for i in order[1:]
     ]
-    return make(found[order[0]], others)
+    return _optimum(surface, fr, R, found[order[0]], others)
+
+
+def _admissible(surface: RuledSurface, fr: RuleFrame, R: float, u_p: float, sols: tangency.Solutions) -> list[tuple]:
+    """The distinct solutions with M2 on the rule, |gamma| < 80 deg and true tangencies near the rule."""
+    lo0, hi0 = surface.u_range
+    span = hi0 - lo0
+    out: list[tuple] = []
+    for i in range(sols.h0.size):
+        h0, gamma = float(sols.h0[i]), float(sols.gamma[i])
+        r0, r1 = ((float(c.u[i]), float(c.dist[i]), c.point[i], float(c.slope[i])) for c in (sols.c0, sols.c1))
+        # a true tangency: the distance is stationary there (not a minimum clipped at the domain's edge)
+        tangent = all(
+            abs(r_[3]) <= 1e-7 * R * max(1.0, float(np.linalg.norm(d(np.array([r_[0]]), 1)[0, 1])))
+            for r_, d in ((r0, surface.c0), (r1, surface.c1))
+        )
+        ok = (
+            -1e-9 <= h0 <= fr.h_p + 1e-9
+            and abs(gamma) < math.radians(80)
+            and tangent
+            and abs(r0[0] - u_p) < 0.5 * span
+            and abs(r1[0] - u_p) < 0.5 * span
+            and np.all(np.isfinite(r0[2]))
+            and np.all(np.isfinite(r1[2]))
+        )
+        if ok and all(abs(h0 - f[0]) > 1e-6 * fr.h_p or abs(gamma - f[1]) > 1e-9 for f in out):
+            q, a = axis_of(fr, R, h0, gamma)
+            out.append((h0, gamma, q, a, r0, r1))
+    return out
+
+
+def _optimum(surface: RuledSurface, fr: RuleFrame, R: float, sol: tuple, others=()) -> Setting:
+    """The optimum :class:`Setting` of one admissible solution; ``others``: the other solutions' figures."""
+    lo0, hi0 = surface.u_range
+    h0, gamma, q, a, r0, r1 = sol
+    return Setting(
+        "optimum",
+        fr,
+        float(R),
+        q,
+        a,
+        float(h0),
+        math.degrees(gamma),
+        0.0,
+        {
+            "u0": r0[0],
+            "u1": r1[0],
+            "M0": r0[2],
+            "M1": r1[2],
+            "M2": fr.p0 + h0 * fr.z1,
+            "tangency_residual_mm": max(abs(r0[1] - R), abs(r1[1] - R)),
+            "contact_outside_surface": bool(not (lo0 <= r0[0] <= hi0 and lo0 <= r1[0] <= hi0)),
+            "tangency_slope_residual": max(abs(r0[3]), abs(r1[3])),
+            "other_solutions": list(others),
+        },
+    )
 
 
 @dataclass(frozen=True, eq=False)

@@ -21,7 +21,7 @@ from ..errors import InputError
 from ..glossary import renamed
 from .path import FlankPath, _aggregate, rule_error
 from .ruled import RuledSurface
-from .settings import NoAdmissibleSetting, Setting, axis_of, interference, rule_frame, tool_setting
+from .settings import NoAdmissibleSetting, RuleFrame, Setting, axis_of, interference, rule_frame, tool_setting
 
 
 def _turn_deg(a, b) -> float:
@@ -81,8 +81,6 @@ def smooth_minimax_path(
         raise InputError("a smooth path needs at least 4 rules")
     if max_turn_rate is not None and not max_turn_rate > 0:
         raise InputError("max_turn_rate must be > 0 deg/mm")
-    from scipy.optimize import minimize
-
     lo, hi = surface.u_range
     eps = 1e-6 * (hi - lo)
     us = np.linspace(lo + eps, hi - eps, n_rules)
@@ -91,45 +89,12 @@ def smooth_minimax_path(
     travel = np.linalg.norm(np.diff(mids, axis=0), axis=1)
     own = _turn_rates([f.z1 for f in frames], frames)
     bound = float(max_turn_rate) if max_turn_rate is not None else 1.5 * float(own.max())
-
-    def make(fr, x, kind="minimax-smooth"):
-        q, a = axis_of(fr, radius, x[0] * fr.h_p, x[1], x[2])
-        return Setting(kind, fr, float(radius), q, a, float(x[0] * fr.h_p), math.degrees(x[1]), math.degrees(x[2]),
-                       {"M2": fr.p0 + x[0] * fr.h_p * fr.z1})  # fmt: skip
-
     sets: list[Setting] = []
     prev_a = None
     for i, fr in enumerate(frames):
-        try:  # start from the rule's optimum when it exists (continuing the previous one), else the standard
-            st0 = tool_setting(surface, float(us[i]), radius, "optimum", side=side)
-        except NoAdmissibleSetting:
-            st0 = tool_setting(surface, float(us[i]), radius, "standard-distributed", side=side)
-        x0 = np.array([st0.h0 / fr.h_p, math.radians(st0.gamma_deg), math.radians(st0.phi_deg)])
-        if sets:
-            prev = sets[-1]
-            x_prev = np.array([prev.h0 / fr.h_p, math.radians(prev.gamma_deg), math.radians(prev.phi_deg)])
-            limit = bound * travel[i - 1]
-
-            def cost(x, fr=fr, limit=limit, prev_a=prev_a):
-                st = make(fr, x)
-                over = max(0.0, _turn_deg(st.a, prev_a) - limit)
-                return interference(surface, st, n_v=n_v).max_abs + 10.0 * radius * math.radians(over)
-
-            starts = [x0, x_prev]
-        else:
-
-            def cost(x, fr=fr):
-                return interference(surface, make(fr, x), n_v=n_v).max_abs
-
-            starts = [x0]
-        best: Any = None
-        for s0 in starts:
-            simplex = np.vstack([s0] + [s0 + np.eye(3)[k] * (0.02, 0.005, 0.005)[k] for k in range(3)])
-            opts = {"xatol": 1e-8, "fatol": 1e-8, "maxiter": 1500, "initial_simplex": simplex}
-            res = minimize(cost, s0, method="Nelder-Mead", options=opts)
-            if best is None or res.fun < best.fun:
-                best = res
-        st = make(fr, best.x)
+        prev = sets[-1] if sets else None
+        limit = bound * travel[i - 1] if sets else None
+        st = _smooth_rule(surface, radius, side, float(us[i]), fr, prev, prev_a, limit, n_v)
         sets.append(st)
         prev_a = st.a
     errs = tuple(rule_error(surface, st) for st in sets)
@@ -146,6 +111,47 @@ def smooth_minimax_path(
         surface, float(radius), "minimax-smooth", side, tuple(sets), us, np.array(tips), axes, float(max(lengths)),
         *_aggregate(errs), float("nan"), smoothness=smoothness, rule_errors=errs,
     )  # fmt: skip
+
+
+def _smooth_setting(fr: RuleFrame, radius: float, x, kind: str = "minimax-smooth") -> Setting:
+    """The setting of parameters ``x = (h0 / h_p, gamma, phi)`` (rad) on the rule of frame ``fr``."""
+    q, a = axis_of(fr, radius, x[0] * fr.h_p, x[1], x[2])
+    return Setting(kind, fr, float(radius), q, a, float(x[0] * fr.h_p), math.degrees(x[1]), math.degrees(x[2]),
+                   {"M2": fr.p0 + x[0] * fr.h_p * fr.z1})  # fmt: skip
+
+
+def _smooth_rule(surface: RuledSurface, radius: float, side: int, u: float, fr: RuleFrame, prev, prev_a, limit, n_v):
+    """One rule's minimax setting (Nelder-Mead), its axis turn from the previous rule's ``prev`` at most ``limit``."""
+    from scipy.optimize import minimize
+
+    try:  # start from the rule's optimum when it exists (continuing the previous one), else the standard
+        st0 = tool_setting(surface, u, radius, "optimum", side=side)
+    except NoAdmissibleSetting:
+        st0 = tool_setting(surface, u, radius, "standard-distributed", side=side)
+    x0 = np.array([st0.h0 / fr.h_p, math.radians(st0.gamma_deg), math.radians(st0.phi_deg)])
+    if prev is not None:
+        x_prev = np.array([prev.h0 / fr.h_p, math.radians(prev.gamma_deg), math.radians(prev.phi_deg)])
+
+        def cost(x):
+            st = _smooth_setting(fr, radius, x)
+            over = max(0.0, _turn_deg(st.a, prev_a) - limit)
+            return interference(surface, st, n_v=n_v).max_abs + 10.0 * radius * math.radians(over)
+
+        starts = [x0, x_prev]
+    else:
+
+        def cost(x):
+            return interference(surface, _smooth_setting(fr, radius, x), n_v=n_v).max_abs
+
+        starts = [x0]
+    best: Any = None
+    for s0 in starts:
+        simplex = np.vstack([s0] + [s0 + np.eye(3)[k] * (0.02, 0.005, 0.005)[k] for k in range(3)])
+        opts = {"xatol": 1e-8, "fatol": 1e-8, "maxiter": 1500, "initial_simplex": simplex}
+        res = minimize(cost, s0, method="Nelder-Mead", options=opts)
+        if best is None or res.fun < best.fun:
+            best = res
+    return _smooth_setting(fr, radius, best.x)
 
 
 @renamed(R="radius")

@@ -503,32 +503,9 @@ def inside_face(face, uv: np.ndarray, dom: _Domain | None = None) -> np.ndarray:
 
 
 def loop_polygons(face, tol: float = 2e-5) -> list:
-    """The trimming loops as closed (u, v) polygons whose edges, mapped onto the surface, stay within
-    ``tol`` mm of the loops' 3-D curves (adaptive bisection from 64 samples per curve, at most 2^14).
-    A uniform 64-sample polygon is off by up to 0.1 mm on a curved loop 250 mm long: enough to count
-    a point 0.01 mm outside a face as inside it. Cached on the face."""
-    cache = face.__dict__.setdefault("_cache", {})
-    key = ("_adaptive_polys", tol)
-    if key not in cache:
-        s = face.surface
-        polys = []
-        for loop in face.loops:
-            parts = []
-            for c in loop:
-                t = np.linspace(*c.bounds, 65)
-                for _ in range(14):
-                    tm = 0.5 * (t[1:] + t[:-1])
-                    ends = c.evaluate(t)
-                    chord = s.evaluate(*(0.5 * (ends[1:] + ends[:-1])).T)
-                    err = np.linalg.norm(s.evaluate(*c.evaluate(tm).T) - chord, axis=1)
-                    bad = err > tol
-                    if not bad.any() or t.size > 1 << 14:
-                        break
-                    t = np.sort(np.concatenate([t, tm[bad]]))
-                parts.append(c.evaluate(t)[:-1])
-            polys.append(np.concatenate(parts))
-        cache[key] = polys
-    return cache[key]
+    """The trimming loops as closed (u, v) polygons within ``tol`` mm of the loops' curves on the surface
+    (:meth:`machsurf_cad.geometry.face.Face.trim_polygons`)."""
+    return face.trim_polygons(tol)
 
 
 def unit_normals_inside(surface: BSplineSurface, uv: np.ndarray, dom: _Domain) -> np.ndarray:

@@ -44,7 +44,7 @@ def _write_rule_errors(path, profiles: dict) -> str:
 
 
 def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
-    from ..flank_milling import flank, mean_normal
+    from ..flank_milling import flank
 
     surf, desc = _ruled_input(spec)
     res = flank(
@@ -64,9 +64,34 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
         chunks=int(spec.chunks),
         map_chunks=chunk_map(spec.chunks),
     )
-    st_, e, cutter = res.setting, res.interference, res.cutter
     rep = res.report()
     rep["surface"] = desc
+    _say_rule(say, spec, res, desc)
+    code = EXIT_OK
+    with Staging(out) as st:
+        rep["error_along_rule_file"] = _write_rule_errors(st.path("error_along_rule.csv"), res.profiles or {})
+        if spec.render and res.profiles:
+            from ..viz.plots import plot_rule_errors
+
+            plot_rule_errors(
+                res.profiles,
+                st.path("error_along_rule.png"),
+                tolerance=spec.tolerance,
+                title=f"error along the rule u = {res.u_p:.5g}, {res.cutter.spec()}, side {spec.side:+d}",
+            )
+        if res.path is not None:
+            code = _whole_surface(st, say, spec, res, surf, rep)
+        if res.study is not None:
+            _study(st, say, spec, res.study)
+        _say_smooth_and_radius_range(say, spec, res)
+        outcome = finish(st, "flank", rep, code, res)
+    say(f"outputs in {out}/: {', '.join(outcome.files)}")
+    return outcome
+
+
+def _say_rule(say: Say, spec: FlankJob, res, desc: str) -> None:
+    """Say the rule, the setting on it with its contacts and interference, and every setting's error there."""
+    st_, e, cutter = res.setting, res.interference, res.cutter
     say(
         f"surface: {desc}; rule u = {res.u_p:.6g} (fraction {spec.rule:g}), h_p = {st_.frame.h_p:.4f} mm, "
         f"alpha0 = {st_.frame.alpha0_deg:.4f} deg; tool {cutter.spec()} (R = {res.R:g} mm), side {spec.side:+d}"
@@ -92,124 +117,127 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
             for k, v in res.comparison.items()
         )
     )
+
+
+def _whole_surface(st: Staging, say: Say, spec: FlankJob, res, surf, rep: dict) -> int:
+    """``--whole``: the checked tool path, the envelopes (STEP, STL) and the deviation map; the exit code."""
+    from ..flank_milling import mean_normal
+    from ..geometry.face import Face
+    from ..occ import write_step, write_stl
+    from .inputs import part_faces
+    from .run_verify import write_checked_toolpath
+
     code = EXIT_OK
-    with Staging(out) as st:
-        rep["error_along_rule_file"] = _write_rule_errors(st.path("error_along_rule.csv"), res.profiles or {})
-        if spec.render and res.profiles:
-            from ..viz.plots import plot_rule_errors
+    cutter = res.cutter
+    env, dev = res.envelope, res.envelope_deviation
+    # the tool body against the part: every face of a STEP part, or the example's surface
+    faces = part_faces(spec.part) if spec.part else [_example_face(spec.example, spec.side)]
+    gtol = spec.gouge_tolerance if spec.gouge_tolerance is not None else spec.tolerance
+    rep["whole"]["verify"], vcode = write_checked_toolpath(
+        st, say, res.toolpath, faces, spec, tolerance=gtol, render=spec.render
+    )
+    env_faces = [
+        Face(fit.surface, name=f"flank_envelope_{k}" if len(res.segment_envelopes) > 1 else "flank_envelope")
+        for k, (_, fit, *_) in enumerate(res.segment_envelopes)
+        if fit is not None
+    ]
+    if env_faces:
+        write_step(st.path("envelope.step"), env_faces)
+        write_stl(st.path("envelope.stl"), env_faces, linear_deflection=0.01)
+    if spec.render and dev is not None:
+        from ..viz import render_deviation
 
-            plot_rule_errors(
-                res.profiles,
-                st.path("error_along_rule.png"),
-                tolerance=spec.tolerance,
-                title=f"error along the rule u = {res.u_p:.5g}, {cutter.spec()}, side {spec.side:+d}",
-            )
-        if res.path is not None:
-            from ..geometry.face import Face
-            from ..occ import write_step, write_stl
-            from .inputs import part_faces
-            from .run_verify import write_checked_toolpath
+        render_deviation(
+            dev,
+            st.path("deviation.png"),
+            vtp_path=st.path("deviation.vtp"),
+            title=f"nominal vs {'envelope' if env is not None else 'positions'} of {cutter.spec()} "
+            f"({spec.setting}); blue gouge (negative), red undercut",
+            tolerance=spec.tolerance,
+            view_direction=mean_normal(surf, spec.side),
+        )
+    _say_whole(say, spec, res)
+    if (res.whole_error_mm or 0.0) > spec.tolerance:
+        say(f"tolerance {spec.tolerance:g} mm NOT met on the whole surface")
+        code = EXIT_TOLERANCE
+    return max(code, vcode)
 
-            path, env, dev = res.path, res.envelope, res.envelope_deviation
-            # the tool body against the part: every face of a STEP part, or the example's surface
-            faces = part_faces(spec.part) if spec.part else [_example_face(spec.example, spec.side)]
-            gtol = spec.gouge_tolerance if spec.gouge_tolerance is not None else spec.tolerance
-            rep["whole"]["verify"], vcode = write_checked_toolpath(
-                st, say, res.toolpath, faces, spec, tolerance=gtol, render=spec.render
-            )
-            env_faces = [
-                Face(fit.surface, name=f"flank_envelope_{k}" if len(res.segment_envelopes) > 1 else "flank_envelope")
-                for k, (_, fit, *_) in enumerate(res.segment_envelopes)
+
+def _say_whole(say: Say, spec: FlankJob, res) -> None:
+    """Say the whole-surface figures: errors, envelope, the rules without the setting, the segments."""
+    path, env, dev = res.path, res.envelope, res.envelope_deviation
+    say(
+        f"whole surface: {len(path.settings)} rules, max gouge {path.max_gouge:.4g} mm, max undercut "
+        f"{path.max_undercut:.4g} mm (rule u = {path.worst['rule_u']:.5g}); "
+        + (
+            f"envelope {env.surface.shape[0]}x{env.surface.shape[1]} poles, fit error {env.max_error:.3g} mm; "
+            f"nominal vs envelope max {dev.max_abs:.4g} mm"
+            if env is not None
+            else "no envelope fitted (see the segments); "
+            + (f"nominal vs tool positions max {dev.max_abs:.4g} mm" if dev is not None else "")
+        )
+        + (f"; {len(path.discontinuities)} setting jump(s)" if path.discontinuities else "")
+    )
+    if path.fallback_u.size:
+        say(
+            f"{spec.setting} does not exist on {path.fallback_u.size} of {len(path.settings)} rules "
+            f"(u in [{path.fallback_u.min():.5g}, {path.fallback_u.max():.5g}]): standard-distributed "
+            "used there"
+        )
+    if len(res.segment_envelopes) > 1:
+        say(f"the path is cut into {len(res.segment_envelopes)} segments where the setting jumps:")
+    for seg, fit, d, *why in res.segment_envelopes if len(res.segment_envelopes) > 1 or env is None else ():
+        say(
+            f"  u in [{seg.u[0]:.5g}, {seg.u[-1]:.5g}], {len(seg.settings)} rules, max gouge "
+            f"{seg.max_gouge:.4g} mm, max undercut {seg.max_undercut:.4g} mm; "
+            + (
+                f"envelope fit {fit.max_error:.3g} mm, nominal vs envelope {d.max_abs:.4g} mm"
                 if fit is not None
-            ]
-            if env_faces:
-                write_step(st.path("envelope.step"), env_faces)
-                write_stl(st.path("envelope.stl"), env_faces, linear_deflection=0.01)
-            if spec.render and dev is not None:
-                from ..viz import render_deviation
+                else why[0] + (f"; nominal vs tool positions {d.max_abs:.4g} mm" if d is not None else "")
+            )
+        )
 
-                render_deviation(
-                    dev,
-                    st.path("deviation.png"),
-                    vtp_path=st.path("deviation.vtp"),
-                    title=f"nominal vs {'envelope' if env is not None else 'positions'} of {cutter.spec()} "
-                    f"({spec.setting}); blue gouge (negative), red undercut",
-                    tolerance=spec.tolerance,
-                    view_direction=mean_normal(surf, spec.side),
-                )
-            say(
-                f"whole surface: {len(path.settings)} rules, max gouge {path.max_gouge:.4g} mm, max undercut "
-                f"{path.max_undercut:.4g} mm (rule u = {path.worst['rule_u']:.5g}); "
-                + (
-                    f"envelope {env.surface.shape[0]}x{env.surface.shape[1]} poles, fit error {env.max_error:.3g} mm; "
-                    f"nominal vs envelope max {dev.max_abs:.4g} mm"
-                    if env is not None
-                    else "no envelope fitted (see the segments); "
-                    + (f"nominal vs tool positions max {dev.max_abs:.4g} mm" if dev is not None else "")
-                )
-                + (f"; {len(path.discontinuities)} setting jump(s)" if path.discontinuities else "")
-            )
-            if path.fallback_u.size:
-                say(
-                    f"{spec.setting} does not exist on {path.fallback_u.size} of {len(path.settings)} rules "
-                    f"(u in [{path.fallback_u.min():.5g}, {path.fallback_u.max():.5g}]): standard-distributed "
-                    "used there"
-                )
-            if len(res.segment_envelopes) > 1:
-                say(f"the path is cut into {len(res.segment_envelopes)} segments where the setting jumps:")
-            for seg, fit, d, *why in res.segment_envelopes if len(res.segment_envelopes) > 1 or env is None else ():
-                say(
-                    f"  u in [{seg.u[0]:.5g}, {seg.u[-1]:.5g}], {len(seg.settings)} rules, max gouge "
-                    f"{seg.max_gouge:.4g} mm, max undercut {seg.max_undercut:.4g} mm; "
-                    + (
-                        f"envelope fit {fit.max_error:.3g} mm, nominal vs envelope {d.max_abs:.4g} mm"
-                        if fit is not None
-                        else why[0] + (f"; nominal vs tool positions {d.max_abs:.4g} mm" if d is not None else "")
-                    )
-                )
-            if (res.whole_error_mm or 0.0) > spec.tolerance:
-                say(f"tolerance {spec.tolerance:g} mm NOT met on the whole surface")
-                code = EXIT_TOLERANCE
-            code = max(code, vcode)
-        if res.study is not None:
-            data = res.study
-            if spec.render:
-                from ..viz.plots import plot_ratio_curves
 
-                plot_ratio_curves(
-                    data["by_h_p"],
-                    st.path("study_h_p.png"),
-                    label_key="h_p_mm",
-                    label_fmt="h_p = {:g} mm",
-                    title="hyperbolic paraboloid, alpha0 = 30 deg (fig. 9)",
-                )
-                plot_ratio_curves(
-                    data["by_alpha0"],
-                    st.path("study_alpha0.png"),
-                    label_key="alpha0_deg",
-                    label_fmt="alpha0 = {:g} deg",
-                    title="hyperbolic paraboloid, h_p = 80 mm (fig. 10)",
-                )
-            say(f"parameter study: smallest ratio standard/optimum {data['min_ratio']:.3g}")
-        if res.smooth is not None:
-            sm, ro = res.smooth["smooth_minimax"], res.smooth["rule_optima"]
-            say(
-                f"smooth minimax over {res.smooth['n_rules']} rules: max |error| {sm['max_abs_mm']:.4g} mm, axis "
-                f"turn at most {sm['max_turn_reached_deg_per_mm']:.4g} deg/mm "
-                f"(bound {sm['max_turn_bound_deg_per_mm']:.4g}, "
-                f"{'met' if sm['bound_met'] else 'NOT met'}); rule-by-rule optima: {ro['max_abs_mm']:.4g} mm, "
-                f"{ro['max_turn_deg_per_mm']:.4g} deg/mm"
+def _study(st: Staging, say: Say, spec: FlankJob, data: dict) -> None:
+    """``--study``: the paper's figs 9 and 10 (pictures) and the smallest ratio standard/optimum."""
+    if spec.render:
+        from ..viz.plots import plot_ratio_curves
+
+        plot_ratio_curves(
+            data["by_h_p"],
+            st.path("study_h_p.png"),
+            label_key="h_p_mm",
+            label_fmt="h_p = {:g} mm",
+            title="hyperbolic paraboloid, alpha0 = 30 deg (fig. 9)",
+        )
+        plot_ratio_curves(
+            data["by_alpha0"],
+            st.path("study_alpha0.png"),
+            label_key="alpha0_deg",
+            label_fmt="alpha0 = {:g} deg",
+            title="hyperbolic paraboloid, h_p = 80 mm (fig. 10)",
+        )
+    say(f"parameter study: smallest ratio standard/optimum {data['min_ratio']:.3g}")
+
+
+def _say_smooth_and_radius_range(say: Say, spec: FlankJob, res) -> None:
+    """Say the ``--smooth`` path against the rule-by-rule optima, and the ``--radius-range`` result."""
+    if res.smooth is not None:
+        sm, ro = res.smooth["smooth_minimax"], res.smooth["rule_optima"]
+        say(
+            f"smooth minimax over {res.smooth['n_rules']} rules: max |error| {sm['max_abs_mm']:.4g} mm, axis "
+            f"turn at most {sm['max_turn_reached_deg_per_mm']:.4g} deg/mm "
+            f"(bound {sm['max_turn_bound_deg_per_mm']:.4g}, "
+            f"{'met' if sm['bound_met'] else 'NOT met'}); rule-by-rule optima: {ro['max_abs_mm']:.4g} mm, "
+            f"{ro['max_turn_deg_per_mm']:.4g} deg/mm"
+        )
+    if res.radius_range is not None:
+        rr = res.radius_range
+        say(
+            f"radius range for {spec.radius_range:g} mm: "
+            + (
+                f"R in [{rr['R_min_mm']:.4g}, {rr['R_max_mm']:.4g}] mm after {len(rr['iterations'])} evaluations"
+                if rr["feasible"]
+                else rr["message"]
             )
-        if res.radius_range is not None:
-            rr = res.radius_range
-            say(
-                f"radius range for {spec.radius_range:g} mm: "
-                + (
-                    f"R in [{rr['R_min_mm']:.4g}, {rr['R_max_mm']:.4g}] mm after {len(rr['iterations'])} evaluations"
-                    if rr["feasible"]
-                    else rr["message"]
-                )
-            )
-        outcome = finish(st, "flank", rep, code, res)
-    say(f"outputs in {out}/: {', '.join(outcome.files)}")
-    return outcome
+        )

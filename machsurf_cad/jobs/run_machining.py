@@ -10,7 +10,6 @@ from .specs import MachiningSurfaceJob
 
 def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> JobOutcome:
     from ..machining import machining_surface
-    from ..machining.surfaces import fit_deviation
     from ..toolspec import parse_cutter
 
     if spec.faces is not None:
@@ -55,6 +54,21 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
     )
     t_fit = time.perf_counter() - t0
     rep = ms.report()
+    _say_surfaces(say, spec, ms, rep, cutter, desc)
+    code = EXIT_OK
+    with Staging(out) as st:
+        _write_surfaces(st, spec, ms, rep, cutter, stl_deflection)
+        if spec.toolpath:
+            code = _write_toolpath(st, say, spec, ms, rep, part)
+        rep["nominal"] = desc
+        rep["time_s"] = {"fit_s": t_fit, "total_s": time.perf_counter() - t0}
+        outcome = finish(st, "machining-surface", rep, code, result=ms)
+    say(f"outputs in {out}/: {', '.join(outcome.files)}")
+    return outcome
+
+
+def _say_surfaces(say: Say, spec: MachiningSurfaceJob, ms, rep: dict, cutter, desc: str) -> None:
+    """Say the nominal, the tool, each fitted surface, the axis orientation errors, the loops and the auto lead."""
     say(f"nominal: {desc}")
     say(
         f"tool: {cutter.spec()} (r = {rep['r_mm']:g} mm, R_t = {rep['R_t_mm']:g} mm), {ms.axes} axes, {rep['strategy']}"
@@ -81,69 +95,68 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
             f"{al['local_need_max_deg']:.3f} deg incl. margin {al['margin_deg']:g}, change at most "
             f"{al['rate_bound_deg_per_mm']:g} deg/mm)"
         )
-    tp = None
-    code = EXIT_OK
-    with Staging(out) as st:
-        from ..occ import write_step, write_stl
-        from ..viz import render_deviation
 
-        write_step(st.path("machining_surface.step"), ms.faces())
-        for f in ms.faces():
-            write_stl(st.path(f"{f.name}.stl"), [f], linear_deflection=stl_deflection)
-        rep["stl_deflection_mm"] = stl_deflection
-        dev = fit_deviation(ms, "S1")
-        loops_pts = [(r.xyz, "magenta", f"{r.kind} loop ({r.surface})") for r in ms.loops.regions]
-        render_deviation(
-            dev,
-            st.path("deviation_S1.png"),
-            vtp_path=st.path("deviation_S1.vtp"),
-            title=f"S1 fit vs exact offset ({cutter.spec()})",
-            tolerance=spec.tolerance,
-            extra_points=loops_pts,
+
+def _write_surfaces(st: Staging, spec: MachiningSurfaceJob, ms, rep: dict, cutter, stl_deflection: float) -> None:
+    """Write S1/S2 (STEP, one STL each) and S1's deviation map from the exact offset (PNG, VTP)."""
+    from ..machining.surfaces import fit_deviation
+    from ..occ import write_step, write_stl
+    from ..viz import render_deviation
+
+    write_step(st.path("machining_surface.step"), ms.faces())
+    for f in ms.faces():
+        write_stl(st.path(f"{f.name}.stl"), [f], linear_deflection=stl_deflection)
+    rep["stl_deflection_mm"] = stl_deflection
+    dev = fit_deviation(ms, "S1")
+    loops_pts = [(r.xyz, "magenta", f"{r.kind} loop ({r.surface})") for r in ms.loops.regions]
+    render_deviation(
+        dev,
+        st.path("deviation_S1.png"),
+        vtp_path=st.path("deviation_S1.vtp"),
+        title=f"S1 fit vs exact offset ({cutter.spec()})",
+        tolerance=spec.tolerance,
+        extra_points=loops_pts,
+    )
+    rep["S1_deviation_map"] = dev.report()
+
+
+def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: dict, part) -> int:
+    """``--toolpath``: passes by step-over or iso-scallop, checked against the part, written; the exit code."""
+    from ..machining.toolpath import tool_paths
+    from .run_verify import write_checked_toolpath
+
+    if spec.scallop is not None:
+        from ..machining.isoscallop import iso_scallop_paths
+
+        tp = iso_scallop_paths(
+            ms, scallop=spec.scallop, chordal_tolerance=spec.chordal_tolerance, clearance=spec.clearance,
+            overrun=spec.overrun,
+        )  # fmt: skip
+        i = tp.info
+        say(
+            f"iso-scallop passes for {spec.scallop:g} mm: spacing on the surface {i['spacing_min_mm']:.4g}.."
+            f"{i['spacing_max_mm']:.4g} mm (mean {i['spacing_mean_mm']:.4g}); {i['n_passes_planned']} passes "
+            f"where a constant spacing keeping the same scallop needs {i['n_passes_constant_spacing']}; "
+            f"overrun {i['overrun_mm']:g} mm ({i['n_overruns_shortened_for_gouging']} shortened where they "
+            "would gouge)"
         )
-        rep["S1_deviation_map"] = dev.report()
-        if spec.toolpath:
-            from ..machining.toolpath import tool_paths
-            from .run_verify import write_checked_toolpath
-
-            if spec.scallop is not None:
-                from ..machining.isoscallop import iso_scallop_paths
-
-                tp = iso_scallop_paths(
-                    ms, scallop=spec.scallop, chordal_tolerance=spec.chordal_tolerance, clearance=spec.clearance,
-                    overrun=spec.overrun,
-                )  # fmt: skip
-                i = tp.info
-                say(
-                    f"iso-scallop passes for {spec.scallop:g} mm: spacing on the surface {i['spacing_min_mm']:.4g}.."
-                    f"{i['spacing_max_mm']:.4g} mm (mean {i['spacing_mean_mm']:.4g}); {i['n_passes_planned']} passes "
-                    f"where a constant spacing keeping the same scallop needs {i['n_passes_constant_spacing']}; "
-                    f"overrun {i['overrun_mm']:g} mm ({i['n_overruns_shortened_for_gouging']} shortened where they "
-                    "would gouge)"
-                )
-            else:
-                tp = tool_paths(
-                    ms,
-                    stepover=spec.stepover_or_default,
-                    chordal_tolerance=spec.chordal_tolerance,
-                    clearance=spec.clearance,
-                )
-            rep["toolpath"] = tp.report()
-            say(
-                f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions ({tp.n_positions} with approach and "
-                f"retract), chordal error {tp.info['chordal_error_measured_mm']:.3g} mm (tol "
-                f"{spec.chordal_tolerance:g})" + (", MULTAX (axis not +Z)" if tp.is_multiaxis else "")
-            )
-            if spec.chordal_tolerance + spec.tolerance >= spec.gouge_tolerance:
-                say(
-                    f"warning: chordal {spec.chordal_tolerance:g} + fit tolerance {spec.tolerance:g} mm reach the "
-                    f"gouge tolerance {spec.gouge_tolerance:g} mm: chords on convex regions may be refused as gouges"
-                )
-            rep["verify"], code = write_checked_toolpath(
-                st, say, tp, part(), spec, tolerance=spec.gouge_tolerance, render=True
-            )
-        rep["nominal"] = desc
-        rep["time_s"] = {"fit_s": t_fit, "total_s": time.perf_counter() - t0}
-        outcome = finish(st, "machining-surface", rep, code, result=ms)
-    say(f"outputs in {out}/: {', '.join(outcome.files)}")
-    return outcome
+    else:
+        tp = tool_paths(
+            ms,
+            stepover=spec.stepover_or_default,
+            chordal_tolerance=spec.chordal_tolerance,
+            clearance=spec.clearance,
+        )
+    rep["toolpath"] = tp.report()
+    say(
+        f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions ({tp.n_positions} with approach and "
+        f"retract), chordal error {tp.info['chordal_error_measured_mm']:.3g} mm (tol "
+        f"{spec.chordal_tolerance:g})" + (", MULTAX (axis not +Z)" if tp.is_multiaxis else "")
+    )
+    if spec.chordal_tolerance + spec.tolerance >= spec.gouge_tolerance:
+        say(
+            f"warning: chordal {spec.chordal_tolerance:g} + fit tolerance {spec.tolerance:g} mm reach the "
+            f"gouge tolerance {spec.gouge_tolerance:g} mm: chords on convex regions may be refused as gouges"
+        )
+    rep["verify"], code = write_checked_toolpath(st, say, tp, part(), spec, tolerance=spec.gouge_tolerance, render=True)
+    return code

@@ -40,6 +40,19 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
         map_chunks=chunk_map(spec.chunks),
     )
     rep = maps.report()
+    _say_maps(say, spec, maps, rep, cutter, desc)
+    with Staging(out) as st:
+        if spec.render:
+            _render_maps(st, spec, maps, rep, cutter, dirs)
+        rep["face"] = desc
+        rep["time_s"]["job_total_s"] = time.perf_counter() - t0
+        outcome = finish(st, "reff", rep, result=maps)
+    say(f"outputs in {out}/: {', '.join(outcome.files)}")
+    return outcome
+
+
+def _say_maps(say: Say, spec: ReffJob, maps, rep: dict, cutter, desc: str) -> None:
+    """Say the face and tools, then per direction the R_eff figures (and step-overs for a scallop height)."""
     R = cutter.D / 2
     say(
         f"face: {desc}; tool {cutter.spec()} (R = {R:g} mm, r = {rep['r_mm']:g} mm) vs "
@@ -68,57 +81,60 @@ def run_reff(spec: ReffJob, out, say: Say, progress=None) -> JobOutcome:
                 f"{_f(d.get('stepover_surface_mean_mm'))} mm (min {_f(d.get('stepover_surface_min_mm'))}), ball "
                 f"{_f(d.get('stepover_surface_ball_mean_mm'))} mm"
             )
-    with Staging(out) as st:
-        if spec.render:
-            from ..viz import render_scalar_map
 
-            mask = maps.inside if maps.face.is_trimmed else None
-            for d in maps.directions:
-                tag = f"{d.theta_deg:g}".replace("-", "m")
-                extra = {
-                    "slope_deg": d.slope_deg,
-                    "alpha_deg": d.alpha_deg,
-                    "ratio_to_ball": np.nan_to_num(d.r_eff / maps.R_ball, posinf=1e300),
-                }
-                extra["unreachable"] = d.unreachable.astype(np.uint8)
-                if d.stepover is not None:
-                    extra.update(
-                        {
-                            "stepover_mm": np.nan_to_num(d.stepover, nan=-1, posinf=1e300),
-                            "stepover_ball_mm": np.nan_to_num(d.stepover_ball, nan=-1, posinf=1e300),
-                            "stepover_surface_mm": np.nan_to_num(d.stepover_surface, nan=-1, posinf=1e300),
-                        }
-                    )
-                render_scalar_map(
-                    maps.points,
-                    d.r_eff,
-                    st.path(f"reff_theta{tag}.png"),
-                    title=f"effective radius, {cutter.spec()}, theta = {d.theta_deg:g} deg\n"
-                    f"white line: R_eff = {maps.R_ball:g} mm (ball)",
-                    label="R_eff [mm]",
-                    clim=(rep["r_mm"] or 0.0, 2 * R),
-                    contour_level=maps.R_ball,
-                    mask=mask,
-                    vtp_path=st.path(f"reff_theta{tag}.vtp"),
-                    extra_arrays=extra,
-                    view="xy",
-                )
-            if maps.best_theta_deg is not None:
-                render_scalar_map(
-                    maps.points,
-                    maps.best_theta_deg,
-                    st.path("best_direction.png"),
-                    title=f"best machining direction ({'step-over' if spec.scallop else 'R_eff'}), deg",
-                    label="theta [deg]",
-                    clim=(min(dirs), max(dirs)),
-                    cmap="viridis",
-                    mask=mask,
-                    vtp_path=st.path("best_direction.vtp"),
-                    view="xy",
-                    categories=sorted(dirs),
-                )
-        rep["face"] = desc
-        rep["time_s"]["job_total_s"] = time.perf_counter() - t0
-        outcome = finish(st, "reff", rep, result=maps)
-    say(f"outputs in {out}/: {', '.join(outcome.files)}")
-    return outcome
+
+def _render_maps(st: Staging, spec: ReffJob, maps, rep: dict, cutter, dirs) -> None:
+    """Draw every direction's R_eff map (PNG, VTP with its other maps) and the best direction's map."""
+    from ..viz import render_scalar_map
+
+    R = cutter.D / 2
+    mask = maps.inside if maps.face.is_trimmed else None
+    for d in maps.directions:
+        tag = f"{d.theta_deg:g}".replace("-", "m")
+        render_scalar_map(
+            maps.points,
+            d.r_eff,
+            st.path(f"reff_theta{tag}.png"),
+            title=f"effective radius, {cutter.spec()}, theta = {d.theta_deg:g} deg\n"
+            f"white line: R_eff = {maps.R_ball:g} mm (ball)",
+            label="R_eff [mm]",
+            clim=(rep["r_mm"] or 0.0, 2 * R),
+            contour_level=maps.R_ball,
+            mask=mask,
+            vtp_path=st.path(f"reff_theta{tag}.vtp"),
+            extra_arrays=_extra_arrays(maps, d),
+            view="xy",
+        )
+    if maps.best_theta_deg is not None:
+        render_scalar_map(
+            maps.points,
+            maps.best_theta_deg,
+            st.path("best_direction.png"),
+            title=f"best machining direction ({'step-over' if spec.scallop else 'R_eff'}), deg",
+            label="theta [deg]",
+            clim=(min(dirs), max(dirs)),
+            cmap="viridis",
+            mask=mask,
+            vtp_path=st.path("best_direction.vtp"),
+            view="xy",
+            categories=sorted(dirs),
+        )
+
+
+def _extra_arrays(maps, d) -> dict:
+    """A direction's other maps for its VTP: slope, alpha, ratio to the ball, unreachable, step-overs."""
+    extra = {
+        "slope_deg": d.slope_deg,
+        "alpha_deg": d.alpha_deg,
+        "ratio_to_ball": np.nan_to_num(d.r_eff / maps.R_ball, posinf=1e300),
+    }
+    extra["unreachable"] = d.unreachable.astype(np.uint8)
+    if d.stepover is not None:
+        extra.update(
+            {
+                "stepover_mm": np.nan_to_num(d.stepover, nan=-1, posinf=1e300),
+                "stepover_ball_mm": np.nan_to_num(d.stepover_ball, nan=-1, posinf=1e300),
+                "stepover_surface_mm": np.nan_to_num(d.stepover_surface, nan=-1, posinf=1e300),
+            }
+        )
+    return extra

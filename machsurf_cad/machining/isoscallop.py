@@ -9,7 +9,7 @@ the surface** by the local spacing ``w``: at every contact point, across the pas
 (relation (30) in the tool frame: the angle ``S`` between the axis and the normal, ``alpha`` between
 the steepest slope and the pass; the ball's radius for a ball) and the surface's normal curvature across
 the pass give ``w`` by the circle-circle construction
-(:func:`~machsurf_cad.simulation.scallop.spacing_for_scallop`). The point is moved by ``w`` along ``c`` on
+(:func:`~machsurf_cad.scallop.spacing_for_scallop`). The point is moved by ``w`` along ``c`` on
 the surface (four steps, re-projected on the tangent plane), ``w`` is evaluated again where it lands and
 the smaller of the two kept. Where the moved points fold over each other the front keeps the least
 advance (no spacing exceeds its own). Passes end when the front has crossed the far edge, where a last
@@ -121,7 +121,7 @@ def _resample(uv, F, n_points: int):
 def _offset(ms, F, rev, cur, forward, scallop, bounds):
     """The next pass from ``cur``: every point moved across the feed by the spacing that leaves ``scallop``
     (the smaller of the spacings at the start and where it lands). Returns spacing and points."""
-    from ..simulation.scallop import spacing_for_scallop
+    from ..scallop import spacing_for_scallop
 
     u0, u1, v0, v1 = bounds
     r_eff, kappa, c, _ = cross_feed(ms, cur, _tangents(F.evaluate(cur[:, 0], cur[:, 1]), _STENCIL))
@@ -242,15 +242,11 @@ def iso_scallop_paths(
         raise InputError(
             f"scallop height {scallop:g} mm is not smaller than the tool radius {em.R:g} mm: no spacing leaves it"
         )
-    from .toolpath import _positions
-
     feed = strategy if strategy is not None else getattr(ms.strategy, "feed", None)
     if feed is None:
         feed = IsoFeed("u")
     F = ms.nominal.surface
-    rev = ms.nominal.reversed
     bounds = ms.nominal.uv_bounds
-    u0, u1, v0, v1 = bounds
     # the passes are fronts level = f(t): "level" the parameter the passes step along (index k), t the other
     if isinstance(feed, IsoFeed):
         k, sign = (1, 1.0) if feed.direction == "u" else (0, 1.0)
@@ -258,6 +254,50 @@ def iso_scallop_paths(
         k, sign = _plane_start(F, feed, bounds)
     else:
         raise InputError("iso-scallop paths start from a planes or iso-parametric strategy")
+    passes_uv, spacings = _plan_fronts(ms, k, sign, scallop, max_passes)
+    # positions along each pass, inside the trimmed face, sampled within the chordal tolerance
+    over = em.R if overrun is None else float(overrun)
+    if not (math.isfinite(over) and over >= 0):
+        raise InputError(f"overrun must be >= 0 mm, got {overrun!r}")
+    runs_over, chord_err, axis_err = _pass_runs(ms, passes_uv, over, chordal_tolerance, zigzag)
+    dropped = _drop_gouging_overruns(ms, runs_over) if over > 0 else 0
+    tips: list = []
+    axes: list = []
+    ccs: list = []
+    extras: list = []
+    for pos in runs_over:
+        tips.append(pos["tip"])
+        axes.append(pos["axis"])
+        ccs.append(pos["cc"])
+        extras.append({"uv": pos["uv"], "K": pos["K"], "CL": pos["CL"], "level": pos["level"]})
+    if not tips:
+        raise InputError("no iso-scallop pass crosses the face")
+    w_all, width = _spacing_figures(spacings, len(passes_uv))
+    info = {
+        "kind": "iso-scallop",
+        "scallop_mm": float(scallop),
+        "n_passes_planned": len(passes_uv),
+        "spacing_min_mm": float(w_all.min()),
+        "spacing_mean_mm": float(w_all.mean()),
+        "spacing_max_mm": float(w_all.max()),
+        "n_passes_constant_spacing": int(math.ceil(width / float(w_all.min()))) + 1,
+        "chordal_tolerance_mm": float(chordal_tolerance),
+        "chordal_error_measured_mm": chord_err,
+        "axis_error_deg_measured": axis_err if ms.axes == 5 else None,
+        "n_cut_positions": int(sum(t.shape[0] for t in tips)),
+        "overrun_mm": over,
+        "n_overruns_shortened_for_gouging": dropped,
+    }
+    return ToolPath.from_passes(
+        tips, axes, cc=ccs, extras=extras, clearance=clearance, cutter=ms.cutter, name="iso_scallop", info=info
+    )
+
+
+def _plan_fronts(ms: MachiningSurface, k: int, sign: float, scallop: float, max_passes: int):
+    """The passes in (u, v), each offset from the last by the spacing that leaves ``scallop``; the spacings."""
+    F = ms.nominal.surface
+    rev = ms.nominal.reversed
+    bounds = ms.nominal.uv_bounds
     lo_k, hi_k = (bounds[2 * k], bounds[2 * k + 1])
     t_lo, t_hi = (bounds[2 * (1 - k)], bounds[2 * (1 - k) + 1])
     grid = np.linspace(t_lo, t_hi, _N_POINTS)
@@ -300,14 +340,15 @@ def iso_scallop_paths(
         passes_uv.append(as_uv(np.clip(level, min(lo_k, hi_k), max(lo_k, hi_k))))
     last = as_uv(np.full(grid.size, end))
     passes_uv.append(last)
-    # positions along each pass, inside the trimmed face, sampled within the chordal tolerance
-    over = em.R if overrun is None else float(overrun)
-    if not (math.isfinite(over) and over >= 0):
-        raise InputError(f"overrun must be >= 0 mm, got {overrun!r}")
-    tips: list = []
-    axes: list = []
-    ccs: list = []
-    extras: list = []
+    return passes_uv, spacings
+
+
+def _pass_runs(ms: MachiningSurface, passes_uv: list, over: float, chordal_tolerance: float, zigzag: bool):
+    """Every pass's runs inside the face as positions (chordal tolerance, overruns); the largest errors."""
+    from .toolpath import _positions
+
+    F = ms.nominal.surface
+    bounds = ms.nominal.uv_bounds
     runs_over: list[dict] = []
     chord_err = axis_err = 0.0
     for lvl, uv in enumerate(passes_uv):
@@ -335,36 +376,16 @@ def iso_scallop_paths(
                 if zigzag and len(runs_over) % 2 == 1:
                     pos = {key: val[::-1] for key, val in pos.items()}
                 runs_over.append(pos)
-    dropped = _drop_gouging_overruns(ms, runs_over) if over > 0 else 0
-    for pos in runs_over:
-        tips.append(pos["tip"])
-        axes.append(pos["axis"])
-        ccs.append(pos["cc"])
-        extras.append({"uv": pos["uv"], "K": pos["K"], "CL": pos["CL"], "level": pos["level"]})
-    if not tips:
-        raise InputError("no iso-scallop pass crosses the face")
+    return runs_over, chord_err, axis_err
+
+
+def _spacing_figures(spacings: list, n_planned: int):
+    """The finite spacings (mm) and the width they cover, for the count a constant spacing would need."""
     w_all = np.concatenate(spacings)
     w_all = w_all[np.isfinite(w_all)]
     mean_gap = float(np.mean([np.mean(x[np.isfinite(x)]) for x in spacings if np.isfinite(x).any()]))
-    width = mean_gap * (len(passes_uv) - 2) + (float(np.mean(spacings[-1])) if len(spacings) else 0.0)
-    info = {
-        "kind": "iso-scallop",
-        "scallop_mm": float(scallop),
-        "n_passes_planned": len(passes_uv),
-        "spacing_min_mm": float(w_all.min()),
-        "spacing_mean_mm": float(w_all.mean()),
-        "spacing_max_mm": float(w_all.max()),
-        "n_passes_constant_spacing": int(math.ceil(width / float(w_all.min()))) + 1,
-        "chordal_tolerance_mm": float(chordal_tolerance),
-        "chordal_error_measured_mm": chord_err,
-        "axis_error_deg_measured": axis_err if ms.axes == 5 else None,
-        "n_cut_positions": int(sum(t.shape[0] for t in tips)),
-        "overrun_mm": over,
-        "n_overruns_shortened_for_gouging": dropped,
-    }
-    return ToolPath.from_passes(
-        tips, axes, cc=ccs, extras=extras, clearance=clearance, cutter=ms.cutter, name="iso_scallop", info=info
-    )
+    width = mean_gap * (n_planned - 2) + (float(np.mean(spacings[-1])) if len(spacings) else 0.0)
+    return w_all, width
 
 
 def _extend_past_edges(seg, F, bounds, length: float):

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import functools
 import math
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -397,8 +398,6 @@ def machining_surface(
     >>> ms.s1_fit.max_error <= 1e-3 and ms.s2_fit.max_error <= 1e-3, ms.loops.found
     (True, False)
     """
-    import time
-
     if loops not in ("error", "flag", "trim"):
         raise InputError("loops must be 'error', 'flag' or 'trim'")
     if tip and axes != 3:
@@ -406,26 +405,10 @@ def machining_surface(
     cutter = checks.tool(tool)
     positive("tolerance (mm)", tolerance)
     em = cutter.end_mill_radii(_PURPOSE)
-    Rt = em.R_t
     face = _as_face(face)
     if isinstance(lead, str):
-        if lead != "auto":
-            raise InputError(f"lead must be degrees or 'auto', got {lead!r}")
-        if axes != 5 or axis is not None or axis_field is not None or tilt:
-            raise InputError("lead='auto' is a 5-axis lead field without tilt, fixed axis or axis field")
-        from .autolead import auto_lead
-
-        feed = as_feed(strategy)
-        strat, _ = auto_lead(
-            face,
-            cutter,
-            feed,
-            margin_deg=lead_margin,
-            min_deg=lead_min,
-            rate_deg_per_mm=lead_rate,
-            check_faces=[face] if lead_check_faces is None else lead_check_faces,
-            gouging=functools.partial(lead_field_gouges, face, cutter),
-        )
+        lead_options = (lead, lead_margin, lead_min, lead_rate, lead_check_faces)
+        strat = _auto_lead_strategy(face, cutter, axes, strategy, tilt, axis, axis_field, *lead_options)
     else:
         strat = _resolve_strategy(axes, strategy, lead, tilt, axis, axis_field)
     L = float(axis_length) if axis_length is not None else cutter.D
@@ -433,7 +416,6 @@ def machining_surface(
         raise InputError("axis length must be > 0 mm")
     maps = MachiningMaps(face, cutter, axes, strat, L, tip)
     maps.check_axis_normal_singularities()
-    bounds = face.uv_bounds
     t0 = time.perf_counter()
     timings = {}
     # loops first: they are cheap to find, and a looped map is also hard to fit
@@ -446,57 +428,14 @@ def machining_surface(
             + ". Use a smaller corner radius, another strategy, or loops='flag' to export anyway",
             report,
         )
-    t1 = time.perf_counter()
-    brk = derived_breaks(face.surface, degree, derivative_loss=1)
-    s1_fit = fit_surface(
-        maps.s1,
-        bounds,
-        tolerance=tolerance,
-        degree=degree,
-        max_poles=max_poles,
-        name="S1_guiding",
-        breaks=brk,
-        progress=progress,
-    )
-    timings["fit_S1_s"] = time.perf_counter() - t1
-    s2_fit = None
-    if axes == 5:
-        t2 = time.perf_counter()
-        s2_fit = fit_surface(
-            maps.s2,
-            bounds,
-            tolerance=tolerance,
-            degree=degree,
-            max_poles=max_poles,
-            name="S2_orientation",
-            breaks=brk,
-            progress=progress,
-        )
-        timings["fit_S2_s"] = time.perf_counter() - t2
-    trimmed = face
-    if report.found and loops == "trim":
-        from .loops import hole_loops
-
-        outer = face.loops or (_box_loop(face.uv_bounds),)
-        trimmed = Face(
-            face.surface,
-            tuple(outer) + tuple(hole_loops(report)),
-            face.name,
-            face.index,
-            face.reversed,
-            face.source_type,
-            face.uv_bounds,
-            face.area,
-        )
+    s1_fit, s2_fit = _fit_s1_s2(maps, axes, tolerance, degree, max_poles, progress, timings)
+    trimmed = _trim_loops(face, report) if report.found and loops == "trim" else face
     s1 = trimmed.with_surface(s1_fit.surface, "S1_guiding")
     s2 = trimmed.with_surface(s2_fit.surface, "S2_orientation") if s2_fit is not None else None
     axis_err = a_tol = a_meas = None
     if axes == 5:
         assert s2_fit is not None  # 5 axes always fit S2
-        axis_err = _measured_axis_error(maps, s1_fit.surface, s2_fit.surface, em.is_ball, L)
-        lever = L if em.is_ball else Rt
-        a_tol = math.degrees(math.atan(2 * tolerance / lever))
-        a_meas = math.degrees(math.atan((s1_fit.max_error + s2_fit.max_error) / lever))
+        axis_err, a_tol, a_meas = _axis_figures(maps, s1_fit, s2_fit, em, L, tolerance)
     timings["total_s"] = time.perf_counter() - t0
     return MachiningSurface(
         face,
@@ -516,6 +455,75 @@ def machining_surface(
         a_meas,
         timings,
     )
+
+
+def _auto_lead_strategy(
+    face, cutter, axes, strategy, tilt, axis, axis_field, lead, lead_margin, lead_min, lead_rate, lead_check_faces
+):
+    """The ``lead="auto"`` lead field (:func:`~machsurf_cad.machining.autolead.auto_lead`), its options checked."""
+    if lead != "auto":
+        raise InputError(f"lead must be degrees or 'auto', got {lead!r}")
+    if axes != 5 or axis is not None or axis_field is not None or tilt:
+        raise InputError("lead='auto' is a 5-axis lead field without tilt, fixed axis or axis field")
+    from .autolead import auto_lead
+
+    feed = as_feed(strategy)
+    strat, _ = auto_lead(
+        face,
+        cutter,
+        feed,
+        margin_deg=lead_margin,
+        min_deg=lead_min,
+        rate_deg_per_mm=lead_rate,
+        check_faces=[face] if lead_check_faces is None else lead_check_faces,
+        gouging=functools.partial(lead_field_gouges, face, cutter),
+    )
+    return strat
+
+
+def _fit_s1_s2(maps: MachiningMaps, axes, tolerance, degree, max_poles, progress, timings: dict):
+    """Fit S1 (and S2 in 5 axes) within ``tolerance``, each fit's time added to ``timings``."""
+    face = maps.face
+    bounds = face.uv_bounds
+    t1 = time.perf_counter()
+    brk = derived_breaks(face.surface, degree, derivative_loss=1)
+    fit = functools.partial(
+        fit_surface, tolerance=tolerance, degree=degree, max_poles=max_poles, breaks=brk, progress=progress
+    )
+    s1_fit = fit(maps.s1, bounds, name="S1_guiding")
+    timings["fit_S1_s"] = time.perf_counter() - t1
+    s2_fit = None
+    if axes == 5:
+        t2 = time.perf_counter()
+        s2_fit = fit(maps.s2, bounds, name="S2_orientation")
+        timings["fit_S2_s"] = time.perf_counter() - t2
+    return s1_fit, s2_fit
+
+
+def _trim_loops(face: Face, report: LoopReport) -> Face:
+    """The face with a hole around each loop region (``loops="trim"``)."""
+    from .loops import hole_loops
+
+    outer = face.loops or (_box_loop(face.uv_bounds),)
+    return Face(
+        face.surface,
+        tuple(outer) + tuple(hole_loops(report)),
+        face.name,
+        face.index,
+        face.reversed,
+        face.source_type,
+        face.uv_bounds,
+        face.area,
+    )
+
+
+def _axis_figures(maps: MachiningMaps, s1_fit, s2_fit, em, L: float, tolerance: float):
+    """5 axes: the measured axis error and the axis angle error the tolerance and the measured errors allow (deg)."""
+    axis_err = _measured_axis_error(maps, s1_fit.surface, s2_fit.surface, em.is_ball, L)
+    lever = L if em.is_ball else em.R_t
+    a_tol = math.degrees(math.atan(2 * tolerance / lever))
+    a_meas = math.degrees(math.atan((s1_fit.max_error + s2_fit.max_error) / lever))
+    return axis_err, a_tol, a_meas
 
 
 def derived_breaks(surface: BSplineSurface, degree=(3, 3), derivative_loss: int = 1):

@@ -97,11 +97,46 @@ def tool_paths(
     feed = as_feed(strategy) if strategy is not None else getattr(surface.strategy, "feed", None)
     if feed is None:
         feed = IsoFeed("u")
+    us, vs, g_masked, levels, kind, N = _section_levels(surface, feed, grid, stepover)
+    if len(levels) > max_passes:
+        raise InputError(
+            f"step-over {stepover:g} mm gives {len(levels)} passes over this face (at most {max_passes}, "
+            f"--stepover >= {stepover * len(levels) / max_passes:.3g} mm)"
+        )
+    tips, axes, ccs, extras, chord_err, axis_err = _trace_passes(
+        surface, us, vs, g_masked, levels, kind, N, chordal_tolerance, zigzag
+    )
+    if not tips:
+        raise InputError("no tool pass crosses the face: reduce the step-over")
+    info = {
+        "kind": kind,
+        "stepover_mm": float(stepover),
+        "chordal_tolerance_mm": float(chordal_tolerance),
+        "chordal_error_measured_mm": chord_err,
+        "axis_error_deg_measured": axis_err if surface.axes == 5 else None,
+        "n_cut_positions": int(sum(t.shape[0] for t in tips)),
+    }
+    return ToolPath.from_passes(
+        tips,
+        axes,
+        cc=ccs,
+        extras=extras,
+        clearance=clearance,
+        cutter=surface.cutter,
+        name="machining_surface",
+        info=info,
+        safe_sphere=safe_sphere,
+    )
+
+
+def _section_levels(surface: MachiningSurface, feed, grid: int, stepover: float):
+    """The feed's section function on a ``grid`` x ``grid`` (u, v) grid of the trimmed S1 and its pass levels."""
     s1 = surface.s1.surface
     u0, u1, v0, v1 = surface.s1.uv_bounds
     us, vs = np.linspace(u0, u1, grid), np.linspace(v0, v1, grid)
     U, V = np.meshgrid(us, vs, indexing="ij")
     inside = surface.s1.contains_uv(U, V)  # the trimmed face, loop holes included
+    N: np.ndarray | None = None
     if isinstance(feed, PlanesFeed):
         N = np.asarray(feed.plane_normal)
         g = np.einsum("ijk,k->ij", s1.evaluate_grid(us, vs), N)
@@ -127,11 +162,11 @@ def tool_paths(
         n_lines = max(1, int(math.floor(total / stepover)))
         targets = (np.arange(n_lines) + 0.5) * total / n_lines
         levels = np.interp(targets, s_len, across)
-    if len(levels) > max_passes:
-        raise InputError(
-            f"step-over {stepover:g} mm gives {len(levels)} passes over this face (at most {max_passes}, "
-            f"--stepover >= {stepover * len(levels) / max_passes:.3g} mm)"
-        )
+    return us, vs, g_masked, levels, kind, N
+
+
+def _trace_passes(surface: MachiningSurface, us, vs, g_masked, levels, kind: str, N, chordal_tolerance, zigzag):
+    """The passes along the level lines of ``g_masked``: positions within the chordal tolerance; the largest errors."""
     import contourpy
 
     gen = contourpy.contour_generator(x=vs, y=us, z=g_masked, line_type="Separate")
@@ -164,27 +199,7 @@ def tool_paths(
             extras.append(
                 {"uv": uv[idx], "K": p["k"][idx], "CL": p["cl"][idx], "level": np.full(idx.size, float(level))}
             )
-    if not tips:
-        raise InputError("no tool pass crosses the face: reduce the step-over")
-    info = {
-        "kind": kind,
-        "stepover_mm": float(stepover),
-        "chordal_tolerance_mm": float(chordal_tolerance),
-        "chordal_error_measured_mm": chord_err,
-        "axis_error_deg_measured": axis_err if surface.axes == 5 else None,
-        "n_cut_positions": int(sum(t.shape[0] for t in tips)),
-    }
-    return ToolPath.from_passes(
-        tips,
-        axes,
-        cc=ccs,
-        extras=extras,
-        clearance=clearance,
-        cutter=surface.cutter,
-        name="machining_surface",
-        info=info,
-        safe_sphere=safe_sphere,
-    )
+    return tips, axes, ccs, extras, chord_err, axis_err
 
 
 def part_sphere(faces: Iterable[FaceLike], clearance: float = 5.0) -> tuple:

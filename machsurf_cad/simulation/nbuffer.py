@@ -230,6 +230,27 @@ def nbuffer(
             n_pairs += si.size
             _settle(cutter, P, N, T, A, si, pi, best, clamped, depth, stock, margin, max_steps, stats, records)
     reached = np.isfinite(best)
+    pose, residual, n_refined = _refine_candidates(
+        cutter, P, N, T, A, records, best, clamped, depth, stock, margin, sharp, stats
+    )
+    if progress is not None:
+        progress(1, 1, "simulating the cut")
+    out = _finish(cutter, P, T, A, best, reached, stats, heights, radii, margin, stock)
+    out.update(
+        clamped=clamped,
+        pose=pose,
+        n_pairs=int(n_pairs),
+        n_marched=int(stats["marched"]),
+        n_refined=n_refined,
+        motion_residual_mm=float(residual),
+    )
+    return out
+
+
+def _refine_candidates(cutter, P, N, T, A, records, best, clamped, depth, stock, margin, sharp, stats):
+    """Refine over the motion the sampled entries within ``margin`` of their sample's best (``best`` in place)."""
+    m = P.shape[0]
+    n_poses = T.shape[0]
     pose = np.full(m, np.nan)
     residual = 0.0
     n_refined = 0
@@ -273,18 +294,7 @@ def nbuffer(
             better = t_ref[first] < best[s_s[first]]
             best[s_s[first][better]] = t_ref[first][better]
             pose[s_s[first][better]] = x_ref[first][better]
-    if progress is not None:
-        progress(1, 1, "simulating the cut")
-    out = _finish(cutter, P, T, A, best, reached, stats, heights, radii, margin, stock)
-    out.update(
-        clamped=clamped,
-        pose=pose,
-        n_pairs=int(n_pairs),
-        n_marched=int(stats["marched"]),
-        n_refined=n_refined,
-        motion_residual_mm=float(residual),
-    )
-    return out
+    return pose, residual, n_refined
 
 
 def _finish(cutter, P, T, A, best, reached, stats, heights, radii, margin, stock) -> dict:

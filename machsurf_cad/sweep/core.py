@@ -358,6 +358,23 @@ def next_pass(
         raise InputError(f"theta = {theta_deg!r} deg is outside (-180, 180)")
     a1 = prev.a_range[1]
     a0 = seg2.a0
+    m1 = prev.motion
+    motion2 = _joined_motion(prev, seg2, continuity, th, kink_deg)
+    env2 = Envelope(motion2, c2, seg2, 1, (), name or f"{prev.name}+1")
+    # pick the sheet whose normal agrees with the previous pass's at the seam
+    tt = np.linspace(*m1.t_range, 7)
+    n_prev = prev.normals(np.full(7, a1), tt)[0]
+    n_new = env2.normals(np.full(7, a0), tt, check=False)[0]
+    s = 1 if np.mean(np.einsum("ij,ij->i", n_prev, n_new)) >= 0 else -1
+    if side is not None:
+        s = side
+    return Envelope(motion2, c2, seg2, s, (), env2.name)
+
+
+def _joined_motion(prev: Envelope, seg2, continuity: str, th: float, kink_deg: float) -> Motion:
+    """The next pass's motion along ``prev``'s seam: its axis and tip (G1: eqs. (39), (40); G0: eq. (41))."""
+    a1 = prev.a_range[1]
+    a0 = seg2.a0
     c = -float(seg2.r_a(a0))  # required A2 . n1
     r1a1 = float(prev.segment.r(a1))
     r2a0 = float(seg2.r(a0))
@@ -406,16 +423,7 @@ def next_pass(
             centre = X - r2a0 * n2
         return centre - a0 * a2
 
-    motion2 = Motion(tip2, axis2, m1.t_range, f"{m1.label} -> next ({continuity}, theta {th:g})").frozen()
-    env2 = Envelope(motion2, c2, seg2, 1, (), name or f"{prev.name}+1")
-    # pick the sheet whose normal agrees with the previous pass's at the seam
-    tt = np.linspace(*m1.t_range, 7)
-    n_prev = prev.normals(np.full(7, a1), tt)[0]
-    n_new = env2.normals(np.full(7, a0), tt, check=False)[0]
-    s = 1 if np.mean(np.einsum("ij,ij->i", n_prev, n_new)) >= 0 else -1
-    if side is not None:
-        s = side
-    return Envelope(motion2, c2, seg2, s, (), env2.name)
+    return Motion(tip2, axis2, m1.t_range, f"{m1.label} -> next ({continuity}, theta {th:g})").frozen()
 
 
 def seam_report(e1: Envelope, e2: Envelope, n: int = 401) -> dict:

@@ -4,7 +4,7 @@ height-field CL surface, raster and waterline tool paths."""
 from .dropcutter import Contact, DropCutterResult, default_seed_spacing, drop_cutter
 from .faceset import FaceSet, axis_frame, face_set
 from .heightfield import cl_surface
-from .paths import Direction, Pattern, raster, scallop_stepover
+from .paths import Direction, Pattern, raster
 from .select import select_faces, top_faces
 from .wholepart import Mill3Result, mill3
 from .zlevel import waterline
@@ -23,7 +23,6 @@ __all__ = [
     "face_set",
     "mill3",
     "raster",
-    "scallop_stepover",
     "select_faces",
     "top_faces",
     "waterline",

@@ -284,8 +284,6 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     fe = np.nonzero(feasible)[0]
     best = fe[_best_per(qi[fe], val[fe])]
     cand.add(qi[best], val[best], Contact.SAMPLE, fid_all[best], xyz[best])
-    if best.size == 0:
-        return cand.best(m)
     cover = fs.cover[sj]
     reach = rho - cover
     ub = np.where(reach <= prof.R, xyz[:, 2] + fs.rise[sj] - prof.floor(reach), -np.inf)

@@ -20,6 +20,7 @@ from ..cam.toolpath import Move, ToolPath
 from ..errors import InputError
 from ..glossary import renamed
 from ..results import Progress
+from ..scallop import scallop_stepover
 from ..typing import FacesLike, ToolLike, Vector3
 from .dropcutter import DropCutterResult, drop_cutter, machining_face_set
 from .faceset import FaceSet
@@ -42,22 +43,6 @@ class Direction(Enum):
     """Every other line reversed; adjacent lines linked on the part where possible."""
     ONE_WAY = "one-way"
     """Every line in the same direction; a retract and a rapid between lines."""
-
-
-@renamed(cutter="tool")
-def scallop_stepover(tool: ToolLike, scallop: float) -> float:
-    """Step-over (mm) leaving a cusp of ``scallop`` mm between two passes of the cutter's smallest
-    corner arc on a flat floor, ``2 sqrt(2 r H - H^2)`` (ball: ``r = D/2``). The flat bottom of a
-    bull-nose adds ``2 R_t``; a flat end mill has no arc and is refused (its scallop on slopes depends on
-    the slope, not on a radius)."""
-    tool = checks.tool(tool)
-    if not scallop > 0:
-        raise InputError(f"scallop must be > 0 mm, got {scallop}")
-    r = float(tool.corner_radius)
-    if r <= 0:
-        raise InputError(f"a scallop height needs a cutter with a corner radius, not {tool.spec()}: give --stepover")
-    h = min(scallop, r)
-    return 2 * math.sqrt(2 * r * h - h * h) + 2 * float(tool.torus_radius if r < tool.radius else 0.0)
 
 
 def _lines(extent, angle_deg: float, stepover: float):
@@ -156,7 +141,7 @@ def raster(
     if (stepover is None) == (scallop is None):
         raise InputError("give a step-over or a scallop height (one of them)")
     if scallop is not None:
-        step = scallop_stepover(tool, checks.positive("scallop height", scallop))
+        step = scallop_stepover(checks.positive("scallop height", scallop), tool)
     else:
         step = checks.positive("step-over", stepover)
     direction = Direction(direction)

@@ -37,7 +37,7 @@ def _inside(fs: FaceSet, fid, u, v) -> np.ndarray:
         face = fs.faces[f]
         u0, u1, v0, v1 = face.uv_bounds
         tol = 1e-12 * max(u1 - u0, v1 - v0, 1.0)
-        ok[sel] = face.contains_uv(u[sel], v[sel], n_per_curve=1024) if face.is_trimmed else (
+        ok[sel] = face.contains_uv(u[sel], v[sel]) if face.is_trimmed else (
             (u[sel] >= u0 - tol) & (u[sel] <= u1 + tol) & (v[sel] >= v0 - tol) & (v[sel] <= v1 + tol)
         )  # fmt: skip
     return ok
@@ -358,55 +358,130 @@ def _rim_ascent(fs, R, h_R, c, fid, u, v, iters):
 
 def _edge_points(fs, eid, t):
     """Surface points of edge parameters ``t`` (each on its own edge ``eid``)."""
-    uv = np.empty((t.size, 2))
+    return _edge_derivs(fs, eid, t, 0)[0]
+
+
+def _edge_derivs(fs, eid, t, order: int):
+    """Point of each edge parameter on its face, and its first (and second) derivatives in ``t``:
+    ``P' = Su u' + Sv v'``, ``P'' = Suu u'^2 + 2 Suv u' v' + Svv v'^2 + Su u'' + Sv v''``."""
+    m = t.size
+    uv = np.empty((m, 3, 2))
     for e in np.unique(eid):
         sel = np.nonzero(eid == e)[0]
-        uv[sel] = fs.edges[e].evaluate(t[sel])
+        uv[sel, : order + 1] = fs.edges[e].derivatives(t[sel], order)
     fid = fs.edge_face[eid]
-    return _surface_eval(fs, fid, uv[:, 0], uv[:, 1], 0)[0]
+    if order == 0:
+        return (_surface_eval(fs, fid, uv[:, 0, 0], uv[:, 0, 1], 0)[0],)
+    d = _surface_eval(fs, fid, uv[:, 0, 0], uv[:, 0, 1], order)
+    P, Su, Sv = d[0], d[1], d[2]
+    du, dv = uv[:, 1, 0:1], uv[:, 1, 1:2]
+    P1 = Su * du + Sv * dv
+    if order == 1:
+        return P, P1
+    Suu, Suv, Svv = d[3], d[4], d[5]
+    ddu, ddv = uv[:, 2, 0:1], uv[:, 2, 1:2]
+    P2 = Suu * du * du + 2 * Suv * du * dv + Svv * dv * dv + Su * ddu + Sv * ddv
+    return P, P1, P2
 
 
-def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 30):
-    """Maximise ``g`` along an edge near ``t0`` (golden section on ``[t0 - 2 dt, t0 + 2 dt]`` within the
-    edge) with the part outside the tool's disc penalised steeply; a maximum found just outside the
-    circle is moved onto it (Newton on ``rho(t) = R``). Returns the value (``-inf`` if no feasible point
-    was reached) and the point."""
+def _edge_g(prof, c, P, P1=None, P2=None):
+    """``g = z - h(rho)`` along an edge and its first two derivatives in ``t`` (where ``rho > 0``)."""
+    d = P[:, :2] - c
+    rho = np.hypot(d[:, 0], d[:, 1])
+    h, h1, h2 = prof(np.minimum(rho, prof.R))
+    g = P[:, 2] - h
+    if P1 is None:
+        return g, rho
+    safe = np.maximum(rho, 1e-300)
+    r1 = np.einsum("ij,ij->i", d, P1[:, :2]) / safe
+    g1 = P1[:, 2] - h1 * r1
+    if P2 is None:
+        return g, rho, g1, r1
+    r2 = (np.einsum("ij,ij->i", P1[:, :2], P1[:, :2]) + np.einsum("ij,ij->i", d, P2[:, :2]) - r1 * r1) / safe
+    g2 = P2[:, 2] - h2 * r1 * r1 - h1 * r2
+    return g, rho, g1, r1, g2
+
+
+_EDGE_SAMPLES = 17
+
+
+def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
+    """Maximise ``g = z - h(rho)`` along an edge near ``t0`` within the tool's disc, on ``[t0 - 2 dt, t0 +
+    2 dt]`` within the edge: the best of 17 samples brackets the maximum, then a safeguarded Newton on
+    ``g'(t) = 0`` with exact derivatives (the bracket shrinks by the sign of ``g'``; a bisection step when
+    Newton leaves it), and where the maximum sits on the tool's circle, Newton on ``rho(t) = R`` within
+    the bracket. Returns the value (``-inf`` where no point of the interval is in the disc) and the point."""
     lo_b = np.array([e.bounds[0] for e in fs.edges])[eid]
     hi_b = np.array([e.bounds[1] for e in fs.edges])[eid]
     a, b = np.maximum(t0 - 2 * dt, lo_b), np.minimum(t0 + 2 * dt, hi_b)
     R = prof.R
-
-    def f(t):
-        P = _edge_points(fs, eid, t)
-        rho = np.hypot(*(P[:, :2] - c).T)
-        return P[:, 2] - prof(np.minimum(rho, R))[0] - 1e6 * np.maximum(rho - R, 0.0), rho, P
-
-    gr = (math.sqrt(5) - 1) / 2
-    x1, x2 = b - gr * (b - a), a + gr * (b - a)
-    f1, f2 = f(x1)[0], f(x2)[0]
+    m = t0.size
+    n = _EDGE_SAMPLES
+    ts = a[:, None] + (b - a)[:, None] * np.linspace(0.0, 1.0, n)[None, :]
+    P = _edge_points(fs, np.repeat(eid, n), ts.ravel())
+    g, rho = _edge_g(prof, np.repeat(c, n, axis=0), P)
+    g = np.where(rho <= R, g, -np.inf).reshape(m, n)
+    k = np.argmax(g, axis=1)
+    feasible = np.isfinite(g[np.arange(m), k])
+    lo = ts[np.arange(m), np.maximum(k - 1, 0)]
+    hi = ts[np.arange(m), np.minimum(k + 1, n - 1)]
+    t = ts[np.arange(m), k]
+    # safeguarded Newton on g' = 0 inside [lo, hi] (an ascent: g' > 0 moves right)
     for _ in range(iters):
-        left = f1 >= f2
-        b = np.where(left, x2, b)
-        a = np.where(left, a, x1)
-        x2n = np.where(left, x1, a + gr * (b - a))
-        x1n = np.where(left, b - gr * (b - a), x2)
-        fn = f(np.where(left, x1n, x2n))[0]
-        f1, f2 = np.where(left, fn, f2), np.where(left, f1, fn)
-        x1, x2 = x1n, x2n
-    t = np.clip(0.5 * (a + b), lo_b, hi_b)
-    for _ in range(4):  # onto the circle where the maximum sits just outside it
-        _, rho, _ = f(t)
-        out = rho > R
-        if not out.any():
+        Pk, P1, P2 = _edge_derivs(fs, eid, t, 2)
+        _, rk, g1, r1, g2 = _edge_g(prof, c, Pk, P1, P2)
+        lo = np.where(g1 > 0, t, lo)
+        hi = np.where(g1 < 0, t, hi)
+        newton = t - g1 / np.where(g2 < 0, g2, -np.inf)  # only where g is concave: a maximum ahead
+        step_ok = (g2 < 0) & (newton > lo) & (newton < hi)
+        t_new = np.where(step_ok, newton, 0.5 * (lo + hi))
+        t_new = np.where(g1 == 0, t, t_new)
+        if np.all(np.abs(t_new - t) <= 1e-15 * np.maximum(np.abs(t), 1.0)):
+            t = t_new
             break
-        e = 1e-7 * np.maximum(dt, 1e-12)
-        rp = f(np.clip(t + e, lo_b, hi_b))[1]
-        rm = f(np.clip(t - e, lo_b, hi_b))[1]
-        slope = (rp - rm) / (np.clip(t + e, lo_b, hi_b) - np.clip(t - e, lo_b, hi_b))
-        step = np.where(out & (np.abs(slope) > 0), (rho - R) * (1 + 1e-9) / np.where(slope == 0, 1, slope), 0.0)
-        t = np.clip(t - step, lo_b, hi_b)
-    g, rho, P = f(t)
-    return np.where(rho <= R * (1 + 1e-12), g, -np.inf), P
+        t = t_new
+    # the maximum outside the disc: the best point is on the circle, between the last point inside
+    # and the first outside (Newton on rho(t) = R, kept in that bracket)
+    P, rho = _edge_points(fs, eid, t), None
+    g, rho = _edge_g(prof, c, P)
+    out = feasible & (rho > R)
+    if out.any():
+        t = _onto_circle(fs, prof, c, eid, t, ts, g.size, out)
+        P = _edge_points(fs, eid, t)
+        g, rho = _edge_g(prof, c, P)
+    ok = feasible & (rho <= R * (1 + 1e-12))
+    return np.where(ok, g, -np.inf), P
+
+
+def _onto_circle(fs, prof, c, eid, t, ts, m, out, iters: int = 40):
+    """For the rows ``out`` (whose maximum ``t`` lies outside the disc), the edge point on the tool's
+    circle nearest ``t`` on the side of the disc: Newton on ``rho(t) - R`` safeguarded by the bracket
+    between the nearest sample inside the disc and ``t``."""
+    R = prof.R
+    idx = np.nonzero(out)[0]
+    n = ts.shape[1]
+    Ps = _edge_points(fs, np.repeat(eid[idx], n), ts[idx].ravel())
+    rs = np.hypot(*(Ps[:, :2] - np.repeat(c[idx], n, axis=0)).T).reshape(idx.size, n)
+    inside = rs <= R
+    dist = np.where(inside, np.abs(ts[idx] - t[idx, None]), np.inf)
+    t_in = ts[idx, np.argmin(dist, axis=1)]
+    t_out = t[idx].copy()
+    x = 0.5 * (t_in + t_out)
+    for _ in range(iters):
+        P, P1 = _edge_derivs(fs, eid[idx], x, 1)
+        _, rho, _, r1 = _edge_g(prof, c[idx], P, P1)
+        f = rho - R
+        t_in = np.where(f <= 0, x, t_in)
+        t_out = np.where(f > 0, x, t_out)
+        newton = x - f / np.where(r1 != 0, r1, np.inf)
+        lo, hi = np.minimum(t_in, t_out), np.maximum(t_in, t_out)
+        x_new = np.where((newton > lo) & (newton < hi), newton, 0.5 * (t_in + t_out))
+        if np.all(np.abs(x_new - x) <= 1e-15 * np.maximum(np.abs(x), 1.0)):
+            break
+        x = x_new
+    t = t.copy()
+    t[idx] = t_in  # the last parameter inside the disc (within the bracket's width of the circle)
+    return t
 
 
 def _tip_solve(fs, c, fid, u, v, iters: int = 30):
