@@ -315,7 +315,8 @@ def table() -> str:
     """The glossary as a Markdown table (docs/glossary.md)."""
     rows = ["| name | unit | meaning |", "|---|---|---|"]
     rows += [
-        f"| `{k}` | {t.unit or '-'} | {t.meaning} |" for k, t in sorted(TERMS.items(), key=lambda kv: kv[0].lower())
+        f"| `{k}` | {t.unit or '-'} | {t.meaning.replace('|', '&#124;')} |"
+        for k, t in sorted(TERMS.items(), key=lambda kv: kv[0].lower())
     ]
     old = ["", "Renamed in 0.3.0 (the old names work with a warning until 0.4):", ""]
     old += ["| old | new |", "|---|---|"] + [f"| `{a}` | `{b}` |" for a, b in sorted(RENAMED.items())]

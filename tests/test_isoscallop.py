@@ -15,7 +15,7 @@ def test_ball_on_a_plane_spacing_is_the_closed_form():
     R, h = 5.0, 0.01
     plane = ms.Face(builders.plane_patch((0, 0, 0), (40, 0, 0), (0, 30, 0)), name="plane")
     res = ms.machining_surface(plane, "ball:D=10", axes=3, tolerance=1e-4)
-    tp = iso_scallop_paths(res, scallop=h, chordal_tolerance=1e-3, clearance=20)
+    tp = ms.tool_paths(res, scallop=h, chordal_tolerance=1e-3, clearance=20)  # the public door
     w = 2 * math.sqrt(2 * R * h - h * h)
     assert_close([tp.info["spacing_min_mm"], tp.info["spacing_max_mm"]], [w, w], 1e-6, "spacing")
     # the passes cover the plane: about width / w of them plus the two on the edges

@@ -10,6 +10,7 @@ import pytest
 from helpers import assert_points_close
 
 import machsurf_cad as ms
+from machsurf_cad.geometry import builders
 
 
 def _round_trip(tp, tmp_path, options=None):
@@ -209,3 +210,27 @@ def test_passes_linked_over_a_sphere_around_the_part():
     radial = (tp.tip[link] - centre) / d[link, None]
     assert np.all(np.einsum("ij,ij->i", ax, radial) > 0)  # the axis points out: the body stays outside
     assert ms.verify([bez], tp, gouge_tolerance=0.01).clean
+
+
+def test_fixed_axis_passes_are_linked_in_a_plane_above_the_whole_part():
+    """Two passes either side of a dome 20 mm high: linked straight 5 mm above their ends, the rapid runs
+    through the dome (the body check finds the collision); linked in the plane 5 mm above the part's
+    poles, it clears it, and the path starts and ends on that plane (issue 28's linking)."""
+    floor = builders.plane_patch((0.0, 0.0, 0.0), (100.0, 0.0, 0.0), (0.0, 100.0, 0.0), name="floor")
+    dome = builders.sphere_patch(20.0, (0.0, 90.0), 360.0, name="dome")
+    dome = dome.with_poles(np.asarray(dome.poles) + [50.0, 50.0, 0.0], dome.weights)
+    dome = ms.Face(dome, name="dome", reversed=True)  # su x sv points to the sphere's centre: outward is -
+    tips = [np.array([[10.0, 0.0, 0.0], [10.0, 100.0, 0.0]]), np.array([[90.0, 0.0, 0.0], [90.0, 100.0, 0.0]])]
+    axes = [np.array([[0.0, 0.0, 1.0]] * 2)] * 2
+    ball = ms.BallEndMill(10)
+    straight = ms.ToolPath.from_passes(tips, axes, cutter=ball, clearance=5.0)
+    h = ms.part_plane([floor, dome], clearance=5.0)
+    assert abs(h - 25.0) < 1e-9  # the dome's top pole at 20
+    linked = ms.ToolPath.from_passes(tips, axes, cutter=ball, clearance=5.0, safe_plane=h)
+    assert linked.tip[0, 2] == h and linked.tip[-1, 2] == h
+    rapid = linked.move == ms.Move.RAPID
+    assert np.all((linked.tip[rapid, 2] == h) | (linked.tip[rapid, 2] == 5.0))  # on the plane, or its way down
+    assert linked.report()["safe_plane_height_mm"] == h
+    assert not ms.verify([floor, dome], straight).clean  # the straight rapid meets the dome
+    v = ms.verify([floor, dome], linked)
+    assert v.clean and v.report()["n_collisions"] == 0

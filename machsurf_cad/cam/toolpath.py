@@ -49,6 +49,16 @@ def _exit_point(p, d, centre, radius):
     return p + max(lam, 0.0) * d
 
 
+def _in_plane(p0, p1, a, height: float):
+    """Rapid positions from ``p0`` (None at the path's start) up the fixed axis ``a`` to the plane
+    ``x . a = height``, across it, and down towards ``p1`` (not included): (tips, axes)."""
+    pts = [] if p0 is None else [np.asarray(p0, float)]
+    pts.append(np.asarray(p1, float))
+    up = [p + max(height - float(p @ a), 0.0) * a for p in pts]
+    tips = np.array(up)
+    return tips, np.repeat(np.asarray(a, float)[None, :], len(tips), axis=0)
+
+
 def _over_sphere(p0, a0, p1, a1, sphere, step_deg: float = 5.0):
     """Rapid positions from ``p0`` (axis ``a0``) out along the axis to the sphere, over it along the great
     circle (axes radial, outward), back in along ``a1`` to ``p1``'s exit point: (tips, axes) without ``p1``."""
@@ -166,6 +176,7 @@ class ToolPath(Result):
         info=None,
         linking: Sequence | None = None,
         safe_sphere: tuple | None = None,
+        safe_plane: float | None = None,
     ) -> ToolPath:
         """Cutting passes linked the safe way: rapid to ``clearance`` mm above each pass start along
         its tool axis, approach along the axis, cut, retract ``clearance`` mm along the axis.
@@ -191,6 +202,11 @@ class ToolPath(Result):
             and may still cross other parts of it (a propeller's next blade), which the tool-body
             check finds. Without it a rapid runs straight from one pass's retract point to the next
             one's approach point.
+        safe_plane : float, optional
+            For a fixed tool axis (3 axes, 3+2): the height along the axis of a plane above the whole part
+            (mm, :func:`~machsurf_cad.machining.toolpath.part_plane`). The path starts on it, and between
+            passes the tool leaves along its axis up to it, travels in it and comes down along the axis
+            above the next pass: no link crosses the part. Passes with another axis are linked straight.
 
         Examples
         --------
@@ -221,12 +237,16 @@ class ToolPath(Result):
             m = t.shape[0]
             d0, d1 = (a[0], a[-1]) if linking is None else (np.asarray(x, float) for x in linking[i])
             d0, d1 = d0 / np.linalg.norm(d0), d1 / np.linalg.norm(d1)
-            if safe_sphere is not None and T:  # from the last pass's retract over the sphere to this one
+            link_t = None
+            if safe_plane is not None and (not T or abs(float(A[-1][-1] @ d0) - 1.0) < 1e-9):
+                link_t, link_a = _in_plane(T[-1][-1] if T else None, t[0] + clearance * d0, d0, safe_plane)
+            elif safe_sphere is not None and T:  # from the last pass's retract over the sphere to this one
                 link_t, link_a = _over_sphere(T[-1][-1], A[-1][-1], t[0] + clearance * d0, d0, safe_sphere)
+            if link_t is not None and len(link_t):
                 T.append(link_t)
                 A.append(link_a)
                 M.append([Move.RAPID] * len(link_t))
-                P.append(np.full(len(link_t), P[-1][-1]))
+                P.append(np.full(len(link_t), P[-1][-1] if P else i))
                 if cc is not None:
                     C.append(np.full((len(link_t), 3), np.nan))
                 for k in keys:
@@ -246,6 +266,19 @@ class ToolPath(Result):
                 X.setdefault(k, []).extend([pad, v, pad])
         if not T:
             raise InputError("a tool path needs at least one pass with a position")
+        if safe_plane is not None:  # the path ends on the plane: the next operation starts clear of the part
+            last, a_last = np.asarray(T[-1][-1], float), np.asarray(A[-1][-1], float)
+            lift = float(safe_plane) - float(last @ a_last)
+            if lift > 0:
+                T.append((last + lift * a_last)[None, :])
+                A.append(a_last[None, :])
+                M.append([Move.RAPID])
+                P.append(np.full(1, P[-1][-1]))
+                if cc is not None:
+                    C.append(np.full((1, 3), np.nan))
+                for k in keys:
+                    v = np.asarray(X[k][-1])
+                    X[k].append(np.full((1,) + v.shape[1:], np.nan if v.dtype.kind == "f" else -1, dtype=v.dtype))
         return cls(
             np.concatenate(T),
             np.concatenate(A),
@@ -257,7 +290,8 @@ class ToolPath(Result):
             name,
             {k: np.concatenate(v) for k, v in X.items()},
             dict(info or {}, clearance_mm=float(clearance))
-            | ({} if safe_sphere is None else {"safe_sphere_radius_mm": float(safe_sphere[1])}),
+            | ({} if safe_sphere is None else {"safe_sphere_radius_mm": float(safe_sphere[1])})
+            | ({} if safe_plane is None else {"safe_plane_height_mm": float(safe_plane)}),
         )
 
     # ------------------------------------------------------------------ views

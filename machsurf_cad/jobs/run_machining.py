@@ -122,15 +122,18 @@ def _write_surfaces(st: Staging, spec: MachiningSurfaceJob, ms, rep: dict, cutte
 
 def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: dict, part) -> int:
     """``--toolpath``: passes by step-over or iso-scallop, checked against the part, written; the exit code."""
-    from ..machining.toolpath import tool_paths
+    from ..machining.toolpath import part_plane, part_sphere, tool_paths
     from .run_verify import write_checked_toolpath
 
+    # links over a clearance surface around the whole part: a sphere in 5 axes, a plane along a fixed axis
+    if spec.axes == 5:
+        link = {"safe_sphere": part_sphere(part(), spec.clearance)}
+    else:
+        link = {"safe_plane": part_plane(part(), spec.axis or (0.0, 0.0, 1.0), spec.clearance)}
     if spec.scallop is not None:
-        from ..machining.isoscallop import iso_scallop_paths
-
-        tp = iso_scallop_paths(
+        tp = tool_paths(
             ms, scallop=spec.scallop, chordal_tolerance=spec.chordal_tolerance, clearance=spec.clearance,
-            overrun=spec.overrun,
+            overrun=spec.overrun, **link,
         )  # fmt: skip
         i = tp.info
         say(
@@ -146,6 +149,7 @@ def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: d
             stepover=spec.stepover_or_default,
             chordal_tolerance=spec.chordal_tolerance,
             clearance=spec.clearance,
+            **link,
         )
     rep["toolpath"] = tp.report()
     say(

@@ -205,6 +205,8 @@ def iso_scallop_paths(
     clearance: float = 5.0,
     overrun: float | None = None,
     max_passes: int = 5000,
+    safe_sphere: tuple | None = None,
+    safe_plane: float | None = None,
 ) -> ToolPath:
     """Passes spaced on the surface so that the predicted scallop between neighbours is ``scallop`` mm.
 
@@ -222,6 +224,9 @@ def iso_scallop_paths(
         Each pass runs on straight beyond its ends by this much (mm; default the tool radius), so that a
         pass meeting the face's edge at an angle still cuts the edge to the scallop height. The
         path-writing commands check these moves against the whole part like any other.
+    safe_sphere, safe_plane : optional
+        Link the passes over a sphere (5 axes) or in a plane (fixed axis) around the whole part
+        (:meth:`~machsurf_cad.cam.ToolPath.from_passes`).
 
     Returns
     -------
@@ -289,8 +294,9 @@ def iso_scallop_paths(
         "n_overruns_shortened_for_gouging": dropped,
     }
     return ToolPath.from_passes(
-        tips, axes, cc=ccs, extras=extras, clearance=clearance, cutter=ms.cutter, name="iso_scallop", info=info
-    )
+        tips, axes, cc=ccs, extras=extras, clearance=clearance, cutter=ms.cutter, name="iso_scallop", info=info,
+        safe_sphere=safe_sphere, safe_plane=safe_plane,
+    )  # fmt: skip
 
 
 def _plan_fronts(ms: MachiningSurface, k: int, sign: float, scallop: float, max_passes: int):

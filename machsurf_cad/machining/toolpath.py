@@ -14,7 +14,7 @@ GOTO statements, u the tool axis.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 
@@ -32,7 +32,9 @@ from .surfaces import MachiningSurface, recover_axis
 def tool_paths(
     surface: MachiningSurface,
     *,
-    stepover: float,
+    stepover: float | None = None,
+    scallop: float | None = None,
+    overrun: float | None = None,
     chordal_tolerance: float = 0.005,
     strategy: StrategyLike | None = None,
     grid: int = 401,
@@ -40,6 +42,7 @@ def tool_paths(
     clearance: float = 5.0,
     max_passes: int = 5000,
     safe_sphere: tuple | None = None,
+    safe_plane: float | None = None,
 ) -> ToolPath:
     """Tool paths on S1: plane sections (``PlanesFeed``) or iso-parametric lines (``IsoFeed``).
 
@@ -50,6 +53,11 @@ def tool_paths(
     stepover : float
         Distance between planes (mm) or, for iso lines, the approximate distance between lines
         measured on S1.
+    scallop : float, optional
+        Instead of ``stepover``: iso-scallop passes, spaced on the surface so that the predicted cusp
+        between neighbours is ``scallop`` mm (:func:`~machsurf_cad.machining.isoscallop.iso_scallop_paths`).
+    overrun : float, optional
+        With ``scallop``: passes run on past the face's edges by this much (mm, default the tool radius).
     chordal_tolerance : float
         Max distance of the dense tip path from the chords between written positions, mm.
     strategy : PlanesFeed or IsoFeed, optional
@@ -61,6 +69,9 @@ def tool_paths(
     safe_sphere : (centre, radius), optional
         A sphere around the whole part (mm): passes are linked over it instead of by straight rapids
         (:meth:`~machsurf_cad.cam.ToolPath.from_passes`).
+    safe_plane : float, optional
+        3 axes and 3+2: the height along the fixed axis of a plane above the whole part (:func:`part_plane`):
+        the path starts and ends on it and passes are linked in it.
 
     Returns
     -------
@@ -90,6 +101,18 @@ def tool_paths(
 
     if not isinstance(surface, MachiningSurface):
         raise InputError(f"tool_paths needs a MachiningSurface (ms.machining_surface), got {type(surface).__name__}")
+    if (stepover is None) == (scallop is None):
+        raise InputError("tool_paths needs a stepover or a scallop height (one of them)")
+    if scallop is not None:
+        from .isoscallop import iso_scallop_paths
+
+        return iso_scallop_paths(
+            surface, scallop=scallop, chordal_tolerance=chordal_tolerance, strategy=strategy, zigzag=zigzag,
+            clearance=clearance, overrun=overrun, max_passes=max_passes, safe_sphere=safe_sphere,
+            safe_plane=safe_plane,
+        )  # fmt: skip
+    if overrun is not None:
+        raise InputError("overrun applies to iso-scallop passes: give scallop")
     stepover = checks.positive("stepover", stepover)
     checks.positive("chordal tolerance", chordal_tolerance)
     checks.positive("clearance", clearance)
@@ -126,6 +149,7 @@ def tool_paths(
         name="machining_surface",
         info=info,
         safe_sphere=safe_sphere,
+        safe_plane=safe_plane,
     )
 
 
@@ -214,6 +238,27 @@ def part_sphere(faces: Iterable[FaceLike], clearance: float = 5.0) -> tuple:
     pts = np.concatenate(poles)
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     return 0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + float(clearance)
+
+
+def part_plane(faces: Iterable[FaceLike], axis: Sequence[float] = (0.0, 0.0, 1.0), clearance: float = 5.0) -> float:
+    """Height along ``axis`` (mm, ``x . axis``) of a plane ``clearance`` mm above every face (above their
+    poles: a B-spline with positive weights lies in its poles' convex hull): the plane 3-axis and 3+2
+    passes are linked in (``tool_paths(..., safe_plane=...)``).
+
+    Examples
+    --------
+    >>> from machsurf_cad import example
+    >>> round(part_plane([example("bezier5")], clearance=5.0) - float(example("bezier5").poles[..., 2].max()), 9)
+    5.0
+    """
+    from ..geometry.face import Face
+
+    a = np.asarray(axis, float)
+    a = a / np.linalg.norm(a)
+    poles = [np.asarray((f.surface if isinstance(f, Face) else f).poles, float).reshape(-1, 3) for f in faces]
+    if not poles:
+        raise InputError("a plane above the part needs at least one face")
+    return float((np.concatenate(poles) @ a).max()) + float(clearance)
 
 
 def _densify(uv: np.ndarray, ms: MachiningSurface, level: float, kind: str, N) -> np.ndarray:

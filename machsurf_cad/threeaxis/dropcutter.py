@@ -357,13 +357,21 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     _solve(fs, prof, C, cand, qi[f2], sj[f2], "face")
     _solve(fs, prof, C, cand, qi[r2], sj[r2], "rim")
     _solve(fs, prof, C, cand, qi[e2], sj[e2], "edge")
-    # further rounds: a face seed is the best sample of its group, whose ascent may end on a lower
-    # local maximum (a flat bottom over a wavy face has many) while another sample of the group still
-    # bounds above the best contact: the untried sample of highest bound per group, away from the
-    # best contact, until no bound beats it
+    low = _more_face_rounds(fs, prof, C, cand, m, (qi, sj, xyz, feasible, is_edge), f_seed, ub, fkey, fid_all, cover)
+    _kink_solves(fs, prof, C, cand, (qi, sj, rho, xyz), fkey, cover, low)
+    return cand.best(m)
+
+
+def _more_face_rounds(fs, prof, C, cand, m, pairs, f_seed, ub, fkey, fid_all, cover) -> np.ndarray:
+    """Further rounds of face solves: a face seed is the best sample of its group, whose ascent may end
+    on a lower local maximum (a flat bottom over a wavy face has many) while another sample of the group
+    still bounds above the best contact: the untried sample of highest bound per group, away from the
+    best contact, until no bound beats it. Returns the best heights found (-inf where none)."""
+    qi, sj, xyz, feasible, is_edge = pairs
     tried = np.zeros(qi.size, bool)
     tried[f_seed] = True
     pool = np.nonzero(feasible & ~is_edge & (fs.min_tilt[sj] <= prof.max_tilt + 1e-9))[0]
+    low = np.full(m, -np.inf)
     for _ in range(_EXTRA_ROUNDS):
         h_b, k_b, f_b, p_b = cand.best(m)
         low = np.nan_to_num(h_b, nan=-np.inf)
@@ -376,14 +384,18 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
         p3 = p3[_best_per(fkey[p3], ub[p3])]
         tried[p3] = True
         _solve(fs, prof, C, cand, qi[p3], sj[p3], "face")
-    # circles inside the rim where the profile's slope jumps (a cone's or APT tool's bottom edge): the
-    # highest sample near each, where its bound can still win
+    return low
+
+
+def _kink_solves(fs, prof, C, cand, pairs, fkey, cover, low) -> None:
+    """Circles inside the rim where the profile's slope jumps (a cone's or APT tool's bottom edge): the
+    highest sample near each, where its bound can still beat ``low``."""
+    qi, sj, rho, xyz = pairs
     for k, (rk, hk) in enumerate(prof.kinks):
         near_k = np.nonzero(np.abs(rho - rk) <= cover)[0]
         near_k = near_k[xyz[near_k, 2] + fs.rise[sj[near_k]] - hk >= low[qi[near_k]]]
         seeds_k = near_k[_best_per(fkey[near_k], xyz[near_k, 2])]
         _solve(fs, prof, C, cand, qi[seeds_k], sj[seeds_k], "rim", kink=k)
-    return cand.best(m)
 
 
 _EXTRA_ROUNDS = 4

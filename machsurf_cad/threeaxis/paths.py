@@ -336,6 +336,24 @@ def _reduce_chordal(fs, cutter, passes, d, nrm, offsets, tol, jump_mm: float = 1
     return [[s_, h_, c_, i, (above, below)] for s_, h_, c_, i, _ in kept]
 
 
+def _down_link(fs: FaceSet, cutter, prev_end, start, i, step, d, nrm):
+    """A link cutting along the part between the end of the last line and the start of line ``i``: where
+    the lines are adjacent, no more than 1.5 step-overs apart, and a face is under the tool all the way.
+    Returns ``(s, t, drop-cutter result or None)`` of its inner points, or None."""
+    ps, pt, _, pi = prev_end
+    gap = math.hypot(start[0] - ps, start[1] - pt)
+    if abs(i - pi) != 1 or gap > 1.5 * step + 1e-9:
+        return None
+    n = max(2, math.ceil(gap / min(step, 0.25)) + 1)
+    w = np.linspace(0, 1, n)[1:-1]
+    ls = ps + w * (start[0] - ps)
+    lt = pt + w * (start[1] - pt)
+    lr = _drop(fs, cutter, ls[:, None] * d + lt[:, None] * nrm) if w.size else None
+    if lr is not None and not np.all(np.isfinite(lr.height)):
+        return None
+    return ls, lt, lr
+
+
 def _link(fs: FaceSet, cutter, passes, d, nrm, offsets, step, z_safe, tol, direction, info) -> ToolPath:
     """Join passes: stay down (cutting along the part's exact drop-cutter heights) between the ends of
     adjacent zig-zag lines no more than 1.5 step-overs apart where a face is under the tool all the
@@ -355,25 +373,18 @@ def _link(fs: FaceSet, cutter, passes, d, nrm, offsets, step, z_safe, tol, direc
     prev_end = None
     for k, (s_, h_, c_, i, _) in enumerate(passes):
         start = (s_[0], offsets[i])
-        link_ok = False
+        link = None
         if prev_end is not None and direction is Direction.ZIGZAG:
-            (ps, pt, ph, pi) = prev_end
-            gap = math.hypot(s_[0] - ps, offsets[i] - pt)
-            if abs(i - pi) == 1 and gap <= 1.5 * step + 1e-9:
-                n = max(2, math.ceil(gap / min(step, 0.25)) + 1)
-                w = np.linspace(0, 1, n)[1:-1]
-                ls = ps + w * (s_[0] - ps)
-                lt = pt + w * (offsets[i] - pt)
-                lr = _drop(fs, cutter, ls[:, None] * d + lt[:, None] * nrm) if w.size else None
-                if lr is None or np.all(np.isfinite(lr.height)):
-                    link_ok = True
-                    if lr is not None:
-                        T.append(world(ls, lt, lr.height))
-                        M.append(np.full(w.size, Move.CUT))
-                        P.append(np.full(w.size, k))
-                        C.append(lr.contact)
-                    n_links_down += 1
-        if not link_ok:
+            link = _down_link(fs, cutter, prev_end, start, i, step, d, nrm)
+        if link is not None:
+            ls, lt, lr = link
+            if lr is not None:
+                T.append(world(ls, lt, lr.height))
+                M.append(np.full(ls.size, Move.CUT))
+                P.append(np.full(ls.size, k))
+                C.append(lr.contact)
+            n_links_down += 1
+        else:
             if prev_end is not None:
                 T.append(up((prev_end[0], prev_end[1])))
                 M.append([Move.RETRACT])

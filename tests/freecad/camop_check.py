@@ -64,7 +64,7 @@ try:
     faces = [face_to_numpy(f, f"Block.Face{i + 1}") for i, f in enumerate(part.Shape.Faces)]
     rest = [f for i, f in enumerate(faces) if i != top]
     tp = ms.raster([faces[top]], ms.parse_cutter(op.CutterUsed), check_faces=rest, stepover=4.0,
-                   chordal_tolerance=0.01, clearance=5.0, gouge_tolerance=0.01)  # fmt: skip
+                   chordal_tolerance=0.005, clearance=5.0, gouge_tolerance=0.01)  # the defaults  # fmt: skip
     csv_path = os.path.join(os.path.dirname(out_path), "cam.csv")
     ms.write_csv(csv_path, tp)
     rows = [r for r in csv.DictReader(open(csv_path)) if r["move"] != "rapid"]
@@ -89,7 +89,7 @@ try:
     five.AptFile = apt
     doc.recompute()
     m5 = ms.machining_surface(faces[top], "ball:D=6", axes=5, strategy="planes:-0,1,0", lead=10.0, tolerance=1e-3)
-    tp5 = ms.tool_paths(m5, stepover=4.0, chordal_tolerance=0.01, clearance=5.0,
+    tp5 = ms.tool_paths(m5, stepover=4.0, chordal_tolerance=0.005, clearance=5.0,
                         safe_sphere=ms.part_sphere(faces, 5.0))  # fmt: skip
     moves = [c for c in five.Path.Commands if c.Name in ("G0", "G1")]
     tips = np.array([[c.Parameters[k] for k in "XYZ"] for c in moves])

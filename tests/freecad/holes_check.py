@@ -95,7 +95,9 @@ try:
     obj = doc.addObject("Part::Feature", "Plate")
     obj.Shape = plate
     top = [i for i, f in enumerate(plate.Faces) if abs(f.CenterOfMass.z - 10) < 1e-6][0]
-    ms = features.make("MachiningSurface", doc, (obj, [f"Face{top + 1}"]), Tool="ball:D=10", Axes="3", Lead=0.0)
+    ms = features.make(
+        "MachiningSurface", doc, (obj, [f"Face{top + 1}"]), Tool="ball:D=10", Axes="3"
+    )  # Lead keeps its 5-axis default
     doc.recompute()
     result["feature"] = {"valid": ms.isValid(), "status": ms.Status, "wires": [len(f.Wires) for f in ms.Shape.Faces]}
     result["ok"] = True

@@ -144,8 +144,8 @@ class CamOperationFeature(_Base):
              "side its normal points to, or the opposite one (the paper's side +1 / -1)", list(TOOL_SIDES))  # fmt: skip
         _add(obj, "App::PropertyEnumeration", "FlankSetting", "Flank", "Tool setting on each rule",
              ["optimum", "standard-distributed", "standard-bisector", "standard-tangent"])  # fmt: skip
-        _add(obj, LENGTH, "ChordalTolerance", "Accuracy", "Largest distance of the moves from the exact CL surface",
-             0.01)  # fmt: skip
+        _add(obj, LENGTH, "ChordalTolerance", "Accuracy", "Largest distance of the moves from the exact CL surface "
+             "(below GougeTolerance: a chord may dip that far into the part)", 0.005)  # fmt: skip
         _add(obj, LENGTH, "GougeTolerance", "Accuracy", "Deepest the tool body may go into the part", 0.01)
         _add(obj, "App::PropertyBool", "AllowGouge", "Accuracy", "Write a gouging path anyway (listed in Verdict)",
              False)  # fmt: skip

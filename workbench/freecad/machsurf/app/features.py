@@ -219,8 +219,22 @@ class MachiningSurfaceFeature(_Base):
             "Tool path directions: planes:x|y|z|a,b,c (parallel planes) or iso:u|v (isoparametric)",
             "planes:x",
         )
-        _add(obj, ANGLE, "Lead", "Strategy", "Lead angle: the axis leans towards the feed (the paper's Omega_t)", 10.0)
-        _add(obj, ANGLE, "Tilt", "Strategy", "Tilt angle: the axis turns about the normal (the paper's Omega_n)", 0.0)
+        _add(
+            obj,
+            ANGLE,
+            "Lead",
+            "Strategy",
+            "Lead angle: the axis leans towards the feed (the paper's Omega_t; 5 axes only)",
+            10.0,
+        )
+        _add(
+            obj,
+            ANGLE,
+            "Tilt",
+            "Strategy",
+            "Tilt angle: the axis turns about the normal (the paper's Omega_n; 5 axes only)",
+            0.0,
+        )
         _add(
             obj,
             LENGTH,
@@ -266,13 +280,14 @@ class MachiningSurfaceFeature(_Base):
         from machsurf_cad import machining_surface
 
         f = face_to_numpy(source_face(obj), "F")
+        axes = int(obj.Axes)
         ms = machining_surface(
             f,
             tool_text(obj.Tool),
-            axes=int(obj.Axes),
+            axes=axes,
             strategy=obj.Strategy,
-            lead=value_of(obj.Lead),
-            tilt=value_of(obj.Tilt),
+            lead=value_of(obj.Lead) if axes == 5 else 0.0,  # lead and tilt are 5-axis settings
+            tilt=value_of(obj.Tilt) if axes == 5 else 0.0,
             tolerance=value_of(obj.Tolerance),
             loops=str(obj.Loops),
             progress=self.bar,
