@@ -97,6 +97,7 @@ TERMS: dict[str, Term] = {
     "zigzag": Term("", "alternate the pass direction"),
     "clearance": Term(_MM, "distance the tool keeps from the part on links and retracts"),
     "safe_sphere": Term("", "a sphere around the part that links travel on"),
+    "safe_plane": Term(_MM, "height along the fixed axis of a plane above the part that links travel in"),
     "extent": Term(_MM, "plan rectangle of a 3-axis pattern, (xmin, xmax, ymin, ymax)"),
     "z_min": Term(_MM, "waterline: lowest level"),
     "grid": Term("", "samples per parameter direction (a count)"),

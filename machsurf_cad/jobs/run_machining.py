@@ -126,6 +126,7 @@ def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: d
     from .run_verify import write_checked_toolpath
 
     # links over a clearance surface around the whole part: a sphere in 5 axes, a plane along a fixed axis
+    link: dict[str, object]
     if spec.axes == 5:
         link = {"safe_sphere": part_sphere(part(), spec.clearance)}
     else:

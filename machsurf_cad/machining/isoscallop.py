@@ -55,7 +55,7 @@ def _tangents(pts, half: int = 1):
 def cross_feed(ms: MachiningSurface, uv: np.ndarray, feed3: np.ndarray):
     """Effective tool radius (mm) and normal curvature of the surface (1/mm, > 0 convex) across the feed
     ``feed3`` (unit 3-D tangents) at the nominal's points ``uv``; also the cross direction and normals."""
-    from .toolpath import _positions
+    from .positions import _positions
 
     F = ms.nominal.surface
     d, n = _frame(F, ms.nominal.reversed, uv)
@@ -351,7 +351,7 @@ def _plan_fronts(ms: MachiningSurface, k: int, sign: float, scallop: float, max_
 
 def _pass_runs(ms: MachiningSurface, passes_uv: list, over: float, chordal_tolerance: float, zigzag: bool):
     """Every pass's runs inside the face as positions (chordal tolerance, overruns); the largest errors."""
-    from .toolpath import _positions
+    from .positions import _positions
 
     F = ms.nominal.surface
     bounds = ms.nominal.uv_bounds

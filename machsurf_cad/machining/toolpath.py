@@ -21,11 +21,11 @@ import numpy as np
 from ..cam.chordal import chord_error, douglas_peucker
 from ..cam.toolpath import ToolPath
 from ..errors import InputError
-from ..geometry.normals import unit_normals
 from ..glossary import renamed
 from ..typing import FaceLike, StrategyLike
+from .positions import _positions
 from .strategies import IsoFeed, PlanesFeed
-from .surfaces import MachiningSurface, recover_axis
+from .surfaces import MachiningSurface
 
 
 @renamed(ms="surface")
@@ -286,31 +286,3 @@ def _densify(uv: np.ndarray, ms: MachiningSurface, level: float, kind: str, N) -
     d = s1.derivatives(dense[:, 0], dense[:, 1], 0)
     on_plane = np.abs(d.point @ N - level) < 1e-9 * max(1.0, abs(level))
     return dense[on_plane]  # points clipped at the domain edge could not reach the plane
-
-
-def _positions(ms: MachiningSurface, uv: np.ndarray) -> dict:
-    em = ms.cutter.end_mill_radii("tool paths on machining surfaces")
-    r = em.r
-    F = ms.nominal.surface
-    d = F.derivatives(uv[:, 0], uv[:, 1], 1)
-    n = unit_normals(d.su, d.sv, F.scale)
-    if ms.nominal.reversed:
-        n = -n
-    k = ms.s1.surface.evaluate(uv[:, 0], uv[:, 1])
-    maps = ms.maps
-    if ms.axes == 5:
-        assert ms.s2 is not None  # 5 axes always have S2
-        cl = ms.s2.surface.evaluate(uv[:, 0], uv[:, 1])
-        axis = recover_axis(k, cl, n, ball_length=ms.axis_length if em.is_ball else None)
-        if em.is_ball:
-            cl = k  # the ball's CL is its centre; S2 only orients the axis
-        # measured against the exact axis
-        exact = np.stack([maps.tool_axis(np.array([a]), np.array([b]))[0, 0] for a, b in uv[:: max(1, len(uv) // 16)]])
-        got = axis[:: max(1, len(uv) // 16)]
-        axis_err = float(np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", exact, got), -1, 1))).max())
-    else:
-        axis = np.broadcast_to(np.asarray(ms.strategy.direction), k.shape).copy()
-        cl = k + r * axis if ms.tip else k
-        axis_err = 0.0
-    tip = cl - r * axis
-    return {"cc": d.point, "k": k, "cl": cl, "tip": tip, "axis": axis, "axis_err": axis_err}
