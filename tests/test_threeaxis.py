@@ -642,3 +642,20 @@ def test_edge_search_is_newton_exact_along_the_curve():
         assert g[i] <= ref + 1e-4  # the dense grid's own error (4e-7 of the parameter range)
         compared += 1
     assert compared >= 8
+
+
+def test_reachable_area_beside_a_wall_closed_form():
+    """A 100 x 100 floor with a 50 mm wall along x = 100 and a ball R 5 along +z: the ball touches the floor
+    only 5 mm or more from the wall (95 %, and the dropped tool touches the same), the wall only 5 mm or
+    more above the floor (90 %: its equator; a dropped tool slides past it: 0 %); upside down, nothing."""
+    from machsurf_cad.threeaxis.reach import reachable_area
+
+    floor = builders.plane_patch((0.0, 0.0, 0.0), (100.0, 0.0, 0.0), (0.0, 100.0, 0.0), name="floor")
+    wall = builders.plane_patch((100.0, 0.0, 0.0), (0.0, 100.0, 0.0), (0.0, 0.0, 50.0), name="wall")  # normal +x
+    faces = [ms.Face(floor, name="floor"), ms.Face(wall, name="wall", reversed=True)]  # the wall faces -x
+    fl, wl = reachable_area(faces, [0, 1], "ball:D=10", samples=15_000)  # 1 x 1 mm and 1 x 0.5 mm cells
+    assert abs(fl["reachable_fraction"] - 0.95) < 0.006 and abs(fl["touched_fraction"] - 0.95) < 0.006
+    assert abs(wl["reachable_fraction"] - 0.90) < 0.006 and wl["touched_fraction"] < 0.01
+    assert abs(fl["area_mm2"] - 1e4) < 1e-6 and abs(wl["area_mm2"] - 5e3) < 1e-6
+    (down,) = reachable_area(faces, [0], "ball:D=10", samples=400, axis=(0.0, 0.0, -1.0))
+    assert down["reachable_fraction"] == 0.0 and down["facing_away_fraction"] == 1.0

@@ -87,6 +87,16 @@ def _toolpath(st: Staging, say: Say, spec: Mill3Job, cutter, faces, axis, rep: d
     tp, code = res.planned, EXIT_OK
     i = tp.info
     rep["toolpath"] = tp.report()
+    full = res.report()
+    rep["reach"] = full["reach"]
+    if "reachable_fraction" in full:
+        rep["reachable_fraction"], rep["touched_fraction"] = full["reachable_fraction"], full["touched_fraction"]
+        away = full["faces_out_of_reach"]
+        say(
+            f"the tool can touch {100 * full['reachable_fraction']:.1f} % of the machined faces' area along the axis "
+            f"(the dropped tool {100 * full['touched_fraction']:.1f} %)"
+            + (f"; out of its reach: face(s) {', '.join(map(str, away))}" if away else "")
+        )
     say(
         f"{i['pattern']} tool path: {i['n_passes']} passes, {tp.n_cut} cutting positions; chordal error "
         f"measured {i['chordal_error_measured_mm']:.3g} mm (tol {spec.chordal_tolerance:g}) on points no position "

@@ -18,6 +18,7 @@ from ..pathcheck import OnGouge, PathCheck, check_toolpath
 from ..results import Progress, Result
 from ..typing import PartLike, ToolLike, Vector3
 from .paths import raster
+from .reach import reachable_area
 from .select import _as_faces, faces_away, select_faces
 from .zlevel import waterline
 
@@ -35,6 +36,9 @@ class Mill3Result(Result):
     faces_machined: tuple[int, ...]
     faces_checked: tuple[int, ...]
     axis: tuple[float, float, float]
+    reach: tuple = ()
+    """Per machined face: the area the tool can touch along the axis and what the dropped tool touches
+    (:func:`~machsurf_cad.threeaxis.reach.reachable_area`)."""
 
     @property
     def toolpath(self) -> ToolPath | None:
@@ -52,7 +56,21 @@ class Mill3Result(Result):
             "toolpath": self.planned.report(),
             "verify": self.check.report(),
             "verdict": self.verdict,
+            "reach": list(self.reach),
+            **_reach_summary(self.reach),
         }
+
+
+def _reach_summary(reach) -> dict:
+    """Area-weighted fractions over the machined faces, and the faces the tool can barely touch."""
+    area = sum(r["area_mm2"] for r in reach)
+    if not area:
+        return {}
+    return {
+        "reachable_fraction": sum(r["reachable_mm2"] for r in reach) / area,
+        "touched_fraction": sum(r["touched_mm2"] for r in reach) / area,
+        "faces_out_of_reach": [r["face"] for r in reach if r["reachable_fraction"] < 0.05],
+    }
 
 
 def _seq(part) -> list:
@@ -157,4 +175,8 @@ def mill3(
     else:
         tp = waterline(mf, tool, stepdown=stepdown or step, grid_step=grid_step, **common)
     pc = check_toolpath(tp, part, gouge_tolerance=gouge_tolerance, on_gouge=on_gouge, clearance=clearance)
-    return Mill3Result(tp, pc, tuple(machined), tuple(checked), axis)  # type: ignore[arg-type]
+    both = machined + checked
+    reach = reachable_area([part[i] for i in both], range(len(machined)), tool, axis=axis)
+    for r in reach:
+        r["face"] = machined[r["face"]]
+    return Mill3Result(tp, pc, tuple(machined), tuple(checked), axis, tuple(reach))  # type: ignore[arg-type]
