@@ -1,6 +1,6 @@
 """Scallop height and step-over: one home for the relations every planner and measure uses (mm).
 
-* :func:`stepover`: relation (31) of Tournier et al. (re-derived): the distance between adjacent tool
+* :func:`stepover`: relation (31) of the effective-radius paper (re-derived): the distance between adjacent tool
   centres for a scallop height, an effective radius and the surface's signed normal radius (reff maps).
 * :func:`scallop_height` and its inverse :func:`spacing_for_scallop`: the circle-circle construction
   along the surface (iso-scallop passes, reff step-over maps, the simulation's checks).

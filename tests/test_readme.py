@@ -66,3 +66,16 @@ def test_the_shell_examples_chain_after_the_demo(tmp_path):
         text = (out / "report.json").read_text()
         assert "NaN" not in text and "Infinity" not in text, out  # strict JSON
     assert json.loads((tmp_path / "out/verify/report.json").read_text())["verify"]["clean"]
+
+
+def test_the_guides_python_block_runs_as_a_script(tmp_path):
+    """docs/guide.md's API overview, as printed, in a scratch folder: no DeprecationWarning of ours."""
+    text = (ROOT / "docs" / "guide.md").read_text()
+    (py,) = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    (tmp_path / "guide.py").write_text(py)
+    r = subprocess.run([sys.executable, "-W", "error::DeprecationWarning:__main__", "guide.py"], cwd=tmp_path,
+                       capture_output=True, text=True, env=_env(), stdin=subprocess.DEVNULL, timeout=900)  # fmt: skip
+    assert r.returncode == 0, r.stderr[-2000:]
+    lines = r.stdout.strip().splitlines()
+    assert float(lines[0]) <= 1e-3 and float(lines[1]) <= 0.01 and lines[-1] == "1"
+    assert (tmp_path / "path.apt").is_file() and (tmp_path / "out" / "flank" / "report.json").is_file()

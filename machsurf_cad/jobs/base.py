@@ -6,6 +6,7 @@ import hashlib
 import json
 import os
 import shutil
+import signal
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -174,16 +175,23 @@ class Staging:
         os.umask(mask)
         os.chmod(self.dir, 0o777 & ~mask)  # mkdtemp's 0700 would hide the results from the user's group
         old = None
-        if self.out_dir.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{self.out_dir.name}.old-", dir=str(self.out_dir.parent)))
-            old.rmdir()
-            self.out_dir.rename(old)
+        # the swap is not interrupted: Ctrl-C or SIGTERM between its two renames would leave the earlier
+        # run under a hidden name and no folder at all; a signal that arrives meanwhile is delivered after
+        # it (the run is then complete: its folder holds every file and the manifest)
+        blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
         try:
-            self.dir.rename(self.out_dir)
-        except OSError:
-            if old is not None:
-                old.rename(self.out_dir)
-            raise
+            if self.out_dir.exists():
+                old = Path(tempfile.mkdtemp(prefix=f".{self.out_dir.name}.old-", dir=str(self.out_dir.parent)))
+                old.rmdir()
+                self.out_dir.rename(old)
+            try:
+                self.dir.rename(self.out_dir)
+            except OSError:
+                if old is not None:
+                    old.rename(self.out_dir)
+                raise
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
         return self.out_dir
