@@ -214,6 +214,7 @@ def test_the_misses_of_the_40000_point_comparison_are_found(fname, xy):
 
 # ----------------------------------------------------------------------------- OpenCAMLib
 @needs_kernel
+@pytest.mark.slow  # 17 s: the slow tier (CI runs it)
 def test_against_opencamlib_on_a_fine_mesh():
     """OpenCAMLib's BatchDropCutter on a mesh of the same STEP part (deflection 0.004 mm): both agree
     within what that mesh's sag allows, for ball, flat and bull-nose end mills."""
@@ -450,6 +451,7 @@ def test_part_in_inches_or_centimetres_gives_mm(tmp_path, unit, scale):
 
 
 @needs_kernel
+@pytest.mark.slow  # 23 s: the slow tier (CI runs it)
 def test_cli_holder_too_low_for_the_pocket_exit_2_with_the_region(tmp_path):
     """A 6 mm cutting length and a 2 mm shank put a D30 holder 8 mm above the tip: it cannot reach the
     10 mm deep pocket's floor without the holder hitting the block: the path is not written, the
