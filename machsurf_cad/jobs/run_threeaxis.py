@@ -87,9 +87,9 @@ def _toolpath(st: Staging, say: Say, spec: Mill3Job, cutter, faces, axis, rep: d
     tp, code = res.planned, EXIT_OK
     i = tp.info
     rep["toolpath"] = tp.report()
-    full = res.report()
-    rep["reach"] = full["reach"]
-    if "reachable_fraction" in full:
+    full = res.reach_summary()
+    rep["reach"] = list(res.reach)
+    if full:
         rep["reachable_fraction"], rep["touched_fraction"] = full["reachable_fraction"], full["touched_fraction"]
         away = full["faces_out_of_reach"]
         say(

@@ -111,8 +111,8 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
     pc = check or check_toolpath(
         tp, faces, gouge_tolerance=tolerance, on_gouge=on_gouge(spec), clearance=spec.clearance
     )
-    rep = pc.report()
-    _say_check(say, pc.check, pc.check.report(), tolerance)
+    rep = pc.report()  # the check's report, its verdict and any trimmed recheck
+    _say_check(say, pc.check, rep, tolerance)
     if render:
         _draw_check(st, tp, pc.check, rep, tolerance)
     if pc.toolpath is not None:

@@ -285,11 +285,6 @@ class Mill3Job(_Post, JobSpec):
             raise InputError("nothing to do: give a tool path (the default) or --cl-surface")
         self._check_post()
 
-    @property
-    def stepover_or_default(self) -> float:
-        """The distance between passes, mm (2 when neither it nor ``scallop`` is given)."""
-        return 2.0 if self.stepover is None else float(self.stepover)
-
 
 @renamed_fields(max_memory="max_memory_mb")
 @dataclass(frozen=True)

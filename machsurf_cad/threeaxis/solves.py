@@ -442,18 +442,18 @@ def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
         t = t_new
     # the maximum outside the disc: the best point is on the circle, between the last point inside
     # and the first outside (Newton on rho(t) = R, kept in that bracket)
-    P, rho = _edge_points(fs, eid, t), None
+    P = _edge_points(fs, eid, t)
     g, rho = _edge_g(prof, c, P)
     out = feasible & (rho > R)
     if out.any():
-        t = _onto_circle(fs, prof, c, eid, t, ts, g.size, out)
+        t = _onto_circle(fs, prof, c, eid, t, ts, out)
         P = _edge_points(fs, eid, t)
         g, rho = _edge_g(prof, c, P)
     ok = feasible & (rho <= R * (1 + 1e-12))
     return np.where(ok, g, -np.inf), P
 
 
-def _onto_circle(fs, prof, c, eid, t, ts, m, out, iters: int = 40):
+def _onto_circle(fs, prof, c, eid, t, ts, out, iters: int = 40):
     """For the rows ``out`` (whose maximum ``t`` lies outside the disc), the edge point on the tool's
     circle nearest ``t`` on the side of the disc: Newton on ``rho(t) - R`` safeguarded by the bracket
     between the nearest sample inside the disc and ``t``."""

@@ -13,13 +13,13 @@ from dataclasses import dataclass
 from .. import checks
 from ..cam.toolpath import ToolPath
 from ..errors import InputError
-from ..geometry.face import Face
+from ..gougecheck import _faces
 from ..pathcheck import OnGouge, PathCheck, check_toolpath
 from ..results import Progress, Result
 from ..typing import PartLike, ToolLike, Vector3
 from .paths import raster
 from .reach import reachable_area
-from .select import _as_faces, faces_away, select_faces
+from .select import faces_away, select_faces
 from .zlevel import waterline
 
 
@@ -57,12 +57,15 @@ class Mill3Result(Result):
             "verify": self.check.report(),
             "verdict": self.verdict,
             "reach": list(self.reach),
-            **_reach_summary(self.reach),
+            **self.reach_summary(),
         }
+
+    def reach_summary(self) -> dict:
+        """Area-weighted fractions over the machined faces, and the faces the tool can barely touch (< 5 %)."""
+        return _reach_summary(self.reach)
 
 
 def _reach_summary(reach) -> dict:
-    """Area-weighted fractions over the machined faces, and the faces the tool can barely touch."""
     area = sum(r["area_mm2"] for r in reach)
     if not area:
         return {}
@@ -71,14 +74,6 @@ def _reach_summary(reach) -> dict:
         "touched_fraction": sum(r["touched_mm2"] for r in reach) / area,
         "faces_out_of_reach": [r["face"] for r in reach if r["reachable_fraction"] < 0.05],
     }
-
-
-def _seq(part) -> list:
-    if isinstance(part, (str, bytes)) or not hasattr(part, "__iter__"):
-        if hasattr(part, "poles") or isinstance(part, Face):
-            return [part]
-        raise InputError(f"part must be a sequence of faces, got {type(part).__name__} (read a STEP file with ms.occ)")
-    return list(part)
 
 
 def machined_and_checked(part, faces: str, check_faces: str, axis) -> tuple[list[int], list[int]]:
@@ -152,7 +147,7 @@ def mill3(
     >>> r.verdict, r.toolpath is not None
     ('clean', True)
     """
-    part = _as_faces([p if isinstance(p, Face) else Face(p, name=getattr(p, "name", "") or "") for p in _seq(part)])
+    part = _faces(part, "mill3")
     tool = checks.tool(tool)
     axis = tuple(float(a) for a in axis)
     if pattern not in ("raster", "waterline"):
