@@ -86,7 +86,7 @@ def _print_row(r, header):
         print("-" * 126)
     print(
         f"{r['name']:<46} {r['n']:>9} {r['ours_s']:>11.3f} {r['ref_s']:>12.3f} {r['ref']:<22} "
-        f"{r['ref_s'] / r['ours_s']:>8.1f}x {r['max_diff']:>10.2e}",
+        f"{r.get('cpu_ratio', r['ref_s'] / r['ours_s']):>8.1f}x {r['max_diff']:>10.2e}",
         flush=True,
     )
 

@@ -16,49 +16,78 @@ def _grid(lo, hi, n):
     return np.column_stack([x.ravel(), y.ravel()])
 
 
-def dropcutter_rows(quick=False, deflection=0.001):
+PARTS = [
+    ("example_parts/bezier5_patch.step", "bezier5, 1 face"),
+    ("example_parts/freeform_block.step", "example block, 8 faces"),
+    ("example_parts/mould_insert.step", "mould insert, 51 faces"),
+    ("../shared/real-parts/turbo3d_impeller.step", "turbo3d impeller, 92 faces"),
+]
+CUTTERS = ["ball:D=10", "bull:D=10,r=2", "flat:D=10"]
+
+
+def _timed(fn, *args, **kwargs):
+    """``fn(*args, **kwargs)``, its process CPU time (all threads) and wall time (s)."""
+    c, w = time.process_time(), time.perf_counter()
+    out = fn(*args, **kwargs)
+    return out, time.process_time() - c, time.perf_counter() - w
+
+
+def dropcutter_rows(quick=False, deflection=0.001, sizes=None, ocl_max_points=4000, parts=None, cutters=None):
+    """Per part x cutter x grid: machsurf's compiled engine (CPU, wall), its numpy engine on the smaller grid,
+    OpenCAMLib's BatchDropCutter on an OCCT mesh of the same STEP (CPU with its threads, wall; the mesh's
+    time apart), the CPU ratio and the largest height difference. OpenCAMLib runs on grids of at most
+    ``ocl_max_points`` points (its CPU time on bigger grids is scaled from the 61x61 grid's, marked)."""
     import machsurf_cad as ms
     from machsurf_cad.occ import read_step_faces, triangulate_step
     from machsurf_cad.threeaxis.reference import has_opencamlib, ocl_drop_cutter
 
     rows = []
-    cutter = ms.BullNoseEndMill(10, 2)
-    cases = [("bezier5_patch.step", "1 free-form face"), ("mould_insert.step", "mould insert, 51 faces")]
-    sizes = [31, 61] if quick else [61, 200]
-    for fname, label in cases:
-        path = ROOT / "example_parts" / fname
+    sizes = sizes or ([31] if quick else [61, 200])
+    for fname, label in parts or (PARTS[:1] + PARTS[2:3] if quick else PARTS):
+        path = (ROOT / fname).resolve()
+        if not path.exists():
+            continue
         faces = read_step_faces(path)
-        t = time.perf_counter()
-        P, T = triangulate_step(path, linear_deflection=deflection, angular_deflection=2.0)
-        t_mesh = time.perf_counter() - t
-        lo, hi = P.min(axis=0)[:2], P.max(axis=0)[:2]
-        for n in sizes:
-            xy = _grid(lo, hi, n)
-            t = time.perf_counter()
-            ours = ms.drop_cutter(faces, cutter, xy).height
-            t_ours = time.perf_counter() - t
-            if has_opencamlib():
-                t = time.perf_counter()
-                ref = ocl_drop_cutter(P, T, cutter, xy)
-                t_ref = time.perf_counter() - t
-                diff = float(np.nanmax(np.abs(ours - ref)))
-                name = f"OpenCAMLib {len(T) // 1000}k tri"
-            else:
-                t_ref, diff, name = float("nan"), float("nan"), "OpenCAMLib missing"
-            rows.append(
-                {
-                    "name": f"drop-cutter bull D10 r2, {label}",
+        (P, T), _, t_mesh = _timed(triangulate_step, path, linear_deflection=deflection, angular_deflection=2.0)
+        for spec in cutters or CUTTERS:
+            cutter = ms.parse_cutter(spec)
+            fs = ms.threeaxis.faceset.face_set(faces, spacing=ms.threeaxis.dropcutter.default_seed_spacing(cutter))
+            ms.drop_cutter(None, cutter, fs.sample_xyz[:2, :2], face_set=fs)  # the kernel loaded once
+            lo, hi = fs.sample_xyz.min(axis=0)[:2], fs.sample_xyz.max(axis=0)[:2]
+            ocl_per_point = None
+            for n in sizes:
+                xy = _grid(lo, hi, n)
+                res, c_ours, w_ours = _timed(ms.drop_cutter, None, cutter, xy, face_set=fs)
+                ours = res.height
+                row = {
+                    "name": f"drop-cutter {spec}, {label}",
                     "n": int(xy.shape[0]),
-                    "ours_s": t_ours,
-                    "ref_s": t_ref,
-                    "ref": name,
-                    "max_diff": diff,
+                    "ours_s": w_ours,
+                    "ours_cpu_s": c_ours,
+                    "points_per_s": xy.shape[0] / w_ours,
                     "mesh_s": t_mesh,
                     "mesh_deflection_mm": deflection,
                 }
-            )
+                if n == sizes[0]:
+                    _, c_np, w_np = _timed(ms.drop_cutter, None, cutter, xy, face_set=fs, engine="numpy")
+                    row["numpy_cpu_s"] = c_np
+                if has_opencamlib() and xy.shape[0] <= ocl_max_points:
+                    ref, c_ref, w_ref = _timed(ocl_drop_cutter, P, T, cutter, xy)
+                    ocl_per_point = c_ref / xy.shape[0]
+                    row.update(ref=f"OpenCAMLib {len(T) // 1000}k tri", ref_s=w_ref, ref_cpu_s=c_ref,
+                               max_diff=float(np.nanmax(np.abs(ours - ref))))  # fmt: skip
+                elif ocl_per_point is not None:
+                    row.update(ref="OpenCAMLib (scaled)*", ref_s=float("nan"), ref_cpu_s=ocl_per_point * xy.shape[0],
+                               max_diff=float("nan"))  # fmt: skip
+                else:
+                    row.update(
+                        ref="OpenCAMLib missing", ref_s=float("nan"), ref_cpu_s=float("nan"), max_diff=float("nan")
+                    )
+                row["cpu_ratio"] = row["ref_cpu_s"] / c_ours
+                rows.append(row)
     path = ROOT / "example_parts" / "mould_insert.step"
     faces = read_step_faces(path)
+    cutter = ms.BullNoseEndMill(10, 2)
     top = ms.top_faces(faces)
     rest = [f for i, f in enumerate(faces) if i not in top]
     t = time.perf_counter()
@@ -70,7 +99,7 @@ def dropcutter_rows(quick=False, deflection=0.001):
     t_verify = time.perf_counter() - t
     rows.append(
         {
-            "name": f"raster path + links, 51 faces, {tp.n_cut} pos",
+            "name": f"raster bull D10 r2 + links, 51 faces, {tp.n_cut} pos; raster + verify {t_path + t_verify:.1f} s",
             "n": int(tp.n_cut),
             "ours_s": t_path,
             "ref_s": t_verify,
@@ -79,3 +108,11 @@ def dropcutter_rows(quick=False, deflection=0.001):
         }
     )
     return rows
+
+
+if __name__ == "__main__":  # python -m benchmarks.bench_dropcutter [--quick]
+    import json
+    import sys
+
+    for r in dropcutter_rows(quick="--quick" in sys.argv):
+        print(json.dumps({k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()}), flush=True)

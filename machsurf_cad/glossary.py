@@ -34,6 +34,9 @@ RasterPattern = Literal["raster", "waterline"]
 """3-axis tool-path pattern (:class:`machsurf_cad.Pattern` is the enum)."""
 RasterDirection = Literal["zigzag", "one-way"]
 """Order of raster lines (:class:`machsurf_cad.Direction` is the enum)."""
+DropEngine = Literal["auto", "compiled", "numpy"]
+"""How the drop-cutter runs: the compiled kernel (numba), the numpy reference, or the kernel where numba is
+installed and the faces' degrees are at most 7 (``auto``). Both give the same heights."""
 
 
 class Term(NamedTuple):
@@ -185,6 +188,7 @@ TERMS: dict[str, Term] = {
     "triangles": Term("", "a mesh's triangles"),
     "max_memory_mb": Term("MB", "memory budget: bigger work is refused"),
     "batch_size": Term("", "queries per vectorised batch (bounds memory)"),
+    "engine": Term("", "the drop-cutter's engine: compiled kernel or numpy reference (DropEngine)"),
     "chunks": Term("", "split the work into this many chunks"),
     "map_chunks": Term("", "a map function for the chunks (Dask)"),
     "out": Term("", "output folder"),

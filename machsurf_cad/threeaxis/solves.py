@@ -426,20 +426,24 @@ def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
     lo = ts[np.arange(m), np.maximum(k - 1, 0)]
     hi = ts[np.arange(m), np.minimum(k + 1, n - 1)]
     t = ts[np.arange(m), k]
-    # safeguarded Newton on g' = 0 inside [lo, hi] (an ascent: g' > 0 moves right)
+    # safeguarded Newton on g' = 0 inside [lo, hi] (an ascent: g' > 0 moves right); each row stops when its
+    # step vanishes, so a row's answer does not depend on the others
+    act = np.arange(m)
     for _ in range(iters):
-        Pk, P1, P2 = _edge_derivs(fs, eid, t, 2)
-        _, rk, g1, r1, g2 = _edge_g(prof, c, Pk, P1, P2)
-        lo = np.where(g1 > 0, t, lo)
-        hi = np.where(g1 < 0, t, hi)
-        newton = t - g1 / np.where(g2 < 0, g2, -np.inf)  # only where g is concave: a maximum ahead
-        step_ok = (g2 < 0) & (newton > lo) & (newton < hi)
-        t_new = np.where(step_ok, newton, 0.5 * (lo + hi))
-        t_new = np.where(g1 == 0, t, t_new)
-        if np.all(np.abs(t_new - t) <= 1e-15 * np.maximum(np.abs(t), 1.0)):
-            t = t_new
+        if act.size == 0:
             break
-        t = t_new
+        ta, la, ha = t[act], lo[act], hi[act]
+        Pk, P1, P2 = _edge_derivs(fs, eid[act], ta, 2)
+        _, rk, g1, r1, g2 = _edge_g(prof, c[act], Pk, P1, P2)
+        la = np.where(g1 > 0, ta, la)
+        ha = np.where(g1 < 0, ta, ha)
+        newton = ta - g1 / np.where(g2 < 0, g2, -np.inf)  # only where g is concave: a maximum ahead
+        step_ok = (g2 < 0) & (newton > la) & (newton < ha)
+        t_new = np.where(step_ok, newton, 0.5 * (la + ha))
+        t_new = np.where(g1 == 0, ta, t_new)
+        conv = np.abs(t_new - ta) <= 1e-15 * np.maximum(np.abs(ta), 1.0)
+        t[act], lo[act], hi[act] = t_new, la, ha
+        act = act[~conv]
     # the maximum outside the disc: the best point is on the circle, between the last point inside
     # and the first outside (Newton on rho(t) = R, kept in that bracket)
     P = _edge_points(fs, eid, t)
@@ -467,18 +471,23 @@ def _onto_circle(fs, prof, c, eid, t, ts, out, iters: int = 40):
     t_in = ts[idx, np.argmin(dist, axis=1)]
     t_out = t[idx].copy()
     x = 0.5 * (t_in + t_out)
+    act = np.arange(idx.size)  # rows still moving (each stops on its own)
     for _ in range(iters):
-        P, P1 = _edge_derivs(fs, eid[idx], x, 1)
-        _, rho, _, r1 = _edge_g(prof, c[idx], P, P1)
-        f = rho - R
-        t_in = np.where(f <= 0, x, t_in)
-        t_out = np.where(f > 0, x, t_out)
-        newton = x - f / np.where(r1 != 0, r1, np.inf)
-        lo, hi = np.minimum(t_in, t_out), np.maximum(t_in, t_out)
-        x_new = np.where((newton > lo) & (newton < hi), newton, 0.5 * (t_in + t_out))
-        if np.all(np.abs(x_new - x) <= 1e-15 * np.maximum(np.abs(x), 1.0)):
+        if act.size == 0:
             break
-        x = x_new
+        xa, ti, to = x[act], t_in[act], t_out[act]
+        P, P1 = _edge_derivs(fs, eid[idx[act]], xa, 1)
+        _, rho, _, r1 = _edge_g(prof, c[idx[act]], P, P1)
+        f = rho - R  # inside: within the disc as the edge search accepts it (rho <= R (1 + 1e-12))
+        ti = np.where(f <= 1e-12 * R, xa, ti)
+        to = np.where(f > 1e-12 * R, xa, to)
+        newton = xa - f / np.where(r1 != 0, r1, np.inf)
+        lo, hi = np.minimum(ti, to), np.maximum(ti, to)
+        x_new = np.where((newton > lo) & (newton < hi), newton, 0.5 * (ti + to))
+        conv = np.abs(x_new - xa) <= 1e-15 * np.maximum(np.abs(xa), 1.0)
+        t_in[act], t_out[act] = ti, to
+        x[act] = np.where(conv, xa, x_new)
+        act = act[~conv]
     t = t.copy()
     t[idx] = t_in  # the last parameter inside the disc (within the bracket's width of the circle)
     return t

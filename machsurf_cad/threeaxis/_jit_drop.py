@@ -1,0 +1,312 @@
+"""Compiled (numba) drop-cutter query: the branch and bound of :func:`.dropcutter._drop_chunk` for one
+query point at a time, in parallel over the points.
+
+The seeds, groups, bounds and phases are those of the numpy path (see its docstring): per query, the pool
+samples within ``R + spacing`` of the axis (a plan grid instead of the k-d tree), the best sample as a lower
+bound, per (face, sector) group the best face seed, rim seeds and per (edge, sector, inside) the edge seeds;
+phase 1 solves the best face and rim seed, phase 2 every seed whose group bound still reaches the best
+height found, then up to four rounds of further face seeds and the circles where the profile's slope jumps.
+The local solves are the scalar forms in :mod:`._jit_solve`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from ._jit_geom import hyp, inside, isfin, norm3, prof, prof_floor, surf
+from ._jit_solve import edge_search, face_newton, into_disc, rim_ascent, tip_solve
+
+FACE, RIM, EDGE, TIP, SAMPLE = 1, 2, 3, 4, 5
+
+KERNEL_SOURCES = "3ca91cd210a2ba16"
+""":func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
+cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
+
+
+@njit(cache=True)
+def _add(best, bp, g, kind, f, x, y, z):
+    """Keep the highest value (a bare sample ranks 1e-12 relative below a solved contact of equal value)."""
+    if not isfin(g):
+        return
+    rank = g - (1e-12 * (1 + abs(g)) if kind == SAMPLE else 0.0)
+    if best[4] == 0.0 or rank > best[0]:
+        best[0], best[1], best[2], best[3], best[4] = rank, g, kind, f, 1.0
+        bp[0], bp[1], bp[2] = x, y, z
+
+
+@njit(cache=True)
+def _solve(kind, j, cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk):
+    """One local solve of ``kind`` (FACE, RIM, EDGE) from pool sample ``j``; the candidate into ``best``."""
+    pf, puv = SM[1], SM[2]
+    R, sp = K[0], K[1]
+    f = pf[j]
+    u0, v0 = puv[j, 0], puv[j, 1]
+    D = W[0]
+    if kind == FACE:
+        surf(S, f, u0, v0, 0, D, W[5])
+        if hyp(D[0, 0] - cx, D[0, 1] - cy) > R * (1 - 1e-3):
+            u0, v0 = into_disc(S, sp, R, cx, cy, f, u0, v0, W)
+        u, v, g = face_newton(S, PR, sp, cx, cy, f, u0, v0, W)
+        if isfin(g) and inside(S, T, f, u, v):
+            _add(best, bp, g, FACE, f, D[0, 0], D[0, 1], D[0, 2])
+        if K[4] > 0:
+            u, v, ok = tip_solve(S, cx, cy, f, u0, v0, W)
+            g = D[0, 2] - K[7]
+            if ok and inside(S, T, f, u, v):
+                _add(best, bp, g, TIP, f, D[0, 0], D[0, 1], D[0, 2])
+    elif kind == RIM:
+        u, v, g = rim_ascent(S, sp, rk, hk, cx, cy, f, u0, v0, W)
+        if isfin(g) and inside(S, T, f, u, v):
+            _add(best, bp, g, RIM, f, D[0, 0], D[0, 1], D[0, 2])
+    else:
+        k = j - SM[3]
+        g = edge_search(S, E, PR, cx, cy, SM[4][k], SM[5][k], SM[6][k], W)
+        Ed = W[3]
+        _add(best, bp, g, EDGE, f, Ed[0, 0], Ed[0, 1], Ed[0, 2])
+
+
+@njit(cache=True)
+def _gather(cx, cy, rq, xyz, G):
+    """Pool samples within ``rq`` of ``(cx, cy)`` in plan (the grid's cells around it): indices and distances."""
+    meta, dims, start, items = G
+    x0, y0, cs = meta[0], meta[1], meta[2]
+    nx, ny = dims[0], dims[1]
+    i0 = max(int(math.floor((cx - rq - x0) / cs)), 0)
+    i1 = min(int(math.floor((cx + rq - x0) / cs)), nx - 1)
+    j0 = max(int(math.floor((cy - rq - y0) / cs)), 0)
+    j1 = min(int(math.floor((cy + rq - y0) / cs)), ny - 1)
+    count = 0
+    for i in range(i0, i1 + 1):
+        count += start[i * ny + j1 + 1] - start[i * ny + j0] if j1 >= j0 else 0
+    idx = np.empty(max(count, 0), np.int64)
+    rr = np.empty(max(count, 0))
+    m = 0
+    for i in range(i0, i1 + 1):
+        for k in range(start[i * ny + j0], start[i * ny + j1 + 1] if j1 >= j0 else start[i * ny + j0]):
+            jj = items[k]
+            dx, dy = xyz[jj, 0] - cx, xyz[jj, 1] - cy
+            rho = math.sqrt(dx * dx + dy * dy)
+            if rho <= rq:
+                idx[m] = jj
+                rr[m] = rho
+                m += 1
+    return idx[:m], rr[:m]
+
+
+@njit(cache=True)
+def _group_best(n_groups, key, score, sel, idx):
+    """Per group the candidate of highest ``score`` among ``sel`` (on ties the smallest pool index ``idx``, as
+    the numpy path's ``_best_per``); -1 where none."""
+    out = np.full(n_groups, -1, np.int64)
+    for k in range(key.shape[0]):
+        if sel[k]:
+            g = key[k]
+            o = out[g]
+            if o < 0 or score[k] > score[o] or (score[k] == score[o] and idx[k] < idx[o]):
+                out[g] = k
+    return out
+
+
+@njit(cache=True)
+def _group_max(n_groups, key, x, sel):
+    out = np.full(n_groups, -math.inf)
+    for k in range(key.shape[0]):
+        if sel[k] and x[k] > out[key[k]]:
+            out[key[k]] = x[k]
+    return out
+
+
+@njit(cache=True)
+def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
+    """The tip height at one query point: ``best`` = (rank, height, kind, face, found), ``bp`` the contact."""
+    xyz, pf, n_int = SM[0], SM[1], SM[3]
+    cov, rise, tilt, ecov = SM[7], SM[8], SM[9], SM[10]
+    R, sp, max_tilt, h_R = K[0], K[1], K[2], K[3]
+    nF, nE = int(K[5]), int(K[6])
+    W = (np.empty((6, 3)), np.empty((6, 3)), np.empty((6, 3)), np.empty((9, 3)), np.empty((3, 3)), np.empty(480))
+    best[4] = 0.0
+    idx, rr = _gather(cx, cy, R + sp, xyz, G)
+    m = idx.shape[0]
+    if m == 0:
+        return
+    fmap = np.full(nF, -1, np.int64)
+    emap = np.full(nE, -1, np.int64)
+    nl = ne = 0
+    val = np.empty(m)
+    zz = np.empty(m)
+    negr = np.empty(m)
+    ub = np.empty(m)
+    rim_ub = np.empty(m)
+    e_ub = np.full(m, -math.inf)
+    feas = np.empty(m, np.bool_)
+    is_e = np.empty(m, np.bool_)
+    gk = np.empty(m, np.int64)
+    ek = np.zeros(m, np.int64)
+    for k in range(m):
+        j = idx[k]
+        rho = rr[k]
+        z = xyz[j, 2]
+        zz[k], negr[k] = z, -rho
+        val[k] = z - prof(PR, min(rho, R))[0]
+        feas[k] = rho <= R
+        dx, dy = xyz[j, 0] - cx, xyz[j, 1] - cy
+        sector = 0
+        if not (rho < 0.5 * R):
+            sector = 1 + min(max(int((math.atan2(dy, dx) + math.pi) // (math.pi / 2)), 0), 3)
+        f = pf[j]
+        if fmap[f] < 0:
+            fmap[f] = nl
+            nl += 1
+        gk[k] = fmap[f] * 5 + sector
+        reach = rho - cov[j]
+        ub[k] = z + rise[j] - prof_floor(PR, reach) if reach <= R else -math.inf
+        rim_ub[k] = z + rise[j] - h_R if abs(rho - R) <= cov[j] else -math.inf
+        is_e[k] = j >= n_int
+        if is_e[k]:
+            e = SM[4][j - n_int]
+            if emap[e] < 0:
+                emap[e] = ne
+                ne += 1
+            ek[k] = (emap[e] * 5 + sector) * 2 + (1 if feas[k] else 0)
+            ec = ecov[j - n_int]
+            if rho - ec <= R:
+                e_ub[k] = z + ec - prof_floor(PR, rho - ec)
+    ng = nl * 5
+    # the best sample inside the disc: a lower bound
+    b0 = _group_best(1, np.zeros(m, np.int64), val, feas, idx)[0]
+    if b0 >= 0:
+        j = idx[b0]
+        _add(best, bp, val[b0], SAMPLE, pf[j], xyz[j, 0], xyz[j, 1], xyz[j, 2])
+    # face seeds per group: the best sample inside the disc, an edge sample where the face has none, else
+    # the sample nearest the disc within its cover radius outside it
+    seed = _group_best(ng, gk, val, feas & ~is_e, idx)
+    s2 = _group_best(ng, gk, val, feas & is_e, idx)
+    outside = np.empty(m, np.bool_)
+    for k in range(m):
+        outside[k] = (not feas[k]) and (rr[k] - cov[idx[k]] <= R)
+    s3 = _group_best(ng, gk, negr, outside, idx)
+    is_seed = np.zeros(m, np.bool_)
+    for g in range(ng):
+        s = seed[g] if seed[g] >= 0 else (s2[g] if s2[g] >= 0 else s3[g])
+        if s >= 0 and tilt[idx[s]] <= max_tilt + 1e-9:
+            is_seed[s] = True
+    near = np.empty(m, np.bool_)
+    outr = np.empty(m, np.bool_)
+    for k in range(m):
+        near[k] = feas[k] and rr[k] >= R - cov[idx[k]]
+        outr[k] = (not feas[k]) and rr[k] <= R + cov[idx[k]]
+    rseed = np.zeros(m, np.bool_)
+    for s in _group_best(ng, gk, zz, near, idx):
+        if s >= 0:
+            rseed[s] = True
+    for s in _group_best(ng, gk, negr, outr, idx):
+        if s >= 0:
+            rseed[s] = True
+    n_eg = ne * 10
+    eseed = np.zeros(m, np.bool_)
+    for s in _group_best(n_eg, ek, val, is_e & feas, idx):
+        if s >= 0:
+            eseed[s] = True
+    for s in _group_best(n_eg, ek, negr, is_e & ~feas, idx):
+        if s >= 0:
+            eseed[s] = True
+    fb = _group_max(ng, gk, ub, np.ones(m, np.bool_))
+    rb = _group_max(ng, gk, rim_ub, np.ones(m, np.bool_))
+    eb = _group_max(n_eg, ek, e_ub, is_e)
+    # phase 1: the best face seed and the highest rim seed
+    f1 = _group_best(1, np.zeros(m, np.int64), val, is_seed, idx)[0]
+    r1 = _group_best(1, np.zeros(m, np.int64), zz, rseed, idx)[0]
+    if f1 >= 0:
+        _solve(FACE, idx[f1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
+    if r1 >= 0:
+        _solve(RIM, idx[r1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
+    low = best[1] - 1e-9 if best[4] > 0 else -math.inf
+    solved = best[4] > 0 and best[2] == FACE
+    c_face = best[3]
+    p1x, p1y, p1z = bp[0], bp[1], bp[2]
+    # phase 2: every seed whose group bound reaches the best height found, highest bound first (a seed
+    # whose bound falls below a height found meanwhile cannot raise it: skipped)
+    tk = np.empty(3 * m, np.int64)
+    tb = np.empty(3 * m)
+    nt = 0
+    for k in range(m):
+        if is_seed[k] and k != f1 and fb[gk[k]] >= low:
+            j = idx[k]
+            own = solved and pf[j] == c_face
+            own = own and norm3(xyz[j, 0] - p1x, xyz[j, 1] - p1y, xyz[j, 2] - p1z) <= 2 * cov[j]
+            if not own:
+                tk[nt], tb[nt] = k, fb[gk[k]]
+                nt += 1
+        if rseed[k] and k != r1 and rb[gk[k]] >= low:
+            tk[nt], tb[nt] = m + k, rb[gk[k]]
+            nt += 1
+        if eseed[k] and eb[ek[k]] >= low:
+            tk[nt], tb[nt] = 2 * m + k, eb[ek[k]]
+            nt += 1
+    for i in np.argsort(-tb[:nt], kind="mergesort"):
+        if tb[i] < best[1] - 1e-9:
+            break
+        kind, k = FACE + tk[i] // m, tk[i] % m
+        _solve(kind, idx[k], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
+    low = _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, is_seed, feas, is_e, ub, gk, ng)
+    for kk in range(kinks.shape[0]):
+        rk, hk = kinks[kk, 0], kinks[kk, 1]
+        near_k = np.empty(m, np.bool_)
+        for k in range(m):
+            j = idx[k]
+            near_k[k] = abs(rr[k] - rk) <= cov[j] and zz[k] + rise[j] - hk >= low
+        for s in _group_best(ng, gk, zz, near_k, idx):
+            if s >= 0:
+                _solve(RIM, idx[s], cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk)
+
+
+@njit(cache=True)
+def _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, tried0, feas, is_e, ub, gk, ng):
+    """``_more_face_rounds``: the untried sample of highest bound per group, away from the best contact,
+    while a bound beats the best height; returns the best height before the last round."""
+    xyz, pf, cov, tilt = SM[0], SM[1], SM[7], SM[9]
+    m = idx.shape[0]
+    tried = tried0.copy()
+    low = -math.inf
+    for _ in range(4):
+        low = best[1] if best[4] > 0 else -math.inf
+        sel = np.zeros(m, np.bool_)
+        any_ = False
+        for k in range(m):
+            j = idx[k]
+            if tried[k] or is_e[k] or not feas[k] or tilt[j] > K[2] + 1e-9 or not (ub[k] > low + 1e-7):
+                continue
+            far = best[4] == 0 or best[2] != FACE or pf[j] != best[3]
+            far = far or norm3(xyz[j, 0] - bp[0], xyz[j, 1] - bp[1], xyz[j, 2] - bp[2]) > cov[j]
+            if far:
+                sel[k] = True
+                any_ = True
+        if not any_:
+            break
+        for s in _group_best(ng, gk, ub, sel, idx):
+            if s >= 0:
+                tried[s] = True
+                _solve(FACE, idx[s], cx, cy, S, E, T, PR, SM, K, W, best, bp, K[0], K[3])
+    return low
+
+
+@njit(cache=True, parallel=True)
+def drop_batch(C, S, E, T, PR, SM, G, K, kinks, height, kind, face, point):
+    """Heights of the query points ``C`` (n, 2) into the output arrays, in parallel."""
+    for q in prange(C.shape[0]):
+        best = np.zeros(5)
+        bp = np.zeros(3)
+        _query(C[q, 0], C[q, 1], S, E, T, PR, SM, G, K, kinks, best, bp)
+        if best[4] > 0:
+            height[q] = best[1]
+            kind[q] = int(best[2])
+            face[q] = int(best[3])
+            point[q, 0], point[q, 1], point[q, 2] = bp[0], bp[1], bp[2]
+        else:
+            height[q] = math.nan
+            kind[q] = 0
+            face[q] = -1
+            point[q, 0] = point[q, 1] = point[q, 2] = math.nan

@@ -1,0 +1,381 @@
+"""Compiled (numba) local solves of the drop-cutter, one seed at a time: the face-interior ascent, the
+ascent along a circle (the rim, or a circle where the profile's slope jumps), the search along a trimming
+edge and the point below a pointed tip. Each is the scalar form of its numpy namesake in :mod:`.solves`
+(same steps, safeguards and stopping rules), so the two paths agree to rounding.
+
+``W = (D, Dn, Dm, Ed, cu, wk)`` is per-query scratch: three (6, 3) derivative tables, a (9, 3) edge table,
+a (3, 3) curve table and 480 floats.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from ._jit_geom import clamp_uv, edge_derivs, hyp, isfin, nmax, nmin, norm3, nsign, prof, surf
+
+
+@njit(cache=True)
+def g_derivs(PR, cx, cy, D, order):
+    """``g = S_z - h(|S_xy - c|)`` with its (u, v) gradient and (order 2) Hessian (``_g_and_derivs``)."""
+    dx, dy = D[0, 0] - cx, D[0, 1] - cy
+    rho = hyp(dx, dy)
+    h, h1, h2 = prof(PR, rho)
+    g = D[0, 2] - h
+    small = rho < 1e-9
+    rs = 1.0 if small else rho
+    B = h2 if small else h1 / rs
+    A = 0.0 if small else (h2 - B) / rs**2
+    gdx, gdy = B * dx, B * dy
+    gu = D[1, 2] - (gdx * D[1, 0] + gdy * D[1, 1])
+    gv = D[2, 2] - (gdx * D[2, 0] + gdy * D[2, 1])
+    if order < 2:
+        return g, gu, gv, 0.0, 0.0, 0.0
+    du = dx * D[1, 0] + dy * D[1, 1]
+    dv = dx * D[2, 0] + dy * D[2, 1]
+    xuu = D[1, 0] * D[1, 0] + D[1, 1] * D[1, 1]
+    xuv = D[1, 0] * D[2, 0] + D[1, 1] * D[2, 1]
+    xvv = D[2, 0] * D[2, 0] + D[2, 1] * D[2, 1]
+    Huu = D[3, 2] - (A * du * du + B * xuu) - (gdx * D[3, 0] + gdy * D[3, 1])
+    Huv = D[4, 2] - (A * du * dv + B * xuv) - (gdx * D[4, 0] + gdy * D[4, 1])
+    Hvv = D[5, 2] - (A * dv * dv + B * xvv) - (gdx * D[5, 0] + gdy * D[5, 1])
+    return g, gu, gv, Huu, Huv, Hvv
+
+
+@njit(cache=True)
+def _tan_len(D, a, b):
+    return norm3(D[1, 0] * a + D[2, 0] * b, D[1, 1] * a + D[2, 1] * b, D[1, 2] * a + D[2, 2] * b)
+
+
+@njit(cache=True)
+def _off_poles(S, PR, cx, cy, f, u, v, W):
+    """``_off_poles`` on one start: at a pole, the best of 16 starts just off it."""
+    D, wk = W[0], W[5]
+    surf(S, f, u, v, 1, D, wk)
+    E = D[1, 0] ** 2 + D[1, 1] ** 2 + D[1, 2] ** 2
+    G = D[2, 0] ** 2 + D[2, 1] ** 2 + D[2, 2] ** 2
+    if not (min(E, G) <= 1e-14 * max(E, G)):
+        return u, v
+    ff = S[1]
+    b0, b1, b2, b3 = ff[f, 8], ff[f, 9], ff[f, 10], ff[f, 11]
+    along_v = G <= E
+    off_u = u + 1e-4 * (b1 - b0) * nsign(0.5 * (b0 + b1) - u)
+    off_v = v + 1e-4 * (b3 - b2) * nsign(0.5 * (b2 + b3) - v)
+    best, bu, bv = -math.inf, u, v
+    first = True
+    for k in range(16):
+        kk = (k + 0.5) / 16
+        cu = off_u if along_v else b0 + kk * (b1 - b0)
+        cv = b2 + kk * (b3 - b2) if along_v else off_v
+        surf(S, f, cu, cv, 0, D, wk)
+        g = D[0, 2] - prof(PR, hyp(D[0, 0] - cx, D[0, 1] - cy))[0]
+        if not isfin(g):
+            g = -math.inf
+        if first or g > best:
+            best, bu, bv, first = g, cu, cv, False
+    return bu, bv
+
+
+@njit(cache=True)
+def _up_curvature(Huu, Huv, Hvv, D, radius):
+    disc = math.sqrt(max(0.25 * (Huu - Hvv) ** 2 + Huv * Huv, 0.0))
+    lam = 0.5 * (Huu + Hvv) + disc
+    if abs(Huv) > 1e-300:
+        eu, ev = Huv, lam - Huu
+    else:
+        eu, ev = (1.0, 0.0) if Huu >= Hvv else (0.0, 1.0)
+    k = radius / nmax(_tan_len(D, eu, ev), 1e-300)
+    eu, ev = eu * k, ev * k
+    quad = 0.5 * (Huu * eu * eu + 2 * Huv * eu * ev + Hvv * ev * ev)
+    return eu, ev, quad if isfin(quad) else 0.0
+
+
+@njit(cache=True)
+def _copy(dst, src):
+    for i in range(6):
+        for d in range(3):
+            dst[i, d] = src[i, d]
+
+
+@njit(cache=True)
+def face_newton(S, PR, sp, cx, cy, f, u, v, W, iters=40):
+    """``_face_newton`` on one start: returns ``u, v, g`` with the point in ``W[0][0]``."""
+    D, Dn, Dm, wk = W[0], W[1], W[2], W[5]
+    u, v = _off_poles(S, PR, cx, cy, f, u, v, W)
+    surf(S, f, u, v, 2, D, wk)
+    g, gu, gv, Huu, Huv, Hvv = g_derivs(PR, cx, cy, D, 2)
+    radius = 0.5 * sp
+    if not isfin(g):
+        return u, v, g
+    for _ in range(iters):
+        a, b, d_ = -Huu, -Huv, -Hvv
+        det = a * d_ - b * b
+        newton = (a > 0) and (det > 1e-14 * (a * a + d_ * d_ + b * b))
+        du = dv = 0.0
+        if newton:
+            du = (d_ * gu - b * gv) / det
+            dv = (-b * gu + a * gv) / det
+        E = D[1, 0] ** 2 + D[1, 1] ** 2 + D[1, 2] ** 2
+        F = D[1, 0] * D[2, 0] + D[1, 1] * D[2, 1] + D[1, 2] * D[2, 2]
+        G = D[2, 0] ** 2 + D[2, 1] ** 2 + D[2, 2] ** 2
+        dg = E * G - F * F
+        regular = (dg > 1e-10 * E * G) and (min(E, G) > 1e-14 * max(E, G))
+        if regular:
+            au, av = (G * gu - F * gv) / dg, (-F * gu + E * gv) / dg
+        else:
+            au, av = gu, gv
+        k = radius / nmax(_tan_len(D, au, av), 1e-300)
+        if not newton:
+            du, dv = au * k, av * k
+        eu, ev, quad = _up_curvature(Huu, Huv, Hvv, D, radius)
+        lin = abs(gu * au + gv * av) * k
+        escape = (not newton) and (quad > lin)
+        if escape:
+            du, dv = eu, ev
+        shrink = nmin(1.0, radius / nmax(_tan_len(D, du, dv), 1e-300))
+        nu, nv = clamp_uv(S, f, u + du * shrink, v + dv * shrink)
+        surf(S, f, nu, nv, 2, Dn, wk)
+        gn, gun, gvn, Hun, Hwn, Hvn = g_derivs(PR, cx, cy, Dn, 2)
+        if escape:  # the other side
+            mu, mv = clamp_uv(S, f, u - du * shrink, v - dv * shrink)
+            surf(S, f, mu, mv, 2, Dm, wk)
+            gm, gum, gvm, Hum, Hwm, Hvm = g_derivs(PR, cx, cy, Dm, 2)
+            gm_, gn_ = (-math.inf if gm != gm else gm), (-math.inf if gn != gn else gn)
+            if gm_ > gn_:
+                nu, nv, gn, gun, gvn, Hun, Hwn, Hvn = mu, mv, gm, gum, gvm, Hum, Hwm, Hvm
+                _copy(Dn, Dm)
+        moved = norm3(Dn[0, 0] - D[0, 0], Dn[0, 1] - D[0, 1], Dn[0, 2] - D[0, 2])
+        rises = isfin(gn) and gn >= g - 1e-13 * (1 + abs(g))
+        ok = rises and moved > 0
+        if ok:
+            u, v, g, gu, gv, Huu, Huv, Hvv = nu, nv, gn, gun, gvn, Hun, Hwn, Hvn
+            _copy(D, Dn)
+            radius = nmax(radius, 2 * moved)
+        else:
+            radius = 0.25 * radius
+        if (ok and moved < 1e-11) or (rises and newton and moved == 0) or (not ok and radius < 1e-12):
+            break
+    return u, v, g
+
+
+@njit(cache=True)
+def project_circle(S, sp, R, cx, cy, f, u, v, n, W):
+    """``_project_circle``: minimum-norm Newton steps onto ``rho = R``."""
+    D, wk = W[0], W[5]
+    for _ in range(n):
+        surf(S, f, u, v, 1, D, wk)
+        dx, dy = D[0, 0] - cx, D[0, 1] - cy
+        rho = hyp(dx, dy)
+        ru = (dx * D[1, 0] + dy * D[1, 1]) / nmax(rho, 1e-300)
+        rv = (dx * D[2, 0] + dy * D[2, 1]) / nmax(rho, 1e-300)
+        n2 = ru * ru + rv * rv
+        t = (R - rho) / n2 if n2 > 1e-300 else 0.0
+        shrink = nmin(1.0, sp / nmax(_tan_len(D, t * ru, t * rv), 1e-300))
+        if not isfin(shrink):
+            shrink = 0.0
+        u, v = clamp_uv(S, f, u + t * ru * shrink, v + t * rv * shrink)
+    return u, v
+
+
+@njit(cache=True)
+def into_disc(S, sp, R, cx, cy, f, u, v, W, iters=16):
+    """``_into_disc``: onto a circle just inside the rim, else towards the face's point nearest the axis."""
+    D, wk = W[0], W[5]
+    target = R * (1 - 1e-3)
+    u, v = project_circle(S, sp, target, cx, cy, f, u, v, 6, W)
+    for _ in range(iters):
+        surf(S, f, u, v, 1, D, wk)
+        dx, dy = D[0, 0] - cx, D[0, 1] - cy
+        rho = hyp(dx, dy)
+        if not (rho > target):
+            break
+        a = D[1, 0] ** 2 + D[1, 1] ** 2
+        b = D[1, 0] * D[2, 0] + D[1, 1] * D[2, 1]
+        e = D[2, 0] ** 2 + D[2, 1] ** 2
+        gu = dx * D[1, 0] + dy * D[1, 1]
+        gv = dx * D[2, 0] + dy * D[2, 1]
+        lm = 1e-9 * (a + e) + 1e-300
+        det = (a + lm) * (e + lm) - b * b
+        du = -((e + lm) * gu - b * gv) / det
+        dv = -(-b * gu + (a + lm) * gv) / det
+        k = nmin(1.0, sp / nmax(_tan_len(D, du, dv), 1e-300))
+        if not isfin(k):
+            k = 0.0
+        moved = False
+        for _half in range(8):
+            nu, nv = clamp_uv(S, f, u + du * k, v + dv * k)
+            surf(S, f, nu, nv, 0, D, wk)
+            rn = hyp(D[0, 0] - cx, D[0, 1] - cy)
+            if isfin(rn) and rn < rho - 1e-12:
+                u, v, moved = nu, nv, True
+                break
+            k = 0.5 * k
+        if not moved:
+            break
+    return u, v
+
+
+@njit(cache=True)
+def rim_ascent(S, sp, R, h_R, cx, cy, f, u, v, W, iters=40):
+    """``_rim_ascent``: the highest point of the face on ``rho = R`` near the start; returns ``u, v, g``
+    (``-inf`` when it is not on the circle), the point in ``W[0][0]``."""
+    D, wk = W[0], W[5]
+    tol = 1e-9 * max(R, 1.0)
+    u, v = project_circle(S, sp, R, cx, cy, f, u, v, 6, W)
+    surf(S, f, u, v, 0, D, wk)
+    z = D[0, 2] if abs(hyp(D[0, 0] - cx, D[0, 1] - cy) - R) <= tol else -math.inf
+    radius = 0.5 * sp
+    for _ in range(iters):
+        surf(S, f, u, v, 2, D, wk)
+        pax, pay, paz = D[0, 0], D[0, 1], D[0, 2]
+        dx, dy = pax - cx, pay - cy
+        pu = (dx * D[1, 0] + dy * D[1, 1]) / R
+        pv = (dx * D[2, 0] + dy * D[2, 1]) / R
+        n2 = pu * pu + pv * pv
+        lam = (D[1, 2] * pu + D[2, 2] * pv) / n2 if n2 > 1e-300 else 0.0
+        tu, tv = -pv, pu
+        zt = D[1, 2] * tu + D[2, 2] * tv
+        hz = D[3, 2] * tu * tu + 2 * D[4, 2] * tu * tv + D[5, 2] * tv * tv
+        xtx, xty = D[1, 0] * tu + D[2, 0] * tv, D[1, 1] * tu + D[2, 1] * tv
+        xttx = D[3, 0] * tu * tu + 2 * D[4, 0] * tu * tv + D[5, 0] * tv * tv
+        xtty = D[3, 1] * tu * tu + 2 * D[4, 1] * tu * tv + D[5, 1] * tv * tv
+        hphi = (xtx * xtx + xty * xty + dx * xttx + dy * xtty) / R
+        Ltt = hz - lam * hphi
+        tlen = _tan_len(D, tu, tv)
+        if Ltt < -1e-300:
+            s = -zt / Ltt
+        else:
+            s = nsign(zt) * radius / nmax(tlen, 1e-300)
+        s = s * nmin(1.0, radius / nmax(abs(s) * tlen, 1e-300))
+        if not isfin(s):
+            s = 0.0
+        nu, nv = clamp_uv(S, f, u + s * tu, v + s * tv)
+        nu, nv = project_circle(S, sp, R, cx, cy, f, nu, nv, 3, W)
+        surf(S, f, nu, nv, 0, D, wk)
+        on = abs(hyp(D[0, 0] - cx, D[0, 1] - cy) - R) <= tol
+        zn = D[0, 2] if on else -math.inf
+        acc = isfin(zn) and zn >= z - 1e-13 * (1 + abs(z))
+        moved = norm3(D[0, 0] - pax, D[0, 1] - pay, D[0, 2] - paz)
+        if acc:
+            u, v, z = nu, nv, zn
+            radius = nmax(radius, 2 * moved)
+        else:
+            radius = 0.25 * radius
+        if (acc and moved < 1e-11) or (not acc and radius < 1e-12):
+            break
+    surf(S, f, u, v, 0, D, wk)
+    return u, v, (z - h_R) if isfin(z) else -math.inf
+
+
+@njit(cache=True)
+def tip_solve(S, cx, cy, f, u, v, W, iters=30):
+    """``_tip_solve``: the face point below the axis; returns ``u, v, ok`` (point in ``W[0][0]``)."""
+    D, wk = W[0], W[5]
+    for _ in range(iters):
+        surf(S, f, u, v, 1, D, wk)
+        rx, ry = D[0, 0] - cx, D[0, 1] - cy
+        a, b, c, d = D[1, 0], D[2, 0], D[1, 1], D[2, 1]
+        det = a * d - b * c
+        if abs(det) < 1e-300:
+            det = 1e-300
+        u, v = clamp_uv(S, f, u - (d * rx - b * ry) / det, v - (-c * rx + a * ry) / det)
+    surf(S, f, u, v, 0, D, wk)
+    return u, v, hyp(D[0, 0] - cx, D[0, 1] - cy) < 1e-9
+
+
+# ----------------------------------------------------------------------------- trimming edges
+@njit(cache=True)
+def edge_g(PR, cx, cy, Ed, order):
+    """``g = z - h(rho)`` along an edge and (order >= 1, 2) its derivatives; returns g, rho, g1, r1, g2."""
+    dx, dy = Ed[0, 0] - cx, Ed[0, 1] - cy
+    rho = hyp(dx, dy)
+    R = PR[1][0]
+    h, h1, h2 = prof(PR, nmin(rho, R))
+    g = Ed[0, 2] - h
+    if order == 0:
+        return g, rho, 0.0, 0.0, 0.0
+    safe = nmax(rho, 1e-300)
+    r1 = (dx * Ed[1, 0] + dy * Ed[1, 1]) / safe
+    g1 = Ed[1, 2] - h1 * r1
+    if order == 1:
+        return g, rho, g1, r1, 0.0
+    r2 = (Ed[1, 0] ** 2 + Ed[1, 1] ** 2 + dx * Ed[2, 0] + dy * Ed[2, 1] - r1 * r1) / safe
+    return g, rho, g1, r1, Ed[2, 2] - h2 * r1 * r1 - h1 * r2
+
+
+@njit(cache=True)
+def edge_search(S, E, PR, cx, cy, e, t0, dt, W, iters=40):
+    """``_edge_search`` on one seed: returns ``g`` (``-inf`` where no point is in the disc), the point in
+    ``W[3][0]``."""
+    Ed, cu, wk = W[3], W[4], W[5]
+    R = PR[1][0]
+    a = max(t0 - 2 * dt, E[1][e, 0])
+    b = min(t0 + 2 * dt, E[1][e, 1])
+    n = 17
+    ts = wk[400:417]
+    gs = wk[420:437]
+    kbest = 0
+    for k in range(n):
+        ts[k] = a + (b - a) * (k / (n - 1))
+        edge_derivs(S, E, e, ts[k], 0, Ed, cu, wk)
+        g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
+        gs[k] = g if rho <= R else -math.inf
+        if gs[k] > gs[kbest]:
+            kbest = k
+    feasible = isfin(gs[kbest])
+    lo, hi = ts[max(kbest - 1, 0)], ts[min(kbest + 1, n - 1)]
+    t = ts[kbest]
+    for _ in range(iters):
+        edge_derivs(S, E, e, t, 2, Ed, cu, wk)
+        _, _, g1, _, g2 = edge_g(PR, cx, cy, Ed, 2)
+        if g1 > 0:
+            lo = t
+        if g1 < 0:
+            hi = t
+        newton = t - g1 / (g2 if g2 < 0 else -math.inf)
+        t_new = newton if (g2 < 0 and lo < newton < hi) else 0.5 * (lo + hi)
+        if g1 == 0:
+            t_new = t
+        conv = abs(t_new - t) <= 1e-15 * max(abs(t), 1.0)
+        t = t_new
+        if conv:
+            break
+    edge_derivs(S, E, e, t, 0, Ed, cu, wk)
+    g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
+    if feasible and rho > R:
+        t = _onto_circle(S, E, PR, cx, cy, e, t, ts, W)
+        edge_derivs(S, E, e, t, 0, Ed, cu, wk)
+        g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
+    if feasible and rho <= R * (1 + 1e-12):
+        return g
+    return -math.inf
+
+
+@njit(cache=True)
+def _onto_circle(S, E, PR, cx, cy, e, t, ts, W, iters=40):
+    """``_onto_circle``: the last edge parameter inside the disc between the nearest sample inside and ``t``."""
+    Ed, cu, wk = W[3], W[4], W[5]
+    R = PR[1][0]
+    best, t_in = math.inf, ts[0]
+    for k in range(ts.shape[0]):
+        edge_derivs(S, E, e, ts[k], 0, Ed, cu, wk)
+        if hyp(Ed[0, 0] - cx, Ed[0, 1] - cy) <= R and abs(ts[k] - t) < best:
+            best, t_in = abs(ts[k] - t), ts[k]
+    t_out = t
+    x = 0.5 * (t_in + t_out)
+    for _ in range(iters):
+        edge_derivs(S, E, e, x, 1, Ed, cu, wk)
+        _, rho, _, r1, _ = edge_g(PR, cx, cy, Ed, 1)
+        fx = rho - R  # inside: within the disc as the edge search accepts it
+        if fx <= 1e-12 * R:
+            t_in = x
+        if fx > 1e-12 * R:
+            t_out = x
+        newton = x - fx / (r1 if r1 != 0 else math.inf)
+        lo, hi = min(t_in, t_out), max(t_in, t_out)
+        x_new = newton if lo < newton < hi else 0.5 * (t_in + t_out)
+        if abs(x_new - x) <= 1e-15 * max(abs(x), 1.0):
+            break
+        x = x_new
+    return t_in

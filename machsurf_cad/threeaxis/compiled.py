@@ -1,0 +1,256 @@
+"""The compiled drop-cutter path: a :class:`FaceSet` and a cutter packed into flat arrays for the numba
+kernel (:mod:`._jit_drop`), and the call that runs it.
+
+The numpy path (:func:`.dropcutter._drop_chunk`) is the reference: the kernel runs the same branch and
+bound with the same local solves one query at a time (in parallel over the queries), and the tests check
+that both give the same heights. The kernel is used when numba imports and every face's degrees are at most
+7 (the power-basis patches both paths evaluate); otherwise the numpy path runs.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numpy as np
+
+from ..cutter_profiles import ArcSegment, LineSegment
+from ..geometry.bspline import _POWER_MAX_DEGREE
+from ..geometry.face import TRIM_TOLERANCE
+from .faceset import FaceSet
+
+
+@lru_cache(maxsize=1)
+def available() -> bool:
+    """Whether numba imports (the compiled kernel can run)."""
+    try:
+        import numba  # noqa: F401
+    except Exception:
+        return False
+    return True
+
+
+@lru_cache(maxsize=1)
+def build_error() -> str | None:
+    """None when the kernel compiles (once per process, :func:`warm_up`), else why it does not (an older
+    numba, say): the drop-cutter's ``auto`` engine then runs the numpy path and says so."""
+    try:
+        warm_up()
+    except Exception as e:
+        return f"{type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}"
+    return None
+
+
+def warm_up() -> float:
+    """Compile the kernel (or load it from numba's cache beside the sources) on a small plane; the seconds it
+    took. The first compilation on a machine takes about a minute; later processes load it in under one."""
+    import time
+
+    from ..cutters import BallEndMill
+    from ..geometry.builders import plane_patch
+    from .faceset import face_set
+    from .solves import _Profile
+
+    t = time.perf_counter()
+    fs = face_set([plane_patch((-5, -5, 0), (10, 0, 0), (0, 10, 0))], spacing=1.0)
+    drop(fs, _Profile(BallEndMill(2.0)), np.zeros((1, 2)))
+    return time.perf_counter() - t
+
+
+def kernel_stamp() -> str:
+    """A hash of the kernel's callee sources. numba re-compiles a cached function when its own file changes,
+    not when a function it calls changes in another file: :data:`._jit_drop.KERNEL_SOURCES` must equal this
+    (a test checks it), so that any change of the callees changes the entry point's file too."""
+    import hashlib
+    from pathlib import Path
+
+    here = Path(__file__).parent
+    h = hashlib.sha256()
+    for name in ("_jit_geom.py", "_jit_solve.py"):
+        h.update((here / name).read_bytes())
+    return h.hexdigest()[:16]
+
+
+def supports(fs: FaceSet) -> bool:
+    """Whether the kernel handles every face of ``fs`` (degrees at most 7 in u and v)."""
+    return all(f.surface.degree_u <= _POWER_MAX_DEGREE and f.surface.degree_v <= _POWER_MAX_DEGREE for f in fs.faces)
+
+
+def _surfaces(fs: FaceSet):
+    n = len(fs.faces)
+    fi = np.zeros((n, 14), np.int64)
+    ff = np.zeros((n, 12))
+    ust, hus, vst, hvs, coefs, loops, px, py = [], [], [], [], [], [], [], []
+    nu = nv = nc = nl = npt = 0
+    for f, face in enumerate(fs.faces):
+        s = face.surface
+        tu, tv, hp = s._eval_data
+        flat, mapu, mapv, hu, hv, nsv = s._power_data
+        p, q, dim = s.degree_u, s.degree_v, hp.shape[2]
+        blocks = flat.reshape(-1, p + 1, q + 1, dim)
+        if dim == 3:
+            w = np.zeros(blocks.shape[:3] + (1,))
+            w[:, 0, 0, 0] = 1.0
+            blocks = np.concatenate([blocks, w], axis=3)
+        su, sv = np.nonzero(mapu >= 0)[0], np.nonzero(mapv >= 0)[0]
+        trimmed = bool(face.is_trimmed)
+        polys = face.trim_polygons(TRIM_TOLERANCE) if trimmed else []
+        fi[f] = (p, q, su.size, sv.size, nu, nv, nc, s.periodic_u, s.periodic_v, *fs.closed[f], trimmed, nl,
+                 nl + len(polys))  # fmt: skip
+        ff[f, :4] = tu[p], tu[hp.shape[0]], tv[q], tv[hp.shape[1]]
+        ff[f, 4:8] = s.knots_u[0], s.knots_u[-1], s.knots_v[0], s.knots_v[-1]
+        ff[f, 8:12] = fs.bounds[f]
+        ust.append(tu[su])
+        hus.append(hu)
+        vst.append(tv[sv])
+        hvs.append(hv)
+        coefs.append(blocks.ravel())
+        for poly in polys:
+            loops.append((npt, poly.shape[0]))
+            px.append(poly[:, 0])
+            py.append(poly[:, 1])
+            npt += poly.shape[0]
+        nu, nv, nc, nl = nu + su.size, nv + sv.size, nc + blocks.size, nl + len(polys)
+    S = (fi, ff, *(np.ascontiguousarray(np.concatenate(a), dtype=float) for a in (ust, hus, vst, hvs, coefs)))
+    return S, _slabs(fi, np.array(loops, np.int64).reshape(-1, 2), np.concatenate(px) if px else np.zeros(0),
+                     np.concatenate(py) if py else np.zeros(0))  # fmt: skip
+
+
+def _slabs(fi, loops, px, py):
+    """The trimming polygons' edges bucketed in horizontal slabs of v per face, so that the even-odd test of a
+    point visits the edges of its slab only (a face's polygons may have tens of thousands of vertices)."""
+    n = fi.shape[0]
+    tf = np.zeros((n, 2), np.int64)
+    tl = np.zeros((n, 3))
+    starts, items, ea, eb = [np.zeros(1, np.int64)], [], [], []
+    n_edges = n_slab = 0
+    for f in range(n):
+        a_, b_ = [], []
+        for s, m in loops[fi[f, 12] : fi[f, 13]]:
+            i = np.arange(m)
+            a_.append(s + i)
+            b_.append(s + (i + 1) % m)
+        if not a_:
+            continue
+        a, b = np.concatenate(a_), np.concatenate(b_)
+        lo, hi = np.minimum(py[a], py[b]), np.maximum(py[a], py[b])
+        vmin, vmax = float(lo.min()), float(hi.max())
+        ns = int(max(1, min(4096, a.size // 4)))
+        dv = max((vmax - vmin) / ns, 1e-300)
+        s0 = np.clip(((lo - vmin) / dv).astype(np.int64), 0, ns - 1)
+        s1 = np.clip(((hi - vmin) / dv).astype(np.int64), 0, ns - 1)
+        cnt = s1 - s0 + 1
+        slab = np.repeat(s0, cnt) + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
+        edge = np.repeat(np.arange(a.size), cnt)
+        order = np.argsort(slab, kind="stable")
+        starts.append(starts[-1][-1] + np.cumsum(np.bincount(slab, minlength=ns)))
+        items.append(n_edges + edge[order])
+        ea.append(a)
+        eb.append(b)
+        tf[f] = n_slab, ns
+        tl[f] = vmin, dv, vmax
+        n_edges += a.size
+        n_slab += ns
+    cat = np.concatenate
+    return (tf, tl, cat(starts).astype(np.int64), cat(items).astype(np.int64) if items else np.zeros(0, np.int64),
+            cat(ea).astype(np.int64) if ea else np.zeros(0, np.int64),
+            cat(eb).astype(np.int64) if eb else np.zeros(0, np.int64), px, py)  # fmt: skip
+
+
+def _curves(fs: FaceSet):
+    n = len(fs.edges)
+    ei = np.zeros((max(n, 1), 6), np.int64)
+    ef = np.zeros((max(n, 1), 2))
+    knots, poles = [], []
+    nk = npol = 0
+    for e, c in enumerate(fs.edges):
+        t, hp = c._eval_data
+        if hp.shape[1] == 2:
+            hp = np.column_stack([hp, np.ones(hp.shape[0])])
+        ei[e] = c.degree, nk, t.size, npol, hp.shape[0], fs.edge_face[e]
+        ef[e] = c.bounds
+        knots.append(t)
+        poles.append(hp)
+        nk, npol = nk + t.size, npol + hp.shape[0]
+    knots_a = np.concatenate(knots) if knots else np.zeros(1)
+    return ei, ef, knots_a, np.concatenate(poles) if poles else np.zeros((1, 3))
+
+
+def _profile(prof):
+    rows = []
+    for seg in prof.segs:
+        if isinstance(seg, LineSegment):
+            rows.append((0.0, seg.rho0, seg.z0, seg.rho1, seg.z1, 0.0))
+        elif isinstance(seg, ArcSegment):
+            rows.append((1.0, seg.rho_c, seg.z_c, seg.radius, seg.start_deg, seg.end_deg))
+        else:  # pragma: no cover - cutters give lines and arcs
+            raise TypeError(f"profile segment {type(seg).__name__} is not supported by the compiled kernel")
+    consts = np.array([prof.R, prof.h_R, prof.h_min, 1.0 if prof.monotone else 0.0])
+    return np.array(rows, float).reshape(-1, 6), consts
+
+
+def _pool(fs: FaceSet):
+    n_int = fs.sample_xyz.shape[0]
+    xyz = np.ascontiguousarray(np.concatenate([fs.sample_xyz, fs.edge_xyz]))
+    pf = np.concatenate([fs.sample_face, fs.edge_face[fs.edge_id]]).astype(np.int64)
+    puv = np.ascontiguousarray(np.concatenate([fs.sample_uv, fs.edge_uv]))
+    return (xyz, pf, puv, n_int, fs.edge_id.astype(np.int64), fs.edge_t.astype(float), fs.edge_dt.astype(float),
+            fs.cover.astype(float), fs.rise.astype(float), fs.min_tilt.astype(float),
+            fs.edge_cover.astype(float))  # fmt: skip
+
+
+def _grid(xyz: np.ndarray, reach: float):
+    """A plan grid of the pool samples with cells of about half ``reach`` (at most 2048 a side)."""
+    xy = xyz[:, :2]
+    lo = xy.min(axis=0) if xy.size else np.zeros(2)
+    hi = xy.max(axis=0) if xy.size else np.zeros(2)
+    cs = max(reach / 2, float((hi - lo).max()) / 2048, 1e-9)
+    nx, ny = (int(math.floor((hi[k] - lo[k]) / cs)) + 1 for k in range(2))
+    ix = np.clip(((xy[:, 0] - lo[0]) // cs).astype(np.int64), 0, nx - 1)
+    iy = np.clip(((xy[:, 1] - lo[1]) // cs).astype(np.int64), 0, ny - 1)
+    cell = ix * ny + iy
+    items = np.argsort(cell, kind="stable").astype(np.int64)
+    start = np.zeros(nx * ny + 1, np.int64)
+    np.cumsum(np.bincount(cell, minlength=nx * ny), out=start[1:])
+    return np.array([lo[0], lo[1], cs]), np.array([nx, ny], np.int64), start, items
+
+
+def _packed(fs: FaceSet):
+    """The face set's arrays for the kernel (cached on the face set)."""
+    cache = fs.__dict__.setdefault("_compiled", {})
+    if "fs" not in cache:
+        S, T = _surfaces(fs)
+        cache["fs"] = (S, _curves(fs), T, _pool(fs))
+    return cache["fs"]
+
+
+def drop(fs: FaceSet, prof, C: np.ndarray):
+    """Heights, contact kinds, faces and contact points of the queries ``C`` (n, 2): the outputs of
+    :func:`.dropcutter._drop_chunk`, from the compiled kernel."""
+    from ._jit_drop import drop_batch
+
+    S, E, T, SM = _packed(fs)
+    cache = fs.__dict__["_compiled"]
+    key = ("grid", round(prof.R + fs.spacing, 12))
+    if key not in cache:
+        cache[key] = _grid(SM[0], prof.R + fs.spacing)
+    G = cache[key]
+    PR = _profile(prof)
+    h0 = float(prof(np.zeros(1))[0][0])
+    K = np.array([prof.R, fs.spacing, prof.max_tilt, prof.h_R, 1.0 if prof.pointed else 0.0, len(fs.faces),
+                  max(len(fs.edges), 1), h0])  # fmt: skip
+    kinks = np.array(prof.kinks, float).reshape(-1, 2)
+    m = C.shape[0]
+    height = np.full(m, np.nan)
+    kind = np.zeros(m, np.int8)
+    face = np.full(m, -1, np.int64)
+    point = np.full((m, 3), np.nan)
+    drop_batch(np.ascontiguousarray(C, dtype=float), S, E, T, PR, SM, G, K, kinks, height, kind, face, point)
+    return height, kind, face, point
+
+
+if __name__ == "__main__":  # pragma: no cover - `make venv` compiles the kernel once
+    if available():
+        print(f"machsurf_cad: drop-cutter kernel ready ({warm_up():.1f} s)")
+    else:
+        print("machsurf_cad: numba is not installed: the drop-cutter runs its numpy path")

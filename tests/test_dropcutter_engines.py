@@ -1,0 +1,117 @@
+"""The drop-cutter's two engines: the compiled kernel (numba) against the numpy reference, point for point,
+on the example parts with every contact kind (face, rim, edge, pointed tip, a cone's bottom circle); the
+kernel's answers independent of the batch; the cache stamp that keeps numba from running a stale kernel."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import machsurf_cad as ms
+from machsurf_cad.threeaxis import compiled
+from machsurf_cad.threeaxis.dropcutter import Contact
+
+ROOT = Path(__file__).resolve().parent.parent
+needs_numba = pytest.mark.skipif(not compiled.available(), reason="numba is not installed")
+
+
+def test_the_kernels_cache_stamp_matches_its_callees():
+    """numba re-compiles a cached kernel only when the entry point's own file changes: the entry point's
+    file carries the hash of the callees' sources, so editing them without it fails here."""
+    text = (ROOT / "machsurf_cad" / "threeaxis" / "_jit_drop.py").read_text()
+    stamp = re.search(r'KERNEL_SOURCES = "([0-9a-f]+)"', text).group(1)
+    assert stamp == compiled.kernel_stamp(), "update KERNEL_SOURCES in _jit_drop.py to compiled.kernel_stamp()"
+
+
+def _grid(fs, n, margin=3.0):
+    lo, hi = fs.sample_xyz.min(0)[:2] - margin, fs.sample_xyz.max(0)[:2] + margin
+    x, y = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n))
+    return np.column_stack([x.ravel(), y.ravel()])
+
+
+@pytest.fixture(scope="module")
+def parts():
+    pytest.importorskip("OCP")
+    from machsurf_cad.occ import read_step_faces
+
+    return {name: read_step_faces(ROOT / "example_parts" / name) for name in
+            ("mould_insert.step", "freeform_block.step", "bezier5_patch.step")}  # fmt: skip
+
+
+CASES = [
+    ("mould_insert.step", "bull:D=10,r=2"),
+    ("mould_insert.step", "flat:D=10"),
+    ("mould_insert.step", "cone:D=6,angle=10,L=20"),  # a pointed tip and the bottom circle of the cone
+    ("freeform_block.step", "ball:D=10"),  # trimmed faces: a hole and long degree-8 trimming curves
+    ("bezier5_patch.step", "bull:D=16,r=3"),
+]
+
+
+@needs_numba
+@pytest.mark.parametrize("part,tool", CASES)
+def test_compiled_and_numpy_engines_give_the_same_heights(parts, part, tool):
+    faces = parts[part]
+    cutter = ms.parse_cutter(tool)
+    fs = ms.threeaxis.faceset.face_set(faces, spacing=ms.threeaxis.dropcutter.default_seed_spacing(cutter))
+    xy = _grid(fs, 19)
+    a = ms.drop_cutter(None, cutter, xy, face_set=fs, engine="compiled")
+    b = ms.drop_cutter(None, cutter, xy, face_set=fs, engine="numpy")
+    assert a.engine == "compiled" and b.engine == "numpy"
+    np.testing.assert_array_equal(np.isnan(a.height), np.isnan(b.height))
+    ok = np.isfinite(a.height)
+    assert ok.sum() > 100
+    assert np.abs(a.height[ok] - b.height[ok]).max() <= 1e-9
+    # the contact points lie on the tool at the height found (z - h(rho) = height), whichever engine
+    R = float(cutter.profile_points(16)[:, 0].max())
+    for r in (a, b):
+        p = fs.to_frame(r.contact[ok])
+        rho = np.hypot(p[:, 0] - xy[ok, 0], p[:, 1] - xy[ok, 1])
+        assert rho.max() <= R * (1 + 1e-9)
+        h = np.where(rho >= R * (1 - 1e-12), cutter.height(np.array([R]))[0], cutter.height(np.minimum(rho, R)))
+        assert np.abs(p[:, 2] - np.nan_to_num(h, nan=0.0) - r.height[ok]).max() <= 1e-7
+    kinds = set(np.unique(a.kind[ok]).tolist())
+    assert Contact.FACE in kinds or Contact.TIP in kinds
+
+
+@needs_numba
+def test_compiled_heights_do_not_depend_on_the_batch(parts):
+    """Each query is solved on its own: random subsets give bit-identical heights, contacts and faces."""
+    faces = parts["mould_insert.step"]
+    cutter = ms.parse_cutter("bull:D=10,r=2")
+    fs = ms.threeaxis.faceset.face_set(faces, spacing=ms.threeaxis.dropcutter.default_seed_spacing(cutter))
+    xy = _grid(fs, 23)
+    full = ms.drop_cutter(None, cutter, xy, face_set=fs, engine="compiled")
+    rng = np.random.default_rng(7)
+    for size in (1, 17, 230):
+        pick = rng.choice(xy.shape[0], size, replace=False)
+        part = ms.drop_cutter(None, cutter, xy[pick], face_set=fs, engine="compiled", batch_size=7)
+        np.testing.assert_array_equal(part.height, full.height[pick])
+        np.testing.assert_array_equal(part.face, full.face[pick])
+        np.testing.assert_array_equal(part.kind, full.kind[pick])
+
+
+def test_numpy_engine_on_request_and_bad_engine_refused():
+    plane = ms.builders.plane_patch((-20, -20, 0), (40, 0, 0), (0, 40, 0))
+    r = ms.drop_cutter([plane], ms.BallEndMill(10), [[0.0, 0.0], [3.0, 4.0]], engine="numpy")
+    assert r.engine == "numpy" and np.allclose(r.height, 0.0, atol=1e-12)
+    assert r.report()["engine"] == "numpy"
+    with pytest.raises(ms.InputError, match="engine"):
+        ms.drop_cutter([plane], ms.BallEndMill(10), [[0.0, 0.0]], engine="fast")
+
+
+@needs_numba
+def test_compiled_engine_on_a_closed_form_dome():
+    """A sphere of radius 30 under a ball of radius 5: the tip is at sqrt(35^2 - d^2) - 35 + 30 above the
+    plane through the centre... (exact: the ball's centre lies on the sphere of radius 35)."""
+    sphere = ms.builders.sphere_patch(30.0, (0.0, 90.0), 360.0)
+    d = np.linspace(0.0, 30.0, 31)
+    xy = np.column_stack([d * np.cos(0.3), d * np.sin(0.3)])
+    r = ms.drop_cutter([sphere], ms.BallEndMill(10), xy, engine="compiled")
+    assert r.engine == "compiled"
+    exact = np.sqrt(35.0**2 - d**2) - 5.0
+    # beyond the dome's rim (d > 30 * cos(0)) the ball rests on the rim circle; inside it the closed form holds
+    inner = d <= 30.0 * 30.0 / 35.0
+    assert np.abs(r.height[inner] - exact[inner]).max() <= 1e-9
