@@ -43,6 +43,7 @@ def parts():
 
 CASES = [
     ("mould_insert.step", "bull:D=10,r=2"),
+    ("mould_insert.step@-100", "bull:D=6,r=1"),  # below z = 0, queries whose only contacts are edges
     ("mould_insert.step", "flat:D=10"),
     ("mould_insert.step", "cone:D=6,angle=10,L=20"),  # a pointed tip and the bottom circle of the cone
     ("freeform_block.step", "ball:D=10"),  # trimmed faces: a hole and long degree-8 trimming curves
@@ -50,10 +51,20 @@ CASES = [
 ]
 
 
+def _moved(face, dz):
+    from dataclasses import replace
+
+    s = face.surface
+    return replace(face, surface=s.with_poles(np.asarray(s.poles) + [0.0, 0.0, dz], s.weights))
+
+
 @needs_numba
 @pytest.mark.parametrize("part,tool", CASES)
 def test_compiled_and_numpy_engines_give_the_same_heights(parts, part, tool):
-    faces = parts[part]
+    name, _, dz = part.partition("@")
+    faces = parts[name]
+    if dz:
+        faces = [_moved(f, float(dz)) for f in faces]
     cutter = ms.parse_cutter(tool)
     fs = ms.threeaxis.faceset.face_set(faces, spacing=ms.threeaxis.dropcutter.default_seed_spacing(cutter))
     xy = _grid(fs, 19)

@@ -17,11 +17,11 @@ import numpy as np
 from numba import njit, prange
 
 from ._jit_geom import hyp, inside, isfin, norm3, prof, prof_floor, surf
-from ._jit_solve import edge_search, face_newton, into_disc, rim_ascent, tip_solve
+from ._jit_solve import ON_CIRCLE, edge_search, enters_face, face_newton, into_disc, rim_ascent, tip_solve
 
 FACE, RIM, EDGE, TIP, SAMPLE = 1, 2, 3, 4, 5
 
-KERNEL_SOURCES = "3ca91cd210a2ba16"
+KERNEL_SOURCES = "34edad731f2266d5"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 
@@ -50,7 +50,7 @@ def _solve(kind, j, cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk):
         if hyp(D[0, 0] - cx, D[0, 1] - cy) > R * (1 - 1e-3):
             u0, v0 = into_disc(S, sp, R, cx, cy, f, u0, v0, W)
         u, v, g = face_newton(S, PR, sp, cx, cy, f, u0, v0, W)
-        if isfin(g) and inside(S, T, f, u, v):
+        if isfin(g) and inside(S, T, f, u, v) and enters_face(S, T, R, cx, cy, f, u, v, W):
             _add(best, bp, g, FACE, f, D[0, 0], D[0, 1], D[0, 2])
         if K[4] > 0:
             u, v, ok = tip_solve(S, cx, cy, f, u0, v0, W)
@@ -59,7 +59,7 @@ def _solve(kind, j, cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk):
                 _add(best, bp, g, TIP, f, D[0, 0], D[0, 1], D[0, 2])
     elif kind == RIM:
         u, v, g = rim_ascent(S, sp, rk, hk, cx, cy, f, u0, v0, W)
-        if isfin(g) and inside(S, T, f, u, v):
+        if isfin(g) and inside(S, T, f, u, v) and enters_face(S, T, R, cx, cy, f, u, v, W):
             _add(best, bp, g, RIM, f, D[0, 0], D[0, 1], D[0, 2])
     else:
         k = j - SM[3]
@@ -176,7 +176,10 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
                 e_ub[k] = z + ec - prof_floor(PR, rho - ec)
     ng = nl * 5
     # the best sample inside the disc: a lower bound
-    b0 = _group_best(1, np.zeros(m, np.int64), val, feas, idx)[0]
+    strictly = np.empty(m, np.bool_)  # inside the disc, not on its circle (see enters_face)
+    for k in range(m):
+        strictly[k] = rr[k] < R * (1 - ON_CIRCLE)
+    b0 = _group_best(1, np.zeros(m, np.int64), val, strictly, idx)[0]
     if b0 >= 0:
         j = idx[b0]
         _add(best, bp, val[b0], SAMPLE, pf[j], xyz[j, 0], xyz[j, 1], xyz[j, 2])
@@ -247,7 +250,7 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
             tk[nt], tb[nt] = 2 * m + k, eb[ek[k]]
             nt += 1
     for i in np.argsort(-tb[:nt], kind="mergesort"):
-        if tb[i] < best[1] - 1e-9:
+        if best[4] > 0 and tb[i] < best[1] - 1e-9:
             break
         kind, k = FACE + tk[i] // m, tk[i] % m
         _solve(kind, idx[k], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)

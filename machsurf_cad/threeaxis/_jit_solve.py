@@ -13,7 +13,45 @@ import math
 
 from numba import njit
 
-from ._jit_geom import clamp_uv, edge_derivs, hyp, isfin, nmax, nmin, norm3, nsign, prof, surf
+from ._jit_geom import clamp_uv, edge_derivs, hyp, inside, isfin, nmax, nmin, norm3, nsign, prof, surf
+
+ON_CIRCLE, PROBE_MM, PROBE_DIRECTIONS, PROBE_DROP = 1e-9, 1e-3, 16, 1e-12  # as in solves
+
+
+@njit(cache=True)
+def enters_face(S, T, R, cx, cy, f, u, v, W):
+    """``_enters_face`` on one contact: inside the disc, or on its circle where a probe in one of 16 tangent
+    directions lies on the face and closer to the axis."""
+    D, wk = W[2], W[5]
+    surf(S, f, u, v, 1, D, wk)
+    rho = math.sqrt((D[0, 0] - cx) ** 2 + (D[0, 1] - cy) ** 2)
+    if not (rho >= R * (1 - ON_CIRCLE)):
+        return True
+    su0, su1, su2, sv0, sv1, sv2 = D[1, 0], D[1, 1], D[1, 2], D[2, 0], D[2, 1], D[2, 2]
+    E = su0 * su0 + su1 * su1 + su2 * su2
+    F = su0 * sv0 + su1 * sv1 + su2 * sv2
+    G = sv0 * sv0 + sv1 * sv1 + sv2 * sv2
+    det = E * G - F * F
+    if not (det > 1e-12 * max(E * G, 1e-300)):
+        return True
+    ln = math.sqrt(max(E, 1e-300))
+    a0, a1, a2 = su0 / ln, su1 / ln, su2 / ln
+    k = sv0 * a0 + sv1 * a1 + sv2 * a2
+    b0, b1, b2 = sv0 - k * a0, sv1 - k * a1, sv2 - k * a2
+    lb = max(math.sqrt(b0 * b0 + b1 * b1 + b2 * b2), 1e-300)
+    b0, b1, b2 = b0 / lb, b1 / lb, b2 / lb
+    limit = min(rho, R) - PROBE_DROP * R
+    for i in range(PROBE_DIRECTIONS):
+        th = 2 * math.pi * i / PROBE_DIRECTIONS
+        c_, s_ = PROBE_MM * math.cos(th), PROBE_MM * math.sin(th)
+        e0, e1, e2 = c_ * a0 + s_ * b0, c_ * a1 + s_ * b1, c_ * a2 + s_ * b2
+        pa = e0 * su0 + e1 * su1 + e2 * su2
+        pb = e0 * sv0 + e1 * sv1 + e2 * sv2
+        pu, pv = clamp_uv(S, f, u + (G * pa - F * pb) / det, v + (-F * pa + E * pb) / det)
+        surf(S, f, pu, pv, 0, D, wk)
+        if math.sqrt((D[0, 0] - cx) ** 2 + (D[0, 1] - cy) ** 2) < limit and inside(S, T, f, pu, pv):
+            return True
+    return False
 
 
 @njit(cache=True)
@@ -347,9 +385,27 @@ def edge_search(S, E, PR, cx, cy, e, t0, dt, W, iters=40):
         t = _onto_circle(S, E, PR, cx, cy, e, t, ts, W)
         edge_derivs(S, E, e, t, 0, Ed, cu, wk)
         g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
-    if feasible and rho <= R * (1 + 1e-12):
+    if feasible and rho <= R * (1 + 1e-12) and _enters_edge(S, E, R, cx, cy, e, t, W):
         return g
     return -math.inf
+
+
+@njit(cache=True)
+def _enters_edge(S, E, R, cx, cy, e, t, W):
+    """``_enters_edge`` on one contact (the point of ``t`` left in ``W[3][0]``)."""
+    Ed, cu, wk = W[3], W[4], W[5]
+    edge_derivs(S, E, e, t, 1, Ed, cu, wk)
+    r0 = math.sqrt((Ed[0, 0] - cx) ** 2 + (Ed[0, 1] - cy) ** 2)
+    ok = True
+    if r0 >= R * (1 - ON_CIRCLE):
+        step = PROBE_MM / nmax(norm3(Ed[1, 0], Ed[1, 1], Ed[1, 2]), 1e-300)
+        ok = False
+        for sgn in (-1.0, 1.0):
+            edge_derivs(S, E, e, min(max(t + sgn * step, E[1][e, 0]), E[1][e, 1]), 0, Ed, cu, wk)
+            if math.sqrt((Ed[0, 0] - cx) ** 2 + (Ed[0, 1] - cy) ** 2) < min(r0, R) - PROBE_DROP * R:
+                ok = True
+    edge_derivs(S, E, e, t, 0, Ed, cu, wk)
+    return ok
 
 
 @njit(cache=True)

@@ -42,7 +42,9 @@ from ..typing import ArrayLike, FacesLike, ToolLike, Vector3
 from .faceset import FaceSet
 from .faceset import face_set as build_face_set
 from .solves import (
+    _ON_CIRCLE,
     _edge_search,
+    _enters_face,
     _face_newton,
     _inside,
     _into_disc,
@@ -258,7 +260,9 @@ def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str, kink: int | None = 
             u0, v0 = u0.copy(), v0.copy()
             u0[out], v0[out] = _into_disc(fs, prof.R, c[out], fid[out], u0[out], v0[out])
         u, v, g, P = _face_newton(fs, prof, c, fid, u0, v0)
-        cand.add(q, g, Contact.FACE, fid, P, np.isfinite(g) & _inside(fs, fid, u, v))
+        ok = np.isfinite(g) & _inside(fs, fid, u, v)
+        ok[ok] = _enters_face(fs, prof.R, c[ok], fid[ok], u[ok], v[ok])
+        cand.add(q, g, Contact.FACE, fid, P, ok)
         if prof.pointed:
             u, v, ok, P = _tip_solve(fs, c, fid, u0.copy(), v0.copy())
             g = P[:, 2] - prof(np.zeros(P.shape[0]))[0]
@@ -266,7 +270,9 @@ def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str, kink: int | None = 
     elif kind == "rim":
         rk, hk = (None, None) if kink is None else prof.kinks[kink]
         u, v, g, P = _rim_newton(fs, prof, c, fid, u0, v0, radius=rk, h_at=hk)
-        cand.add(q, g, Contact.RIM, fid, P, np.isfinite(g) & _inside(fs, fid, u, v))
+        ok = np.isfinite(g) & _inside(fs, fid, u, v)
+        ok[ok] = _enters_face(fs, prof.R, c[ok], fid[ok], u[ok], v[ok])
+        cand.add(q, g, Contact.RIM, fid, P, ok)
     else:
         eid = fs.edge_id[ke]
         g, P = _edge_search(fs, prof, c, eid, fs.edge_t[ke], fs.edge_dt[ke])
@@ -287,12 +293,12 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     qi, sj, rho, xyz, val, feasible, sector, is_edge, group = _seeds(fs, prof, C)
     cand = _Candidates()
     fid_all = _start(fs, sj)[0]
-    fe = np.nonzero(feasible)[0]
 
     def pick(sel, key, score):
         return sel[_best_per(key[sel], score[sel], sj[sel])]
 
-    best = pick(fe, qi, val)
+    # the best sample inside the disc (not on its circle: see _enters_face) is a lower bound
+    best = pick(np.nonzero(rho < prof.R * (1 - _ON_CIRCLE))[0], qi, val)
     cand.add(qi[best], val[best], Contact.SAMPLE, fid_all[best], xyz[best])
     cover = fs.cover[sj]
     reach = rho - cover

@@ -454,7 +454,77 @@ def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
         P = _edge_points(fs, eid, t)
         g, rho = _edge_g(prof, c, P)
     ok = feasible & (rho <= R * (1 + 1e-12))
+    ok &= _enters_edge(fs, R, c, eid, t, rho)
     return np.where(ok, g, -np.inf), P
+
+
+_ON_CIRCLE = 1e-9
+"""A contact within this (relative to R) of the tool's circle is on it: it counts only where the part enters the
+open disc next to it (:func:`_enters_face`, :func:`_enters_edge`)."""
+_PROBE_MM = 1e-3
+_PROBE_DIRECTIONS = 16
+_PROBE_DROP = 1e-12
+"""How much closer to the axis (relative to R) a probe must be than the contact to show that the part enters."""
+
+
+def _enters_face(fs, R, c, fid, u, v) -> np.ndarray:
+    """Whether each face contact has face points strictly inside the tool's disc next to it: True inside the
+    disc; on its circle only where a probe :data:`_PROBE_MM` away on the face, in one of 16 directions of the
+    tangent plane, lies on the trimmed face and closer to the axis (the face crosses the circle, or curves
+    into the disc like a fillet tangent to a wall). A face that only touches the circle from outside (a
+    plane wall exactly ``R`` from the axis, a step's edge at the rim) touches the tool's side without
+    entering it: the tool may go lower (the drop-cutter is the lowest height at which the tool does not
+    enter the part)."""
+    ok = np.ones(u.shape[0], bool)
+    P, Su, Sv = _surface_eval(fs, fid, u, v, 1)
+    rho = np.sqrt((P[:, 0] - c[:, 0]) ** 2 + (P[:, 1] - c[:, 1]) ** 2)
+    on = np.nonzero(rho >= R * (1 - _ON_CIRCLE))[0]
+    if on.size == 0:
+        return ok
+    Su, Sv, rho = Su[on], Sv[on], rho[on]
+    E, F, G = (np.einsum("ij,ij->i", a, b) for a, b in ((Su, Su), (Su, Sv), (Sv, Sv)))
+    det = E * G - F * F
+    regular = det > 1e-12 * np.maximum(E * G, 1e-300)
+    det = np.where(regular, det, 1.0)
+    # an orthonormal tangent frame (t1 along Su) and the parameter steps of its directions
+    t1 = Su / np.sqrt(np.maximum(E, 1e-300))[:, None]
+    t2 = Sv - np.einsum("ij,ij->i", Sv, t1)[:, None] * t1
+    t2 /= np.maximum(np.linalg.norm(t2, axis=1), 1e-300)[:, None]
+    n = _PROBE_DIRECTIONS
+    th = 2 * np.pi * np.arange(n) / n
+    e = _PROBE_MM * (np.cos(th)[None, :, None] * t1[:, None, :] + np.sin(th)[None, :, None] * t2[:, None, :])
+    a, b = np.einsum("mkd,md->mk", e, Su), np.einsum("mkd,md->mk", e, Sv)
+    du = (G[:, None] * a - F[:, None] * b) / det[:, None]
+    dv = (-F[:, None] * a + E[:, None] * b) / det[:, None]
+    f = np.repeat(fid[on], n)
+    pu, pv = _clamp_uv(fs, f, np.repeat(u[on], n) + du.ravel(), np.repeat(v[on], n) + dv.ravel())
+    Q = _surface_eval(fs, f, pu, pv, 0)[0]
+    cc = np.repeat(c[on], n, axis=0)
+    rq = np.sqrt((Q[:, 0] - cc[:, 0]) ** 2 + (Q[:, 1] - cc[:, 1]) ** 2)
+    closer = (rq < np.minimum(np.repeat(rho, n), R) - _PROBE_DROP * R) & _inside(fs, f, pu, pv)
+    ok[on] = closer.reshape(-1, n).any(axis=1) | ~regular  # a pole or a degenerate tangent plane: kept
+    return ok
+
+
+def _enters_edge(fs, R, c, eid, t, rho) -> np.ndarray:
+    """As :func:`_enters_face` for edge contacts: on the circle only where a probe :data:`_PROBE_MM` along the
+    edge, on either side, lies closer to the axis."""
+    ok = np.ones(t.shape[0], bool)
+    on = np.nonzero(np.nan_to_num(rho, nan=0.0) >= R * (1 - _ON_CIRCLE))[0]
+    if on.size == 0:
+        return ok
+    P, P1 = _edge_derivs(fs, eid[on], t[on], 1)
+    r0 = np.sqrt((P[:, 0] - c[on, 0]) ** 2 + (P[:, 1] - c[on, 1]) ** 2)
+    step = _PROBE_MM / np.maximum(np.linalg.norm(P1, axis=1), 1e-300)
+    lo_b = np.array([e.bounds[0] for e in fs.edges])[eid[on]]
+    hi_b = np.array([e.bounds[1] for e in fs.edges])[eid[on]]
+    closer = np.zeros(on.size, bool)
+    for sgn in (-1.0, 1.0):
+        Q = _edge_points(fs, eid[on], np.clip(t[on] + sgn * step, lo_b, hi_b))
+        rq = np.sqrt((Q[:, 0] - c[on, 0]) ** 2 + (Q[:, 1] - c[on, 1]) ** 2)
+        closer |= rq < np.minimum(r0, R) - _PROBE_DROP * R
+    ok[on] = closer
+    return ok
 
 
 def _onto_circle(fs, prof, c, eid, t, ts, out, iters: int = 40):
