@@ -126,3 +126,19 @@ def test_compiled_engine_on_a_closed_form_dome():
     # beyond the dome's rim (d > 30 * cos(0)) the ball rests on the rim circle; inside it the closed form holds
     inner = d <= 30.0 * 30.0 / 35.0
     assert np.abs(r.height[inner] - exact[inner]).max() <= 1e-9
+
+
+@pytest.mark.parametrize("engine", ["numpy", pytest.param("compiled", marks=needs_numba)])
+def test_a_wall_exactly_R_from_the_axis_touches_the_side_and_does_not_lift_the_tool(engine):
+    """Floor z = 0 and a wall x = 10 up to z = 8, ball D10: with the axis exactly R = 5 from the wall the
+    tool touches the wall with its side and rests on the floor (height 0, the lowest height at which it
+    does not enter the part); 1 um closer the wall enters the disc and the ball rests on the wall's top
+    edge: 8 - h(4.999) = 3 + sqrt(25 - 4.999^2). Grid lines R from a wall used to lift the tool by up to
+    the wall's height."""
+    floor = ms.builders.plane_patch((-20, -20, 0), (30, 0, 0), (0, 40, 0))
+    wall = ms.builders.plane_patch((10, -20, 0), (0, 40, 0), (0, 0, 8))
+    xy = np.array([[5.0, 0.0], [5.0, 7.3], [5.001, 0.0], [4.0, 1.0]])
+    r = ms.drop_cutter([floor, wall], ms.BallEndMill(10), xy, engine=engine)
+    assert r.engine == engine
+    expected = [0.0, 0.0, 3.0 + np.sqrt(25.0 - 4.999**2), 0.0]
+    assert np.abs(r.height - expected).max() <= 1e-9
