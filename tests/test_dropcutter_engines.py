@@ -142,3 +142,26 @@ def test_a_wall_exactly_R_from_the_axis_touches_the_side_and_does_not_lift_the_t
     assert r.engine == engine
     expected = [0.0, 0.0, 3.0 + np.sqrt(25.0 - 4.999**2), 0.0]
     assert np.abs(r.height - expected).max() <= 1e-9
+
+
+def test_face_sets_and_heights_are_cached_by_content_and_tool():
+    """A repeated query reuses the face set and the heights (the very same numbers); a face changed by 1 um,
+    another tool or another engine never reuses them."""
+    from machsurf_cad.threeaxis import cache
+
+    cache.clear()
+    dome = ms.builders.sphere_patch(30.0, (0.0, 90.0), 360.0)
+    xy = np.array([[0.0, 0.0], [7.0, 3.0], [12.0, -5.0]])
+    a = ms.drop_cutter([dome], ms.BallEndMill(10), xy)
+    b = ms.drop_cutter([dome], ms.BallEndMill(10), xy[::-1])
+    assert a.n_cached == 0 and b.n_cached == 3 and b.report()["n_cached"] == 3
+    np.testing.assert_array_equal(b.height, a.height[::-1])
+    moved = dome.with_poles(np.asarray(dome.poles) + [0.0, 0.0, 1e-3], dome.weights)
+    c = ms.drop_cutter([moved], ms.BallEndMill(10), xy)
+    assert c.n_cached == 0 and np.allclose(c.height, a.height + 1e-3, atol=1e-9)
+    d = ms.drop_cutter([dome], ms.BullNoseEndMill(10, 2), xy)
+    e = ms.drop_cutter([dome], ms.BallEndMill(10), xy, engine="numpy")
+    assert d.n_cached == 0 and e.n_cached == 0
+    assert np.abs(e.height - a.height).max() <= 1e-9
+    assert cache.faces_key([dome]) == cache.faces_key([dome.with_poles(dome.poles, dome.weights)])
+    assert cache.faces_key([dome]) != cache.faces_key([moved])

@@ -39,6 +39,7 @@ from ..errors import InputError
 from ..glossary import DropEngine, renamed
 from ..results import Progress, Result
 from ..typing import ArrayLike, FacesLike, ToolLike, Vector3
+from . import cache
 from .faceset import FaceSet
 from .faceset import face_set as build_face_set
 from .solves import (
@@ -100,6 +101,9 @@ class DropCutterResult(Result):
         Stage timings (seconds).
     engine : str
         The engine that computed the heights ("compiled" or "numpy").
+    n_cached : int
+        Points answered from the heights computed earlier for the same faces, tool and engine
+        (:mod:`~machsurf_cad.threeaxis.cache`).
     """
 
     xy: np.ndarray
@@ -113,6 +117,7 @@ class DropCutterResult(Result):
     cutter: str
     time_s: dict
     engine: str = "numpy"
+    n_cached: int = 0
 
     @property
     def n_points(self) -> int:
@@ -130,6 +135,7 @@ class DropCutterResult(Result):
             "height_max_mm": float(self.height[ok].max()) if ok.any() else None,
             "axis": [float(a) for a in self.axis],
             "engine": self.engine,
+            "n_cached": self.n_cached,
             "time_s": dict(self.time_s),
         }
 
@@ -430,7 +436,7 @@ def machining_face_set(faces, check_faces, cutter, *, axis, seed_spacing=None, w
     if not machined:
         raise InputError(f"{what} needs at least one face to machine")
     spacing = default_seed_spacing(cutter) if seed_spacing is None else float(seed_spacing)
-    fs = build_face_set(machined + list(check_faces), axis=axis, spacing=spacing)
+    fs = cache.face_set(build_face_set, machined + list(check_faces), axis=axis, spacing=spacing)
     xy = fs.sample_xyz[fs.sample_face < len(machined), :2]
     return fs, (float(xy[:, 0].min()), float(xy[:, 0].max()), float(xy[:, 1].min()), float(xy[:, 1].max()))
 
@@ -496,21 +502,30 @@ def drop_cutter(
     if not np.all(np.isfinite(xy)):
         raise InputError("drop-cutter query points must be a finite (n, 2) array of x, y in mm")
     spacing = default_seed_spacing(tool) if seed_spacing is None else checks.positive("seed spacing", seed_spacing)
-    fs = face_set if face_set is not None else build_face_set(faces, axis=axis, spacing=spacing)
+    fs = face_set if face_set is not None else cache.face_set(build_face_set, faces, axis=axis, spacing=spacing)
     t1 = time.perf_counter()
     prof = _Profile(tool)
     chunk_fn = _engine(engine, fs)
+    engine_name = "numpy" if chunk_fn is _drop_chunk else "compiled"
     n = xy.shape[0]
     height = np.full(n, np.nan)
     kind = np.zeros(n, np.int8)
     face = np.full(n, -1)
     point = np.full((n, 3), np.nan)
-    batch_size = _chunk_size(fs, prof, n, int(batch_size))
-    for s in range(0, n, batch_size):
-        e = min(n, s + batch_size)
-        height[s:e], kind[s:e], face[s:e], point[s:e] = chunk_fn(fs, prof, xy[s:e])
+    memo = cache.HeightMemo.of(fs, tool.spec(), engine_name)
+    rows, keys = memo.lookup(xy)
+    known = np.nonzero(rows >= 0)[0]
+    if known.size:  # points solved before with this face set, tool and engine: the same numbers
+        height[known], kind[known], face[known], point[known] = memo.take(rows[known])
+    todo = np.nonzero(rows < 0)[0]
+    m = todo.size
+    batch_size = _chunk_size(fs, prof, m, int(batch_size))
+    for s in range(0, m, batch_size):
+        sel = todo[s : min(m, s + batch_size)]
+        height[sel], kind[sel], face[sel], point[sel] = chunk_fn(fs, prof, xy[sel])
+        memo.store([keys[i] for i in sel], height[sel], kind[sel], face[sel], point[sel])
         if progress is not None:
-            progress(e, n, "drop-cutter")
+            progress(known.size + s + sel.size, n, "drop-cutter")
     t2 = time.perf_counter()
     tip_f = np.column_stack([xy, height])
     return DropCutterResult(
@@ -524,7 +539,8 @@ def drop_cutter(
         fs.frame.copy(),
         tool.spec(),
         {"prepare_s": t1 - t0, "drop_s": t2 - t1},
-        "numpy" if chunk_fn is _drop_chunk else "compiled",
+        engine_name,
+        int(known.size),
     )
 
 

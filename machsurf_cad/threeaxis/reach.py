@@ -17,6 +17,7 @@ import numpy as np
 
 from .. import checks
 from ..errors import InputError
+from . import cache
 from .dropcutter import default_seed_spacing, drop_cutter
 from .faceset import FaceSet
 from .faceset import face_set as build_face_set
@@ -80,7 +81,7 @@ def reachable_area(
     if int(samples) < 4:
         raise InputError("samples must be >= 4")
     prof = _Profile(cutter)
-    fs = face_set or build_face_set(list(faces), axis=axis, spacing=default_seed_spacing(cutter))
+    fs = face_set or cache.face_set(build_face_set, list(faces), axis=axis, spacing=default_seed_spacing(cutter))
     machined = list(machined)
     areas = np.array([_samples(fs.faces[i], 16)[2].sum() for i in machined])
     share = areas / areas.sum() if areas.sum() > 0 else np.full(len(machined), 1.0 / max(len(machined), 1))

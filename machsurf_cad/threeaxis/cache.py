@@ -1,0 +1,112 @@
+"""Caches of the 3-axis work on a part: face sets (seed samples, kernel arrays) and exact drop-cutter
+heights, reused by repeated queries (a raster, then a waterline, the scallop planner, a FreeCAD recompute
+with another step-over).
+
+Face sets are keyed by the faces' content (every degree, knot, pole, weight, trimming curve and name), the
+tool axis and the seed spacing: a changed part never reuses one. Heights are kept per face set and per tool
+(its full spec) and engine, point by point (the exact query coordinates): a changed tool never reuses them,
+and a repeated point returns the very same numbers. Both are bounded (:data:`MAX_FACE_SETS`,
+:data:`MAX_HEIGHTS`) and can be emptied with :func:`clear`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections import OrderedDict
+
+import numpy as np
+
+MAX_FACE_SETS = 8
+"""Face sets kept (least recently used dropped first)."""
+MAX_HEIGHTS = 500_000
+"""Heights kept per face set, tool and engine (then the memo starts again)."""
+
+_face_sets: OrderedDict = OrderedDict()
+
+
+def clear() -> None:
+    """Forget every cached face set and height."""
+    _face_sets.clear()
+
+
+def _update_array(h, a) -> None:
+    a = np.ascontiguousarray(np.asarray(a))
+    h.update(str((a.dtype.str, a.shape)).encode())
+    h.update(a.tobytes())
+
+
+def faces_key(faces) -> str:
+    """A hash of the faces' geometry, trimming and names (what a face set is built from)."""
+    from ..geometry.bspline import BSplineSurface
+    from ..geometry.face import Face
+
+    h = hashlib.sha256()
+    for f in faces:
+        face = Face(f, name=f.name) if isinstance(f, BSplineSurface) else f
+        if not isinstance(face, Face):
+            return ""  # not faces: no key (face_set refuses them with its own message)
+        s = face.surface
+        h.update(repr((type(face).__name__, face.name, s.degree_u, s.degree_v, s.periodic_u, s.periodic_v,
+                       face.uv_bounds, face.reversed)).encode())  # fmt: skip
+        for a in (s.knots_u, s.mults_u, s.knots_v, s.mults_v, s.poles, np.zeros(0) if s.weights is None else s.weights):
+            _update_array(h, a)
+        for loop in face.loops:
+            h.update(b"loop")
+            for c in loop:
+                h.update(repr((c.degree, c.periodic)).encode())
+                for a in (c.knots, c.mults, c.poles, np.zeros(0) if c.weights is None else c.weights):
+                    _update_array(h, a)
+    return h.hexdigest()
+
+
+def face_set(build, faces, *, axis, spacing: float, **kw):
+    """``build(faces, axis=, spacing=, **kw)``, or the face set built earlier from the same content."""
+    faces = list(faces)
+    fk = faces_key(faces)
+    if not fk:
+        return build(faces, axis=axis, spacing=spacing, **kw)
+    key = (fk, tuple(float(a) for a in np.asarray(axis, float).ravel()), float(spacing), tuple(sorted(kw.items())))
+    if key in _face_sets:
+        _face_sets.move_to_end(key)
+        return _face_sets[key]
+    fs = build(faces, axis=axis, spacing=spacing, **kw)
+    _face_sets[key] = fs
+    while len(_face_sets) > MAX_FACE_SETS:
+        _face_sets.popitem(last=False)
+    return fs
+
+
+class HeightMemo:
+    """Heights already computed on one face set for one tool and engine, by exact query point."""
+
+    def __init__(self):
+        self.index: dict = {}
+        self.chunks: list = []
+        self.n = 0
+        self._joined = None
+
+    @staticmethod
+    def of(fs, tool_spec: str, engine: str) -> HeightMemo:
+        memos = fs.__dict__.setdefault("_height_memos", {})
+        return memos.setdefault((tool_spec, engine), HeightMemo())
+
+    def lookup(self, xy: np.ndarray):
+        """Row of each point in the memo (-1: not computed) and the points' keys."""
+        keys = [r.tobytes() for r in np.ascontiguousarray(xy, dtype=float)]
+        return np.array([self.index.get(k, -1) for k in keys], np.int64), keys
+
+    def take(self, rows):
+        """Height, contact kind, face and contact point of memo rows."""
+        if self._joined is None:
+            self._joined = [np.concatenate([c[i] for c in self.chunks]) for i in range(4)]
+        return tuple(a[rows] for a in self._joined)
+
+    def store(self, keys, height, kind, face, point) -> None:
+        if self.n + len(keys) > MAX_HEIGHTS:
+            self.__init__()
+        for j, k in enumerate(keys):
+            self.index.setdefault(k, self.n + j)
+        self.chunks.append((np.array(height, float), np.array(kind, np.int8), np.array(face, np.int64),
+                            np.array(point, float).reshape(-1, 3)))  # fmt: skip
+        self.n += len(keys)
+        self._joined = None
