@@ -28,7 +28,8 @@ from __future__ import annotations
 import functools
 import math
 import warnings
-from dataclasses import dataclass
+from collections import OrderedDict
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -293,6 +294,22 @@ def _coarse(c, tree, P, h, tolerance, T, A, progress=None):
     return cut_d, hold_d, seed, idx, val, hold_seed
 
 
+_RECENT: OrderedDict = OrderedDict()
+_MAX_RECENT = 2
+
+
+def _memo_key(faces, toolpath, tool, params, map_chunks) -> str:
+    """The content key of a check (faces, positions, axes, moves, the whole tool, every parameter); empty when
+    it cannot be keyed (faces not given as faces, a custom chunk runner)."""
+    from .contentkey import content_key, faces_key
+
+    fk = faces_key(faces)
+    if not fk or map_chunks is not None:
+        return ""
+    tp = toolpath
+    return content_key(fk, np.asarray(tp.tip), np.asarray(tp.axis), np.asarray(tp.move), repr(tool), params)
+
+
 @renamed(
     cutter="tool",
     tolerance="gouge_tolerance",
@@ -391,6 +408,13 @@ def verify(
     faces = _faces(part)
     h = positive("spacing", spacing) if spacing is not None else _auto_spacing(faces, c, max_samples)
     _check_placements(toolpath, step, angle_step)
+    key = _memo_key(faces, toolpath, c, (gouge_tolerance, clear, step, angle_step, h, max_samples), map_chunks)
+    if key in _RECENT:  # the very same check just ran (a raster's own check, then the check before writing)
+        _RECENT.move_to_end(key)
+        res = _RECENT[key]
+        for w in res.warnings:
+            warnings.warn(w, stacklevel=2)
+        return replace(res, toolpath=toolpath)
     smp = _sample_part(faces, h, max_samples)
     tree = cKDTree(smp.P)
     T, A, owner = _placements(toolpath, step, angle_step)
@@ -414,7 +438,7 @@ def verify(
         warnings.warn(w, stacklevel=2)
     t3 = time.perf_counter()
     times = {"sample_s": t1 - t0, "coarse_s": t2 - t1, "refine_s": t3 - t2, "total_s": t3 - t0}
-    return VerifyResult(
+    res = VerifyResult(
         toolpath,
         c,
         float(gouge_tolerance),
@@ -436,6 +460,11 @@ def verify(
         float(step) * float(step) / (8.0 * rho_motion),  # inf, not OverflowError, for an absurd step
         float(clear),
     )
+    if key:
+        _RECENT[key] = res
+        while len(_RECENT) > _MAX_RECENT:
+            _RECENT.popitem(last=False)
+    return res
 
 
 class _Samples(NamedTuple):

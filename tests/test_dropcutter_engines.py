@@ -159,6 +159,7 @@ def test_face_sets_and_heights_are_cached_by_content_and_tool():
     moved = dome.with_poles(np.asarray(dome.poles) + [0.0, 0.0, 1e-3], dome.weights)
     c = ms.drop_cutter([moved], ms.BallEndMill(10), xy)
     assert c.n_cached == 0 and np.allclose(c.height, a.height + 1e-3, atol=1e-9)
+    assert ms.drop_cutter([dome], ms.BallEndMill(10.0000001), xy).n_cached == 0  # another tool, however close
     d = ms.drop_cutter([dome], ms.BullNoseEndMill(10, 2), xy)
     e = ms.drop_cutter([dome], ms.BallEndMill(10), xy, engine="numpy")
     assert d.n_cached == 0 and e.n_cached == 0

@@ -3,18 +3,19 @@ heights, reused by repeated queries (a raster, then a waterline, the scallop pla
 with another step-over).
 
 Face sets are keyed by the faces' content (every degree, knot, pole, weight, trimming curve and name), the
-tool axis and the seed spacing: a changed part never reuses one. Heights are kept per face set and per tool
-(its full spec) and engine, point by point (the exact query coordinates): a changed tool never reuses them,
-and a repeated point returns the very same numbers. Both are bounded (:data:`MAX_FACE_SETS`,
-:data:`MAX_HEIGHTS`) and can be emptied with :func:`clear`.
+tool axis and the seed spacing: a changed part never reuses one. Heights are kept per face set, tool (every
+field of it at full precision: a diameter 1e-7 mm larger is another tool) and engine, point by point (the
+exact query coordinates): a changed tool never reuses them, and a repeated point returns the very same
+numbers. Both are bounded (:data:`MAX_FACE_SETS`, :data:`MAX_HEIGHTS`) and can be emptied with :func:`clear`.
 """
 
 from __future__ import annotations
 
-import hashlib
 from collections import OrderedDict
 
 import numpy as np
+
+from ..contentkey import faces_key
 
 MAX_FACE_SETS = 8
 """Face sets kept (least recently used dropped first)."""
@@ -27,36 +28,6 @@ _face_sets: OrderedDict = OrderedDict()
 def clear() -> None:
     """Forget every cached face set and height."""
     _face_sets.clear()
-
-
-def _update_array(h, a) -> None:
-    a = np.ascontiguousarray(np.asarray(a))
-    h.update(str((a.dtype.str, a.shape)).encode())
-    h.update(a.tobytes())
-
-
-def faces_key(faces) -> str:
-    """A hash of the faces' geometry, trimming and names (what a face set is built from)."""
-    from ..geometry.bspline import BSplineSurface
-    from ..geometry.face import Face
-
-    h = hashlib.sha256()
-    for f in faces:
-        face = Face(f, name=f.name) if isinstance(f, BSplineSurface) else f
-        if not isinstance(face, Face):
-            return ""  # not faces: no key (face_set refuses them with its own message)
-        s = face.surface
-        h.update(repr((type(face).__name__, face.name, s.degree_u, s.degree_v, s.periodic_u, s.periodic_v,
-                       face.uv_bounds, face.reversed)).encode())  # fmt: skip
-        for a in (s.knots_u, s.mults_u, s.knots_v, s.mults_v, s.poles, np.zeros(0) if s.weights is None else s.weights):
-            _update_array(h, a)
-        for loop in face.loops:
-            h.update(b"loop")
-            for c in loop:
-                h.update(repr((c.degree, c.periodic)).encode())
-                for a in (c.knots, c.mults, c.poles, np.zeros(0) if c.weights is None else c.weights):
-                    _update_array(h, a)
-    return h.hexdigest()
 
 
 def face_set(build, faces, *, axis, spacing: float, **kw):
@@ -86,9 +57,9 @@ class HeightMemo:
         self._joined = None
 
     @staticmethod
-    def of(fs, tool_spec: str, engine: str) -> HeightMemo:
+    def of(fs, tool_key: str, engine: str) -> HeightMemo:
         memos = fs.__dict__.setdefault("_height_memos", {})
-        return memos.setdefault((tool_spec, engine), HeightMemo())
+        return memos.setdefault((tool_key, engine), HeightMemo())
 
     def lookup(self, xy: np.ndarray):
         """Row of each point in the memo (-1: not computed) and the points' keys."""

@@ -4,7 +4,12 @@ For a tool whose axis is +z (the :class:`~machsurf_cad.threeaxis.faceset.FaceSet
 surface is ``z = tip_z + h(rho)`` (:func:`~machsurf_cad.cutter_profiles.lower_height`, out to the profile's
 largest radius ``R``), the tip height at ``c = (x, y)`` is
 
-    tip_z(c) = max over part points p with |p_xy - c| <= R of  p_z - h(|p_xy - c|).
+    tip_z(c) = sup over part points p with |p_xy - c| < R of  p_z - h(|p_xy - c|),
+
+the lowest height at which the tool does not enter the part. Points exactly on the tool's circle count as
+limits of points inside (a fillet tangent to a wall exactly ``R`` away does); a face or edge that only
+touches the circle from outside (a plane wall exactly ``R`` from the axis) touches the tool's side without
+entering it and does not lift the tool (:func:`~machsurf_cad.threeaxis.solves._enters_face`).
 
 The maximum is reached at one of these contacts, each found by a local solve on the exact NURBS:
 
@@ -16,6 +21,11 @@ The maximum is reached at one of these contacts, each found by a local solve on 
   back to the circle where the maximum lies outside it);
 * ``TIP``: the point below a pointed tip (profiles with ``h'(0) > 0``);
 * ``SAMPLE``: a seed sample itself, when no refinement beats it (counted in the report).
+
+Two engines run the same algorithm: the numpy reference (vectorised over the queries of a batch) and a
+compiled kernel (numba, :mod:`~machsurf_cad.threeaxis.compiled`: one query at a time, in parallel); they
+give the same heights (tested to 1e-9 mm). Face sets and heights are cached
+(:mod:`~machsurf_cad.threeaxis.cache`).
 
 Seeds come from a k-d tree over the face and edge samples in plan; per query the best sample of each
 face and edge in five sectors of the disc (centre, four quadrants) seeds the solves. Every candidate
@@ -512,7 +522,7 @@ def drop_cutter(
     kind = np.zeros(n, np.int8)
     face = np.full(n, -1)
     point = np.full((n, 3), np.nan)
-    memo = cache.HeightMemo.of(fs, tool.spec(), engine_name)
+    memo = cache.HeightMemo.of(fs, repr(tool), engine_name)  # every field at full precision
     rows, keys = memo.lookup(xy)
     known = np.nonzero(rows >= 0)[0]
     if known.size:  # points solved before with this face set, tool and engine: the same numbers

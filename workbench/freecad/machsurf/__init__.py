@@ -4,8 +4,19 @@ Geometry crosses between FreeCAD's OpenCASCADE and machsurf_cad as B-spline arra
 knots, multiplicities, poles, weights). Lengths in mm, angles in degrees.
 """
 
+import os
 import sys
 from pathlib import Path
+
+
+def _numba_cache():
+    """numba's compiled drop-cutter kernel, for FreeCAD's Python (``python3-numba``), cached in FreeCAD's user
+    folder: beside the sources numba would share one cache with the repository's own environment, and each
+    would throw the other's away (numba keeps one kernel per file and numba version)."""
+    if "NUMBA_CACHE_DIR" not in os.environ and "numba" not in sys.modules:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        os.environ["NUMBA_CACHE_DIR"] = os.path.join(base, "machsurf_cad", "freecad-numba")
+
 
 
 def ensure_core():
@@ -24,6 +35,7 @@ def ensure_core():
     import machsurf_cad  # noqa: F401  (raises a clear ImportError if not found)
 
 
+_numba_cache()
 ensure_core()
 
 from machsurf_cad import __version__ as __version__
