@@ -166,3 +166,24 @@ def test_face_sets_and_heights_are_cached_by_content_and_tool():
     assert np.abs(e.height - a.height).max() <= 1e-9
     assert cache.faces_key([dome]) == cache.faces_key([dome.with_poles(dome.poles, dome.weights)])
     assert cache.faces_key([dome]) != cache.faces_key([moved])
+
+
+@pytest.mark.parametrize("engine", ["numpy", pytest.param("compiled", marks=needs_numba)])
+def test_an_edge_grazing_the_disc_between_its_samples_lifts_the_tool(engine):
+    """A thin fin (a vertical wall 10 um inside the tool's circle at its nearest, the edge's samples either
+    side of that point, all outside the disc) with its top edge at z = 20 over a floor at z = 0: the ball
+    D10 rests on the fin's top edge at 20 - h(4.99999), not on the floor at 0 (on the impeller of the shared
+    real parts such a blade-tip edge was missed: the tool 26 mm too low)."""
+    from machsurf_cad.geometry.builders import line_segment
+    from machsurf_cad.geometry.face import Face
+
+    floor = ms.builders.plane_patch((-20, -20, 0), (40, 0, 0), (0, 40, 0))
+    # the fin's surface runs up to z = 40, trimmed at z = 20: ascents on the surface climb out of the trim,
+    # only the trimming edge holds the answer
+    plane = ms.builders.plane_patch((-20.8, 4.99999, 0), (40, 0, 0), (0, 0, 40))
+    c = [(0, 0), (1, 0), (1, 0.5), (0, 0.5)]
+    loop = tuple(line_segment(c[i], c[(i + 1) % 4]) for i in range(4))
+    fin = Face(plane, (loop,), "fin", uv_bounds=(0.0, 1.0, 0.0, 0.5))
+    r = ms.drop_cutter([floor, fin], ms.BallEndMill(10), [[0.0, 0.0]], engine=engine)
+    expected = 20.0 - (5.0 - np.sqrt(25.0 - 4.99999**2))
+    assert abs(r.height[0] - expected) <= 1e-9

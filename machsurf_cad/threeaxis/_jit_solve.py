@@ -361,6 +361,8 @@ def edge_search(S, E, PR, cx, cy, e, t0, dt, W, iters=40):
         gs[k] = g if rho <= R else -math.inf
         if gs[k] > gs[kbest]:
             kbest = k
+    if not isfin(gs[kbest]):  # ``_graze``: an edge grazing the disc between the samples
+        kbest = _graze(S, E, PR, cx, cy, e, ts, gs, W)
     feasible = isfin(gs[kbest])
     lo, hi = ts[max(kbest - 1, 0)], ts[min(kbest + 1, n - 1)]
     t = ts[kbest]
@@ -388,6 +390,45 @@ def edge_search(S, E, PR, cx, cy, e, t0, dt, W, iters=40):
     if feasible and rho <= R * (1 + 1e-12) and _enters_edge(S, E, R, cx, cy, e, t, W):
         return g
     return -math.inf
+
+
+@njit(cache=True)
+def _graze(S, E, PR, cx, cy, e, ts, gs, W, iters=40):
+    """``_graze`` on one edge: the point nearest the axis between the samples around the nearest one; inside
+    the disc it replaces that sample (``ts``, ``gs``). Returns the index of the sample to start from."""
+    Ed, cu, wk = W[3], W[4], W[5]
+    R = PR[1][0]
+    n = ts.shape[0]
+    k, best = 0, math.inf
+    for i in range(n):
+        edge_derivs(S, E, e, ts[i], 0, Ed, cu, wk)
+        r = hyp(Ed[0, 0] - cx, Ed[0, 1] - cy)
+        if r < best:
+            k, best = i, r
+    lo, hi = ts[max(k - 1, 0)], ts[min(k + 1, n - 1)]
+    t = ts[k]
+    for _ in range(iters):
+        edge_derivs(S, E, e, t, 2, Ed, cu, wk)
+        dx, dy = Ed[0, 0] - cx, Ed[0, 1] - cy
+        r1 = dx * Ed[1, 0] + dy * Ed[1, 1]
+        r2 = Ed[1, 0] ** 2 + Ed[1, 1] ** 2 + dx * Ed[2, 0] + dy * Ed[2, 1]
+        if r1 < 0:
+            lo = t
+        if r1 > 0:
+            hi = t
+        newton = t - r1 / (r2 if r2 > 0 else math.inf)
+        t_new = newton if (r2 > 0 and lo < newton < hi) else 0.5 * (lo + hi)
+        if r1 == 0:
+            t_new = t
+        conv = abs(t_new - t) <= 1e-15 * max(abs(t), 1.0)
+        t = t_new
+        if conv:
+            break
+    edge_derivs(S, E, e, t, 0, Ed, cu, wk)
+    g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
+    if rho <= R:
+        ts[k], gs[k] = t, g
+    return k
 
 
 @njit(cache=True)

@@ -18,7 +18,6 @@ def _numba_cache():
         os.environ["NUMBA_CACHE_DIR"] = os.path.join(base, "machsurf_cad", "freecad-numba")
 
 
-
 def ensure_core():
     """Make ``machsurf_cad`` importable: installed, or the repository this add-on is linked from."""
     try:
