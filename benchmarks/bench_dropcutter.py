@@ -36,7 +36,9 @@ def dropcutter_rows(quick=False, deflection=0.001, sizes=None, ocl_max_points=40
     """Per part x cutter x grid: machsurf's compiled engine (CPU, wall), its numpy engine on the smaller grid,
     OpenCAMLib's BatchDropCutter on an OCCT mesh of the same STEP (CPU with its threads, wall; the mesh's
     time apart), the CPU ratio and the largest height difference. OpenCAMLib runs on grids of at most
-    ``ocl_max_points`` points (its CPU time on bigger grids is scaled from the 61x61 grid's, marked)."""
+    ``ocl_max_points`` points (its CPU time on bigger grids is scaled from the 61x61 grid's, marked).
+    OpenCAMLib counts a contact on the tool's circle from outside (a wall exactly R from the axis), which
+    lifts its tool there: ``n_below_0_01`` counts the points where ours is more than 0.01 mm lower."""
     import machsurf_cad as ms
     from machsurf_cad.occ import read_step_faces, triangulate_step
     from machsurf_cad.threeaxis.reference import has_opencamlib, ocl_drop_cutter
@@ -74,8 +76,10 @@ def dropcutter_rows(quick=False, deflection=0.001, sizes=None, ocl_max_points=40
                 if has_opencamlib() and xy.shape[0] <= ocl_max_points:
                     ref, c_ref, w_ref = _timed(ocl_drop_cutter, P, T, cutter, xy)
                     ocl_per_point = c_ref / xy.shape[0]
+                    d = ours - ref
                     row.update(ref=f"OpenCAMLib {len(T) // 1000}k tri", ref_s=w_ref, ref_cpu_s=c_ref,
-                               max_diff=float(np.nanmax(np.abs(ours - ref))))  # fmt: skip
+                               max_diff=float(np.nanmax(np.abs(d))), ours_above_mm=float(np.nanmax(d)),
+                               ours_below_mm=float(np.nanmax(-d)), n_below_0_01=int(np.sum(d < -0.01)))  # fmt: skip
                 elif ocl_per_point is not None:
                     row.update(ref="OpenCAMLib (scaled)*", ref_s=float("nan"), ref_cpu_s=ocl_per_point * xy.shape[0],
                                max_diff=float("nan"))  # fmt: skip
