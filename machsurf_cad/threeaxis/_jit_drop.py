@@ -120,26 +120,18 @@ def _group_max(n_groups, key, x, sel):
 
 
 @njit(cache=True)
-def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
-    """The tip height at one query point: ``best`` = (rank, height, kind, face, found), ``bp`` the contact."""
+def _candidates(cx, cy, idx, rr, PR, SM, K):
+    """Per pool sample in reach of the query: value ``z - h(rho)``, z, ``-rho``, the bounds of its face
+    (``ub``), rim (``rim_ub``) and edge (``e_ub``) neighbourhoods, inside the disc, an edge sample, its
+    (face, sector) group and (edge, sector, inside) group, and the numbers of faces and edges met."""
     xyz, pf, n_int = SM[0], SM[1], SM[3]
-    cov, rise, tilt, ecov = SM[7], SM[8], SM[9], SM[10]
-    R, sp, max_tilt, h_R = K[0], K[1], K[2], K[3]
-    nF, nE = int(K[5]), int(K[6])
-    W = (np.empty((6, 3)), np.empty((6, 3)), np.empty((6, 3)), np.empty((9, 3)), np.empty((3, 3)), np.empty(480))
-    best[4] = 0.0
-    idx, rr = _gather(cx, cy, R + sp, xyz, G)
+    cov, rise, ecov = SM[7], SM[8], SM[10]
+    R, h_R = K[0], K[3]
     m = idx.shape[0]
-    if m == 0:
-        return
-    fmap = np.full(nF, -1, np.int64)
-    emap = np.full(nE, -1, np.int64)
+    fmap = np.full(int(K[5]), -1, np.int64)
+    emap = np.full(int(K[6]), -1, np.int64)
     nl = ne = 0
-    val = np.empty(m)
-    zz = np.empty(m)
-    negr = np.empty(m)
-    ub = np.empty(m)
-    rim_ub = np.empty(m)
+    val, zz, negr, ub, rim_ub = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     e_ub = np.full(m, -math.inf)
     feas = np.empty(m, np.bool_)
     is_e = np.empty(m, np.bool_)
@@ -174,51 +166,68 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
             ec = ecov[j - n_int]
             if rho - ec <= R:
                 e_ub[k] = z + ec - prof_floor(PR, rho - ec)
-    ng = nl * 5
-    # the best sample inside the disc: a lower bound
-    strictly = np.empty(m, np.bool_)  # inside the disc, not on its circle (see enters_face)
-    for k in range(m):
-        strictly[k] = rr[k] < R * (1 - ON_CIRCLE)
-    b0 = _group_best(1, np.zeros(m, np.int64), val, strictly, idx)[0]
-    if b0 >= 0:
-        j = idx[b0]
-        _add(best, bp, val[b0], SAMPLE, pf[j], xyz[j, 0], xyz[j, 1], xyz[j, 2])
-    # face seeds per group: the best sample inside the disc, an edge sample where the face has none, else
-    # the sample nearest the disc within its cover radius outside it
+    return val, zz, negr, ub, rim_ub, e_ub, feas, is_e, gk, ek, nl, ne
+
+
+@njit(cache=True)
+def _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K):
+    """Face seeds (per group the best sample inside the disc, an edge sample where the face has none, else
+    the sample nearest the disc within its cover radius outside it; none steeper than the profile), rim
+    seeds (the highest near the rim inside, the nearest outside) and edge seeds, as masks."""
+    cov, tilt = SM[7], SM[9]
+    R, max_tilt = K[0], K[2]
+    m = idx.shape[0]
     seed = _group_best(ng, gk, val, feas & ~is_e, idx)
     s2 = _group_best(ng, gk, val, feas & is_e, idx)
     outside = np.empty(m, np.bool_)
+    near = np.empty(m, np.bool_)
+    outr = np.empty(m, np.bool_)
     for k in range(m):
         outside[k] = (not feas[k]) and (rr[k] - cov[idx[k]] <= R)
+        near[k] = feas[k] and rr[k] >= R - cov[idx[k]]
+        outr[k] = (not feas[k]) and rr[k] <= R + cov[idx[k]]
     s3 = _group_best(ng, gk, negr, outside, idx)
     is_seed = np.zeros(m, np.bool_)
     for g in range(ng):
         s = seed[g] if seed[g] >= 0 else (s2[g] if s2[g] >= 0 else s3[g])
         if s >= 0 and tilt[idx[s]] <= max_tilt + 1e-9:
             is_seed[s] = True
-    near = np.empty(m, np.bool_)
-    outr = np.empty(m, np.bool_)
-    for k in range(m):
-        near[k] = feas[k] and rr[k] >= R - cov[idx[k]]
-        outr[k] = (not feas[k]) and rr[k] <= R + cov[idx[k]]
     rseed = np.zeros(m, np.bool_)
-    for s in _group_best(ng, gk, zz, near, idx):
-        if s >= 0:
-            rseed[s] = True
-    for s in _group_best(ng, gk, negr, outr, idx):
-        if s >= 0:
-            rseed[s] = True
-    n_eg = ne * 10
     eseed = np.zeros(m, np.bool_)
-    for s in _group_best(n_eg, ek, val, is_e & feas, idx):
-        if s >= 0:
-            eseed[s] = True
-    for s in _group_best(n_eg, ek, negr, is_e & ~feas, idx):
-        if s >= 0:
-            eseed[s] = True
-    fb = _group_max(ng, gk, ub, np.ones(m, np.bool_))
-    rb = _group_max(ng, gk, rim_ub, np.ones(m, np.bool_))
-    eb = _group_max(n_eg, ek, e_ub, is_e)
+    for mask, groups in ((rseed, _group_best(ng, gk, zz, near, idx)), (rseed, _group_best(ng, gk, negr, outr, idx)),
+                         (eseed, _group_best(n_eg, ek, val, is_e & feas, idx)),
+                         (eseed, _group_best(n_eg, ek, negr, is_e & ~feas, idx))):  # fmt: skip
+        for s in groups:
+            if s >= 0:
+                mask[s] = True
+    return is_seed, rseed, eseed
+
+
+@njit(cache=True)
+def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
+    """The tip height at one query point: ``best`` = (rank, height, kind, face, found), ``bp`` the contact."""
+    xyz, pf = SM[0], SM[1]
+    cov, rise = SM[7], SM[8]
+    R, sp, h_R = K[0], K[1], K[3]
+    W = (np.empty((6, 3)), np.empty((6, 3)), np.empty((6, 3)), np.empty((9, 3)), np.empty((3, 3)), np.empty(480))
+    best[4] = 0.0
+    idx, rr = _gather(cx, cy, R + sp, xyz, G)
+    m = idx.shape[0]
+    if m == 0:
+        return
+    val, zz, negr, ub, rim_ub, e_ub, feas, is_e, gk, ek, nl, ne = _candidates(cx, cy, idx, rr, PR, SM, K)
+    ng, n_eg = nl * 5, ne * 10
+    # the best sample inside the disc (not on its circle: see enters_face) is a lower bound
+    strictly = np.empty(m, np.bool_)
+    for k in range(m):
+        strictly[k] = rr[k] < R * (1 - ON_CIRCLE)
+    b0 = _group_best(1, np.zeros(m, np.int64), val, strictly, idx)[0]
+    if b0 >= 0:
+        j = idx[b0]
+        _add(best, bp, val[b0], SAMPLE, pf[j], xyz[j, 0], xyz[j, 1], xyz[j, 2])
+    is_seed, rseed, eseed = _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K)
+    bounds = (_group_max(ng, gk, ub, np.ones(m, np.bool_)), _group_max(ng, gk, rim_ub, np.ones(m, np.bool_)),
+              _group_max(n_eg, ek, e_ub, is_e))  # fmt: skip
     # phase 1: the best face seed and the highest rim seed
     f1 = _group_best(1, np.zeros(m, np.int64), val, is_seed, idx)[0]
     r1 = _group_best(1, np.zeros(m, np.int64), zz, rseed, idx)[0]
@@ -226,12 +235,33 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
         _solve(FACE, idx[f1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
     if r1 >= 0:
         _solve(RIM, idx[r1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
+    _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, (is_seed, rseed, eseed), bounds, gk, ek, f1, r1)
+    low = _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, is_seed, feas, is_e, ub, gk, ng)
+    for kk in range(kinks.shape[0]):
+        rk, hk = kinks[kk, 0], kinks[kk, 1]
+        near_k = np.empty(m, np.bool_)
+        for k in range(m):
+            j = idx[k]
+            near_k[k] = abs(rr[k] - rk) <= cov[j] and zz[k] + rise[j] - hk >= low
+        for s in _group_best(ng, gk, zz, near_k, idx):
+            if s >= 0:
+                _solve(RIM, idx[s], cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk)
+
+
+@njit(cache=True)
+def _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, seeds, bounds, gk, ek, f1, r1):
+    """Every seed whose group bound reaches the best height of phase 1 (face seeds in the found contact's own
+    basin skipped), highest bound first; a seed whose bound falls below a height found meanwhile cannot
+    raise it and is skipped."""
+    xyz, pf, cov = SM[0], SM[1], SM[7]
+    R, h_R = K[0], K[3]
+    is_seed, rseed, eseed = seeds
+    fb, rb, eb = bounds
+    m = idx.shape[0]
     low = best[1] - 1e-9 if best[4] > 0 else -math.inf
     solved = best[4] > 0 and best[2] == FACE
     c_face = best[3]
     p1x, p1y, p1z = bp[0], bp[1], bp[2]
-    # phase 2: every seed whose group bound reaches the best height found, highest bound first (a seed
-    # whose bound falls below a height found meanwhile cannot raise it: skipped)
     tk = np.empty(3 * m, np.int64)
     tb = np.empty(3 * m)
     nt = 0
@@ -254,16 +284,6 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
             break
         kind, k = FACE + tk[i] // m, tk[i] % m
         _solve(kind, idx[k], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
-    low = _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, is_seed, feas, is_e, ub, gk, ng)
-    for kk in range(kinks.shape[0]):
-        rk, hk = kinks[kk, 0], kinks[kk, 1]
-        near_k = np.empty(m, np.bool_)
-        for k in range(m):
-            j = idx[k]
-            near_k[k] = abs(rr[k] - rk) <= cov[j] and zz[k] + rise[j] - hk >= low
-        for s in _group_best(ng, gk, zz, near_k, idx):
-            if s >= 0:
-                _solve(RIM, idx[s], cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk)
 
 
 @njit(cache=True)
