@@ -251,6 +251,13 @@ def drop(fs: FaceSet, prof, C: np.ndarray):
 
 if __name__ == "__main__":  # pragma: no cover - `make venv` compiles the kernel once
     if available():
-        print(f"machsurf_cad: drop-cutter kernel ready ({warm_up():.1f} s)")
+        import time as _time
+
+        _t = _time.perf_counter()
+        _err = build_error()
+        if _err is None:
+            print(f"machsurf_cad: drop-cutter kernel ready ({_time.perf_counter() - _t:.1f} s)")
+        else:  # the numpy path runs instead (drop_cutter says so): set-up goes on
+            print(f"machsurf_cad: the drop-cutter kernel does not build ({_err}); the numpy path runs")
     else:
         print("machsurf_cad: numba is not installed: the drop-cutter runs its numpy path")
