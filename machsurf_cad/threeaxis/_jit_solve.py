@@ -20,13 +20,13 @@ ON_CIRCLE, PROBE_MM, PROBE_DIRECTIONS, PROBE_DROP = 1e-9, 1e-3, 16, 1e-12  # as 
 
 @njit(cache=True)
 def enters_face(S, T, R, cx, cy, f, u, v, W):
-    """``_enters_face`` on one contact: inside the disc, or on its circle where a probe in one of 16 tangent
-    directions lies on the face and closer to the axis."""
-    D, wk = W[2], W[5]
-    surf(S, f, u, v, 1, D, wk)
-    rho = math.sqrt((D[0, 0] - cx) ** 2 + (D[0, 1] - cy) ** 2)
+    """``_enters_face`` on one contact (its point left in ``W[0][0]`` by the solve): inside the disc, or on its
+    circle where a probe in one of 16 tangent directions lies on the face and closer to the axis."""
+    rho = math.sqrt((W[0][0, 0] - cx) ** 2 + (W[0][0, 1] - cy) ** 2)
     if not (rho >= R * (1 - ON_CIRCLE)):
         return True
+    D, wk = W[2], W[5]
+    surf(S, f, u, v, 1, D, wk)
     su0, su1, su2, sv0, sv1, sv2 = D[1, 0], D[1, 1], D[1, 2], D[2, 0], D[2, 1], D[2, 2]
     E = su0 * su0 + su1 * su1 + su2 * su2
     F = su0 * sv0 + su1 * sv1 + su2 * sv2
@@ -166,11 +166,12 @@ def face_newton(S, PR, sp, cx, cy, f, u, v, W, iters=40):
         k = radius / nmax(_tan_len(D, au, av), 1e-300)
         if not newton:
             du, dv = au * k, av * k
-        eu, ev, quad = _up_curvature(Huu, Huv, Hvv, D, radius)
-        lin = abs(gu * au + gv * av) * k
-        escape = (not newton) and (quad > lin)
-        if escape:
-            du, dv = eu, ev
+        escape = False
+        if not newton:
+            eu, ev, quad = _up_curvature(Huu, Huv, Hvv, D, radius)
+            escape = quad > abs(gu * au + gv * av) * k
+            if escape:
+                du, dv = eu, ev
         shrink = nmin(1.0, radius / nmax(_tan_len(D, du, dv), 1e-300))
         nu, nv = clamp_uv(S, f, u + du * shrink, v + dv * shrink)
         surf(S, f, nu, nv, 2, Dn, wk)
@@ -343,6 +344,22 @@ def edge_g(PR, cx, cy, Ed, order):
 
 
 @njit(cache=True)
+def _newton_max(t, lo, hi, d1, d2):
+    """One safeguarded Newton step towards a maximum of a function of ``t`` with derivatives ``d1``, ``d2``:
+    the bracket ``[lo, hi]`` shrinks by the sign of ``d1``, Newton where the function is concave and the step
+    stays inside, else bisection. Returns the new ``t``, the bracket and whether the step vanished."""
+    if d1 > 0:
+        lo = t
+    if d1 < 0:
+        hi = t
+    newton = t - d1 / (d2 if d2 < 0 else -math.inf)
+    t_new = newton if (d2 < 0 and lo < newton < hi) else 0.5 * (lo + hi)
+    if d1 == 0:
+        t_new = t
+    return t_new, lo, hi, abs(t_new - t) <= 1e-15 * max(abs(t), 1.0)
+
+
+@njit(cache=True)
 def edge_search(S, E, PR, cx, cy, e, t0, dt, W, iters=40):
     """``_edge_search`` on one seed: returns ``g`` (``-inf`` where no point is in the disc), the point in
     ``W[3][0]``."""
@@ -352,39 +369,32 @@ def edge_search(S, E, PR, cx, cy, e, t0, dt, W, iters=40):
     b = min(t0 + 2 * dt, E[1][e, 1])
     n = 17
     ts = wk[400:417]
-    gs = wk[420:437]
+    gs = wk[420:437]  # the samples' values, -inf outside the disc
+    rs = wk[440:457]  # and their distances from the axis
     kbest = 0
     for k in range(n):
         ts[k] = a + (b - a) * (k / (n - 1))
         edge_derivs(S, E, e, ts[k], 0, Ed, cu, wk)
         g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
         gs[k] = g if rho <= R else -math.inf
+        rs[k] = rho
         if gs[k] > gs[kbest]:
             kbest = k
     if not isfin(gs[kbest]):  # ``_graze``: an edge grazing the disc between the samples
-        kbest = _graze(S, E, PR, cx, cy, e, ts, gs, W)
+        kbest = _graze(S, E, PR, cx, cy, e, ts, gs, rs, W)
     feasible = isfin(gs[kbest])
     lo, hi = ts[max(kbest - 1, 0)], ts[min(kbest + 1, n - 1)]
     t = ts[kbest]
     for _ in range(iters):
         edge_derivs(S, E, e, t, 2, Ed, cu, wk)
         _, _, g1, _, g2 = edge_g(PR, cx, cy, Ed, 2)
-        if g1 > 0:
-            lo = t
-        if g1 < 0:
-            hi = t
-        newton = t - g1 / (g2 if g2 < 0 else -math.inf)
-        t_new = newton if (g2 < 0 and lo < newton < hi) else 0.5 * (lo + hi)
-        if g1 == 0:
-            t_new = t
-        conv = abs(t_new - t) <= 1e-15 * max(abs(t), 1.0)
-        t = t_new
+        t, lo, hi, conv = _newton_max(t, lo, hi, g1, g2)
         if conv:
             break
     edge_derivs(S, E, e, t, 0, Ed, cu, wk)
     g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
     if feasible and rho > R:
-        t = _onto_circle(S, E, PR, cx, cy, e, t, ts, W)
+        t = _onto_circle(S, E, PR, cx, cy, e, t, ts, gs, W)
         edge_derivs(S, E, e, t, 0, Ed, cu, wk)
         g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
     if feasible and rho <= R * (1 + 1e-12) and _enters_edge(S, E, R, cx, cy, e, t, W):
@@ -393,35 +403,25 @@ def edge_search(S, E, PR, cx, cy, e, t0, dt, W, iters=40):
 
 
 @njit(cache=True)
-def _graze(S, E, PR, cx, cy, e, ts, gs, W, iters=40):
-    """``_graze`` on one edge: the point nearest the axis between the samples around the nearest one; inside
-    the disc it replaces that sample (``ts``, ``gs``). Returns the index of the sample to start from."""
+def _graze(S, E, PR, cx, cy, e, ts, gs, rs, W, iters=40):
+    """``_graze`` on one edge (samples ``ts``, their distances ``rs`` from the axis): the point nearest the axis
+    between the samples around the nearest one; inside the disc it replaces that sample (``ts``, ``gs``).
+    Returns the index of the sample to start from."""
     Ed, cu, wk = W[3], W[4], W[5]
     R = PR[1][0]
     n = ts.shape[0]
     k, best = 0, math.inf
     for i in range(n):
-        edge_derivs(S, E, e, ts[i], 0, Ed, cu, wk)
-        r = hyp(Ed[0, 0] - cx, Ed[0, 1] - cy)
-        if r < best:
-            k, best = i, r
+        if rs[i] < best:
+            k, best = i, rs[i]
     lo, hi = ts[max(k - 1, 0)], ts[min(k + 1, n - 1)]
     t = ts[k]
     for _ in range(iters):
         edge_derivs(S, E, e, t, 2, Ed, cu, wk)
         dx, dy = Ed[0, 0] - cx, Ed[0, 1] - cy
-        r1 = dx * Ed[1, 0] + dy * Ed[1, 1]
+        r1 = dx * Ed[1, 0] + dy * Ed[1, 1]  # half the derivatives of rho^2: a maximum of -rho^2
         r2 = Ed[1, 0] ** 2 + Ed[1, 1] ** 2 + dx * Ed[2, 0] + dy * Ed[2, 1]
-        if r1 < 0:
-            lo = t
-        if r1 > 0:
-            hi = t
-        newton = t - r1 / (r2 if r2 > 0 else math.inf)
-        t_new = newton if (r2 > 0 and lo < newton < hi) else 0.5 * (lo + hi)
-        if r1 == 0:
-            t_new = t
-        conv = abs(t_new - t) <= 1e-15 * max(abs(t), 1.0)
-        t = t_new
+        t, lo, hi, conv = _newton_max(t, lo, hi, -r1, -r2)
         if conv:
             break
     edge_derivs(S, E, e, t, 0, Ed, cu, wk)
@@ -450,14 +450,14 @@ def _enters_edge(S, E, R, cx, cy, e, t, W):
 
 
 @njit(cache=True)
-def _onto_circle(S, E, PR, cx, cy, e, t, ts, W, iters=40):
-    """``_onto_circle``: the last edge parameter inside the disc between the nearest sample inside and ``t``."""
+def _onto_circle(S, E, PR, cx, cy, e, t, ts, gs, W, iters=40):
+    """``_onto_circle``: the last edge parameter inside the disc between the nearest sample inside (finite
+    ``gs``) and ``t``."""
     Ed, cu, wk = W[3], W[4], W[5]
     R = PR[1][0]
     best, t_in = math.inf, ts[0]
     for k in range(ts.shape[0]):
-        edge_derivs(S, E, e, ts[k], 0, Ed, cu, wk)
-        if hyp(Ed[0, 0] - cx, Ed[0, 1] - cy) <= R and abs(ts[k] - t) < best:
+        if isfin(gs[k]) and abs(ts[k] - t) < best:
             best, t_in = abs(ts[k] - t), ts[k]
     t_out = t
     x = 0.5 * (t_in + t_out)

@@ -163,11 +163,9 @@ def _chunk_size(fs: FaceSet, prof: _Profile, n: int, chunk: int) -> int:
     """Queries per batch so that a batch's pairs fit :data:`MAX_PAIRS_PER_CHUNK`; a call whose pairs exceed
     :data:`MAX_PAIRS` (a tool much larger than the part's sample spacing: every query sees every sample)
     is refused with the figure."""
-    xyz = np.concatenate([fs.sample_xyz, fs.edge_xyz]) if fs.edge_xyz.size else fs.sample_xyz
-    if xyz.shape[0] == 0 or n == 0:
+    n_pool, lo, hi, size = fs.pool_extent
+    if n_pool == 0 or n == 0:
         return max(1, chunk)
-    lo, hi = xyz[:, :2].min(axis=0), xyz[:, :2].max(axis=0)
-    size = float(np.linalg.norm(np.ptp(xyz, axis=0)))
     if 2 * prof.R > 10 * max(size, 1e-9):
         raise InputError(
             f"the tool (D = {2 * prof.R:g} mm) is more than 10 times the part's size ({size:.4g} mm across): "
@@ -175,7 +173,7 @@ def _chunk_size(fs: FaceSet, prof: _Profile, n: int, chunk: int) -> int:
         )
     reach = prof.R + fs.spacing
     box = float(np.prod(np.maximum(hi - lo, 0) + 2 * reach))
-    per_query = min(float(xyz.shape[0]), xyz.shape[0] * math.pi * reach * reach / box)
+    per_query = min(float(n_pool), n_pool * math.pi * reach * reach / box)
     if per_query * n > MAX_PAIRS:
         raise InputError(
             f"drop-cutter: about {per_query * n:.3g} (point, part sample) pairs ({n:,} points, the tool's disc of "
@@ -277,7 +275,7 @@ def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str, kink: int | None = 
             u0[out], v0[out] = _into_disc(fs, prof.R, c[out], fid[out], u0[out], v0[out])
         u, v, g, P = _face_newton(fs, prof, c, fid, u0, v0)
         ok = np.isfinite(g) & _inside(fs, fid, u, v)
-        ok[ok] = _enters_face(fs, prof.R, c[ok], fid[ok], u[ok], v[ok])
+        ok[ok] = _enters_face(fs, prof.R, c[ok], fid[ok], u[ok], v[ok], P[ok])
         cand.add(q, g, Contact.FACE, fid, P, ok)
         if prof.pointed:
             u, v, ok, P = _tip_solve(fs, c, fid, u0.copy(), v0.copy())
@@ -287,7 +285,7 @@ def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str, kink: int | None = 
         rk, hk = (None, None) if kink is None else prof.kinks[kink]
         u, v, g, P = _rim_newton(fs, prof, c, fid, u0, v0, radius=rk, h_at=hk)
         ok = np.isfinite(g) & _inside(fs, fid, u, v)
-        ok[ok] = _enters_face(fs, prof.R, c[ok], fid[ok], u[ok], v[ok])
+        ok[ok] = _enters_face(fs, prof.R, c[ok], fid[ok], u[ok], v[ok], P[ok])
         cand.add(q, g, Contact.RIM, fid, P, ok)
     else:
         eid = fs.edge_id[ke]

@@ -156,6 +156,16 @@ class FaceSet:
         """The faces' surfaces, evaluated together (one vectorised pass per degree pair)."""
         return SurfaceAtlas([f.surface for f in self.faces])
 
+    @cached_property
+    def pool_extent(self) -> tuple[int, np.ndarray, np.ndarray, float]:
+        """Number of face and edge samples, their plan box (``lo``, ``hi``) and the diagonal of their 3-D box
+        (mm): what the drop-cutter sizes its work by."""
+        xyz = np.concatenate([self.sample_xyz, self.edge_xyz]) if self.edge_xyz.size else self.sample_xyz
+        if xyz.shape[0] == 0:
+            return 0, np.zeros(2), np.zeros(2), 0.0
+        return (int(xyz.shape[0]), xyz[:, :2].min(axis=0), xyz[:, :2].max(axis=0),
+                float(np.linalg.norm(np.ptp(xyz, axis=0))))  # fmt: skip
+
     @property
     def n_samples(self) -> int:
         return int(self.sample_xyz.shape[0] + self.edge_xyz.shape[0])

@@ -405,6 +405,18 @@ def _edge_g(prof, c, P, P1=None, P2=None):
 _EDGE_SAMPLES = 17
 
 
+def _newton_max(t, lo, hi, d1, d2):
+    """One safeguarded Newton step per row towards a maximum of a function of ``t`` with derivatives ``d1``,
+    ``d2``: the bracket ``[lo, hi]`` shrinks by the sign of ``d1``, Newton where the function is concave and
+    the step stays inside, else bisection. Returns the new ``t``, the bracket and whether the step vanished."""
+    lo = np.where(d1 > 0, t, lo)
+    hi = np.where(d1 < 0, t, hi)
+    newton = t - d1 / np.where(d2 < 0, d2, -np.inf)
+    t_new = np.where((d2 < 0) & (newton > lo) & (newton < hi), newton, 0.5 * (lo + hi))
+    t_new = np.where(d1 == 0, t, t_new)
+    return t_new, lo, hi, np.abs(t_new - t) <= 1e-15 * np.maximum(np.abs(t), 1.0)
+
+
 def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
     """Maximise ``g = z - h(rho)`` along an edge near ``t0`` within the tool's disc, on ``[t0 - 2 dt, t0 +
     2 dt]`` within the edge: the best of 17 samples brackets the maximum, then a safeguarded Newton on
@@ -419,12 +431,11 @@ def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
     n = _EDGE_SAMPLES
     ts = a[:, None] + (b - a)[:, None] * np.linspace(0.0, 1.0, n)[None, :]
     P = _edge_points(fs, np.repeat(eid, n), ts.ravel())
-    g, rho = _edge_g(prof, np.repeat(c, n, axis=0), P)
-    g = np.where(rho <= R, g, -np.inf).reshape(m, n)
-    rho = rho.reshape(m, n)
-    _graze(fs, prof, c, eid, ts, g, rho)
-    k = np.argmax(g, axis=1)
-    feasible = np.isfinite(g[np.arange(m), k])
+    g_s, rho = _edge_g(prof, np.repeat(c, n, axis=0), P)
+    g_s = np.where(rho <= R, g_s, -np.inf).reshape(m, n)  # the samples' values, -inf outside the disc
+    _graze(fs, prof, c, eid, ts, g_s, rho.reshape(m, n))
+    k = np.argmax(g_s, axis=1)
+    feasible = np.isfinite(g_s[np.arange(m), k])
     lo = ts[np.arange(m), np.maximum(k - 1, 0)]
     hi = ts[np.arange(m), np.minimum(k + 1, n - 1)]
     t = ts[np.arange(m), k]
@@ -436,15 +447,8 @@ def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
             break
         ta, la, ha = t[act], lo[act], hi[act]
         Pk, P1, P2 = _edge_derivs(fs, eid[act], ta, 2)
-        _, rk, g1, r1, g2 = _edge_g(prof, c[act], Pk, P1, P2)
-        la = np.where(g1 > 0, ta, la)
-        ha = np.where(g1 < 0, ta, ha)
-        newton = ta - g1 / np.where(g2 < 0, g2, -np.inf)  # only where g is concave: a maximum ahead
-        step_ok = (g2 < 0) & (newton > la) & (newton < ha)
-        t_new = np.where(step_ok, newton, 0.5 * (la + ha))
-        t_new = np.where(g1 == 0, ta, t_new)
-        conv = np.abs(t_new - ta) <= 1e-15 * np.maximum(np.abs(ta), 1.0)
-        t[act], lo[act], hi[act] = t_new, la, ha
+        _, _, g1, _, g2 = _edge_g(prof, c[act], Pk, P1, P2)
+        t[act], lo[act], hi[act], conv = _newton_max(ta, la, ha, g1, g2)
         act = act[~conv]
     # the maximum outside the disc: the best point is on the circle, between the last point inside
     # and the first outside (Newton on rho(t) = R, kept in that bracket)
@@ -452,7 +456,7 @@ def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
     g, rho = _edge_g(prof, c, P)
     out = feasible & (rho > R)
     if out.any():
-        t = _onto_circle(fs, prof, c, eid, t, ts, out)
+        t = _onto_circle(fs, prof, c, eid, t, ts, g_s, out)
         P = _edge_points(fs, eid, t)
         g, rho = _edge_g(prof, c, P)
     ok = feasible & (rho <= R * (1 + 1e-12))
@@ -469,21 +473,21 @@ _PROBE_DROP = 1e-12
 """How much closer to the axis (relative to R) a probe must be than the contact to show that the part enters."""
 
 
-def _enters_face(fs, R, c, fid, u, v) -> np.ndarray:
+def _enters_face(fs, R, c, fid, u, v, P) -> np.ndarray:
     """Whether each face contact has face points strictly inside the tool's disc next to it: True inside the
     disc; on its circle only where a probe :data:`_PROBE_MM` away on the face, in one of 16 directions of the
     tangent plane, lies on the trimmed face and closer to the axis (the face crosses the circle, or curves
     into the disc like a fillet tangent to a wall). A face that only touches the circle from outside (a
     plane wall exactly ``R`` from the axis, a step's edge at the rim) touches the tool's side without
     entering it: the tool may go lower (the drop-cutter is the lowest height at which the tool does not
-    enter the part)."""
+    enter the part). ``P`` holds the contacts' points."""
     ok = np.ones(u.shape[0], bool)
-    P, Su, Sv = _surface_eval(fs, fid, u, v, 1)
     rho = np.sqrt((P[:, 0] - c[:, 0]) ** 2 + (P[:, 1] - c[:, 1]) ** 2)
     on = np.nonzero(rho >= R * (1 - _ON_CIRCLE))[0]
     if on.size == 0:
         return ok
-    Su, Sv, rho = Su[on], Sv[on], rho[on]
+    _, Su, Sv = _surface_eval(fs, fid[on], u[on], v[on], 1)
+    rho = rho[on]
     E, F, G = (np.einsum("ij,ij->i", a, b) for a, b in ((Su, Su), (Su, Sv), (Sv, Sv)))
     det = E * G - F * F
     regular = det > 1e-12 * np.maximum(E * G, 1e-300)
@@ -549,15 +553,9 @@ def _graze(fs, prof, c, eid, ts, g, rho, iters: int = 40) -> None:
         ta, la, ha = t[act], lo[act], hi[act]
         P, P1, P2 = _edge_derivs(fs, eid[rows[act]], ta, 2)
         d = P[:, :2] - c[rows[act]]
-        r1 = np.einsum("ij,ij->i", d, P1[:, :2])  # half of d rho^2 / dt
+        r1 = np.einsum("ij,ij->i", d, P1[:, :2])  # half the derivatives of rho^2: a maximum of -rho^2
         r2 = np.einsum("ij,ij->i", P1[:, :2], P1[:, :2]) + np.einsum("ij,ij->i", d, P2[:, :2])
-        la = np.where(r1 < 0, ta, la)
-        ha = np.where(r1 > 0, ta, ha)
-        newton = ta - r1 / np.where(r2 > 0, r2, np.inf)
-        t_new = np.where((r2 > 0) & (newton > la) & (newton < ha), newton, 0.5 * (la + ha))
-        t_new = np.where(r1 == 0, ta, t_new)
-        conv = np.abs(t_new - ta) <= 1e-15 * np.maximum(np.abs(ta), 1.0)
-        t[act], lo[act], hi[act] = t_new, la, ha
+        t[act], lo[act], hi[act], conv = _newton_max(ta, la, ha, -r1, -r2)
         act = act[~conv]
     P = _edge_points(fs, eid[rows], t)
     gt, rt = _edge_g(prof, c[rows], P)
@@ -566,17 +564,13 @@ def _graze(fs, prof, c, eid, ts, g, rho, iters: int = 40) -> None:
     g[rows[hit], k[hit]] = gt[hit]
 
 
-def _onto_circle(fs, prof, c, eid, t, ts, out, iters: int = 40):
+def _onto_circle(fs, prof, c, eid, t, ts, g, out, iters: int = 40):
     """For the rows ``out`` (whose maximum ``t`` lies outside the disc), the edge point on the tool's
     circle nearest ``t`` on the side of the disc: Newton on ``rho(t) - R`` safeguarded by the bracket
-    between the nearest sample inside the disc and ``t``."""
+    between the nearest sample inside the disc (finite ``g``) and ``t``."""
     R = prof.R
     idx = np.nonzero(out)[0]
-    n = ts.shape[1]
-    Ps = _edge_points(fs, np.repeat(eid[idx], n), ts[idx].ravel())
-    rs = np.hypot(*(Ps[:, :2] - np.repeat(c[idx], n, axis=0)).T).reshape(idx.size, n)
-    inside = rs <= R
-    dist = np.where(inside, np.abs(ts[idx] - t[idx, None]), np.inf)
+    dist = np.where(np.isfinite(g[idx]), np.abs(ts[idx] - t[idx, None]), np.inf)
     t_in = ts[idx, np.argmin(dist, axis=1)]
     t_out = t[idx].copy()
     x = 0.5 * (t_in + t_out)
