@@ -103,6 +103,7 @@ if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``im
         mill3,
         raster,
         top_faces,
+        trim_to_reach,
         waterline,
     )
     from .toolspec import cutter_from_apt, parse_cutter
@@ -160,6 +161,7 @@ __all__ = [
     "waterline",
     "cl_surface",
     "top_faces",
+    "trim_to_reach",
     "scallop_stepover",
     "Contact",
     "Direction",

@@ -152,6 +152,8 @@ def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: d
             clearance=spec.clearance,
             **link,
         )
+    if spec.axes == 3 and len(part()) > 1:  # the part's other faces may stand in the way: cut out, not refused
+        tp = _trimmed_to_reach(say, spec, ms, tp, part())
     rep["toolpath"] = tp.report()
     say(
         f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions ({tp.n_positions} with approach and "
@@ -165,3 +167,20 @@ def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: d
         )
     rep["verify"], code = write_checked_toolpath(st, say, tp, part(), spec, tolerance=spec.gouge_tolerance, render=True)
     return code
+
+
+def _trimmed_to_reach(say: Say, spec: MachiningSurfaceJob, ms, tp, faces):
+    """The fixed-axis path without the positions where the part stops the tool (drop-cutter on every face),
+    skim-linked (:func:`machsurf_cad.trim_to_reach`); the figures said."""
+    from ..threeaxis.reachpath import trim_to_reach
+
+    out = trim_to_reach(tp, faces, gouge_tolerance=spec.gouge_tolerance, clearance=spec.clearance, face=ms.nominal)
+    i = out.info
+    frac = i.get("machined_area_fraction")
+    say(
+        f"reach along the axis on all {len(faces)} faces (exact drop-cutter): {i['reach_positions_trimmed']} of "
+        f"{i['reach_positions_planned']} cutting positions cut out where the part stops the tool; "
+        f"{i['reach_runs']} run(s), {i['links_skim']} skim link(s) (highest {i['link_height_max_mm']:.4g} mm)"
+        + ("" if frac is None else f"; machined area {100 * frac:.1f} % of the face")
+    )
+    return out

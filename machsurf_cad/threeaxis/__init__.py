@@ -5,6 +5,7 @@ from .dropcutter import Contact, DropCutterResult, default_seed_spacing, drop_cu
 from .faceset import FaceSet, axis_frame, face_set
 from .heightfield import cl_surface
 from .paths import Direction, Pattern, raster
+from .reachpath import trim_to_reach
 from .select import select_faces, top_faces
 from .wholepart import Mill3Result, mill3
 from .zlevel import waterline
@@ -25,5 +26,6 @@ __all__ = [
     "raster",
     "select_faces",
     "top_faces",
+    "trim_to_reach",
     "waterline",
 ]
