@@ -642,11 +642,9 @@ def _refine(face: Face, c, T, A, u, v, du, dv, levels: int = 3, k: int = 5):
     return best, xyz
 
 
-def clear_runs(toolpath: ToolPath, result: VerifyResult, *, clearance: float = 5.0) -> ToolPath | None:
-    """The tool path cut down to its clear stretches: within each pass, the runs of consecutive cutting
-    positions whose motion in was clear (at least two), each relinked as its own pass (approach and
-    retract ``clearance`` mm along the axis). ``None`` when nothing clear is left. Check the result
-    again: its new linking moves are not checked here."""
+def clear_stretches(toolpath: ToolPath, result: VerifyResult) -> list[np.ndarray]:
+    """Within each pass, the index runs of consecutive cutting positions whose motion in was clear (at
+    least two)."""
     cutting = (toolpath.move == Move.CUT) | (toolpath.move == Move.APPROACH)
     ok = cutting & (result.status == CLEAR)
     runs: list[np.ndarray] = []
@@ -659,6 +657,15 @@ def clear_runs(toolpath: ToolPath, result: VerifyResult, *, clearance: float = 5
             seg = seg[good[seg]]
             if seg.size >= 2 and np.all(np.diff(idx[seg]) == 1):
                 runs.append(idx[seg])
+    return runs
+
+
+def clear_runs(toolpath: ToolPath, result: VerifyResult, *, clearance: float = 5.0) -> ToolPath | None:
+    """The tool path cut down to its clear stretches (:func:`clear_stretches`), each relinked as its own
+    pass (approach and retract ``clearance`` mm along the axis, straight rapids between).
+    ``None`` when nothing clear is left. Check the result again: its new linking moves are not checked here
+    (:func:`machsurf_cad.check_toolpath` links the stretches by checked links instead)."""
+    runs = clear_stretches(toolpath, result)
     if not runs:
         return None
     return ToolPath.from_passes(
@@ -673,4 +680,4 @@ def clear_runs(toolpath: ToolPath, result: VerifyResult, *, clearance: float = 5
     )
 
 
-__all__ = ["verify", "VerifyResult", "clear_runs", "CLEAR", "GOUGE", "COLLISION", "STATUS"]
+__all__ = ["verify", "VerifyResult", "clear_runs", "clear_stretches", "CLEAR", "GOUGE", "COLLISION", "STATUS"]

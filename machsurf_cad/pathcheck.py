@@ -15,7 +15,7 @@ from typing import Literal
 from .cam.toolpath import ToolPath
 from .checks import positive
 from .errors import InputError
-from .gougecheck import VerifyResult, clear_runs, verify
+from .gougecheck import VerifyResult, clear_stretches, verify
 from .results import Progress, Result
 from .typing import MapChunks, PartLike, ToolLike
 
@@ -55,9 +55,44 @@ class PathCheck(Result):
                 "n_cut_before": self.planned.n_cut,
                 "n_passes": self.toolpath.n_passes,
                 "clearance_mm": self.link_clearance,
+                **{
+                    k: self.toolpath.info[k]
+                    for k in (
+                        "links_direct",
+                        "links_over_surface",
+                        "runs_left_out",
+                        "gaps_not_linked",
+                        "clearance_surface",
+                    )
+                    if k in self.toolpath.info
+                },  # fmt: skip
                 "recheck": self.recheck.report(),
             }
         return rep
+
+
+def _relinked(toolpath, res, part, tool, gouge_tolerance, clearance, clear) -> ToolPath | None:
+    """The clear stretches of ``toolpath`` joined by links checked clear (:func:`~machsurf_cad.linking.link_runs`)."""
+    from .gougecheck import _faces
+    from .linking import link_runs
+
+    runs = clear_stretches(toolpath, res)
+    if not runs:
+        return None
+    cc = toolpath.cc
+    try:
+        return link_runs(
+            [(toolpath.tip[r], toolpath.axis[r], None if cc is None else cc[r]) for r in runs],
+            _faces(part),
+            tool if tool is not None else toolpath.cutter,
+            clearance=clearance,
+            gouge_tolerance=gouge_tolerance,
+            link_clearance=clear,
+            name=toolpath.name,
+            info=dict(toolpath.info, trimmed_to_clear_runs=len(runs)),
+        )
+    except InputError:  # no run can be reached and left
+        return None
 
 
 def check_toolpath(
@@ -86,9 +121,10 @@ def check_toolpath(
     gouge_tolerance : float
         Deepest the cutting part may go into the part, mm.
     on_gouge : {"refuse", "trim", "allow"}
-        A gouging path is refused (``toolpath`` None), cut to its clear stretches relinked ``clearance``
-        mm along the axis and checked again (the link height doubles up to 3 times when the links
-        collide), or kept with its gouges listed.
+        A gouging path is refused (``toolpath`` None), cut to its clear stretches joined by links the
+        tool-body check finds clear (:mod:`machsurf_cad.linking`: direct where clear, else over a plane or
+        sphere around the part; a stretch no clear link reaches is left out) and checked again, or kept
+        with its gouges listed.
     clearance : float
         Approach and retract of the relinked stretches, mm.
     tool, step, angle_step, spacing, chunks, map_chunks, progress
@@ -120,13 +156,9 @@ def check_toolpath(
     if on_gouge == "allow":
         return PathCheck(toolpath, toolpath, res, None, "gouges allowed", float(clearance))
     if on_gouge == "trim":
-        link = float(clearance)
-        for _ in range(4):
-            cut = clear_runs(toolpath, res, clearance=link)
-            if cut is None:
-                break
+        cut = _relinked(toolpath, res, part, tool, gouge_tolerance, clearance, clear)
+        if cut is not None:
             again = verify(part, cut, tool, gouge_tolerance=gouge_tolerance, clearance=clear)
             if again.clean:
-                return PathCheck(toolpath, cut, res, again, "trimmed", link)
-            link *= 2.0
+                return PathCheck(toolpath, cut, res, again, "trimmed", float(clearance))
     return PathCheck(toolpath, None, res, None, "refused", float(clearance))

@@ -1,0 +1,209 @@
+"""Links between the clear stretches of a tool path that never cross the part.
+
+Each gap between two runs of cutting positions gets the first of these links the tool-body check finds
+clear (all candidates of all gaps are checked in one :func:`~machsurf_cad.verify` call):
+
+1. **direct**: retract ``clearance`` along the axis, straight across to ``clearance`` above the next run
+   along its axis, approach - the short link that stays down on the part;
+2. **over the clearance surface**: out along the axis to the plane above the part (a fixed axis) or to the
+   sphere around it (the axis turning), over it, and back in along the next run's axis.
+
+A gap no link clears is not bridged by a crossing move: the run after it is left out and the gap reported
+(where it is), and the next run is tried from the same end; a run whose way out to the clearance surface at
+the end of the path is not clear is left out too. The path's first approach and last retract
+come from and go to the clearance surface, checked the same way.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .cam.toolpath import Move, ToolPath, _over_sphere
+from .errors import InputError
+from .gougecheck import CLEAR, verify
+
+
+def clearance_surface(faces, axes: np.ndarray, clearance: float):
+    """``("plane", height)`` above the part along a fixed axis, else ``("sphere", (centre, radius))``."""
+    poles = np.concatenate([np.asarray(getattr(f, "surface", f).poles, float).reshape(-1, 3) for f in faces])
+    a = axes[0]
+    if np.abs(axes - a).max() <= 1e-9:
+        return "plane", float((poles @ a).max()) + float(clearance)
+    lo, hi = poles.min(axis=0), poles.max(axis=0)
+    return "sphere", (0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + float(clearance))
+
+
+def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndarray, np.ndarray, list]]:
+    """The links from position ``p0`` (axis ``a0``; None at the path's start) to ``p1`` (axis ``a1``; None at
+    its end), in order of preference: (tips, axes, moves) without ``p0``, with ``p1``."""
+    kind, geo = surface
+    out = []
+    up0 = None if p0 is None else p0 + clearance * a0
+    up1 = None if p1 is None else p1 + clearance * a1
+    if p0 is not None and p1 is not None:
+        out.append((np.array([up0, up1, p1]), np.array([a0, a1, a1]), [Move.RETRACT, Move.RAPID, Move.APPROACH]))
+    if kind == "plane":
+        a = a0 if a0 is not None else a1
+        pts = [q for q in (up0, up1) if q is not None]
+        lifted = [q + max(geo - float(q @ a), 0.0) * a for q in pts]
+        tips = np.array([pts[0], lifted[0], *lifted[1:], *pts[1:]] if up0 is not None else [lifted[0], pts[0]])
+    else:
+        if up0 is None or up1 is None:
+            q = up1 if up0 is None else up0
+            a = a1 if up0 is None else a0
+            w = q - geo[0]
+            b = float(w @ a)
+            lam = -b + np.sqrt(max(b * b - float(w @ w) + geo[1] ** 2, 0.0))
+            tips = np.array([q + max(lam, 0.0) * a, q]) if up0 is None else np.array([q, q + max(lam, 0.0) * a])
+        else:
+            tips, _ = _over_sphere(up0, a0, up1, a1, geo)
+    axes = _link_axes(tips, a0, a1, kind, geo)
+    if p0 is not None:  # leave along the axis at the plunge feed, then rapid
+        moves = [Move.RETRACT] + [Move.RAPID] * (len(tips) - 1)
+    else:
+        moves = [Move.RAPID] * len(tips)
+    if p1 is not None:
+        tips, axes, moves = np.vstack([tips, p1]), np.vstack([axes, a1]), moves + [Move.APPROACH]
+    out.append((tips, axes, moves))
+    return out
+
+
+def _link_axes(tips, a0, a1, kind, geo):
+    """Axes along a link over the clearance surface: the fixed axis in a plane, radial over a sphere (the
+    ends keep their pass's axis)."""
+    if kind == "plane":
+        return np.tile(a0 if a0 is not None else a1, (len(tips), 1))
+    r = tips - geo[0]
+    axes = r / np.linalg.norm(r, axis=1, keepdims=True)
+    if a0 is not None:
+        axes[0] = a0
+    if a1 is not None:
+        axes[-1] = a1
+    return axes
+
+
+def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: float = 0.01,
+              link_clearance: float = 0.01, name: str = "toolpath", info=None) -> ToolPath:  # fmt: skip
+    """Join ``runs`` (each ``(tips, axes)`` of consecutive cutting positions, with optional ``"cc"`` as a
+    third item) by links the tool-body check finds clear (module docstring).
+
+    Returns
+    -------
+    ToolPath
+        ``info`` adds ``links_direct``, ``links_over_surface``, ``runs_left_out`` and ``gaps_not_linked``
+        (where: the two ends, mm), ``clearance_surface`` (``plane`` or ``sphere``).
+    """
+    runs = [r for r in runs if len(r[0]) >= 1]
+    if not runs:
+        raise InputError("no run of cutting positions to link")
+    faces = list(part)
+    n = len(runs)
+    surface = clearance_surface(faces, np.concatenate([np.asarray(r[1]) for r in runs]), clearance)
+    ends = [(np.asarray(t[0], float), np.asarray(a[0], float), np.asarray(t[-1], float), np.asarray(a[-1], float))
+            for t, a, *_ in runs]  # fmt: skip
+    cand: dict[tuple[int, int], list] = {}
+    ok: dict[tuple[tuple[int, int], int], bool] = {}
+
+    def check(keys):
+        """Candidates of the gaps ``keys``, checked together."""
+        new = {}
+        for i, j in keys:
+            if (i, j) not in cand:
+                p0, a0 = (None, None) if i < 0 else ends[i][2:]
+                p1, a1 = (None, None) if j >= n else ends[j][:2]
+                new[(i, j)] = cand[(i, j)] = _candidates(p0, a0, p1, a1, clearance, surface)
+        if new:
+            ok.update(_clear(new, ends, faces, cutter, gouge_tolerance, link_clearance))
+
+    def first_clear(key):
+        check([key])
+        return next((c for c in range(len(cand[key])) if ok[(key, c)]), None)
+
+    # the gaps between neighbours, the path's start and every run's retract to the end, in one check
+    check([(-1, 0)] + [(i, i + 1) for i in range(n - 1)] + [(i, n) for i in range(n)])
+    chosen: list[tuple[tuple[int, int], int]] = []
+    left_out: list[int] = []
+    not_linked: list[dict] = []
+    i, j = -1, 0
+    while True:
+        if i < 0 and j >= n:
+            raise InputError("no run of the path can be reached and left without crossing the part")
+        c = first_clear((i, j))
+        if c is not None:
+            chosen.append(((i, j), c))
+            if j == n:
+                break
+            i, j = j, j + 1
+            continue
+        not_linked.append({"from_mm": None if i < 0 else ends[i][2].tolist(),
+                           "to_mm": None if j >= n else ends[j][0].tolist()})  # fmt: skip
+        if j < n:  # no clear way into run j: it is left out
+            left_out.append(j)
+            j += 1
+        else:  # no clear way out of run i to the end: it is left out, and its way in dropped
+            left_out.append(i)
+            chosen.pop()
+            i = chosen[-1][0][1] if chosen else -1
+    return _assemble(runs, dict(chosen), cand, cutter, name, info, surface, sorted(left_out), not_linked)
+
+
+def _clear(cand, ends, faces, cutter, gouge_tolerance, link_clearance) -> dict:
+    """Whether each candidate link is clear: all of them in one tool-body check (each from its own start)."""
+    T: list = []
+    A: list = []
+    M: list = []
+    P: list = []
+    keys: list[tuple] = []
+    for key, links in cand.items():
+        i = key[0]
+        for c, (tips, axes, moves) in enumerate(links):
+            start = ends[i][2:] if i >= 0 else (tips[0], axes[0])
+            T += [start[0][None, :], tips]
+            A += [start[1][None, :], axes]
+            M += [[Move.RAPID], moves]
+            P.append(np.full(len(tips) + 1, len(keys)))
+            keys.append((key, c))
+    tp = ToolPath(np.vstack(T), np.vstack(A), np.concatenate([np.asarray(m, np.int8) for m in M]),
+                  np.concatenate(P), cutter=cutter)  # fmt: skip
+    res = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance, clearance=link_clearance)
+    status = np.asarray(res.status)
+    first = np.r_[True, np.diff(tp.pass_index) != 0]  # the move into a candidate's start is no part of it
+    return {key: bool(np.all(status[(tp.pass_index == k) & ~first] == CLEAR)) for k, key in enumerate(keys)}
+
+
+def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_linked) -> ToolPath:
+    T, A, M, P, C = [], [], [], [], []
+    n_direct = n_over = 0
+    has_cc = all(len(r) > 2 and r[2] is not None for r in runs)
+    for (i, j), c in sorted(chosen.items(), key=lambda kv: kv[0][1]):
+        tips, axes, moves = cand[(i, j)][c]
+        if 0 <= i and j < len(runs):
+            direct = c == 0 and len(cand[(i, j)]) > 1
+            n_direct += int(direct)
+            n_over += int(not direct)
+        k = max(i, 0) if j >= len(runs) else j
+        T.append(tips)
+        A.append(axes)
+        M.append(np.asarray(moves, np.int8))
+        P.append(np.full(len(tips), k))
+        C.append(np.full((len(tips), 3), np.nan))
+        if j < len(runs):  # the run itself (its first position is the link's approach end)
+            t, a = np.asarray(runs[j][0], float), np.asarray(runs[j][1], float)
+            T.append(t[1:])
+            A.append(a[1:])
+            M.append(np.full(len(t) - 1, Move.CUT, np.int8))
+            P.append(np.full(len(t) - 1, j))
+            if has_cc:
+                cc = np.asarray(runs[j][2], float)
+                C[-1][-1] = cc[0]
+                C.append(cc[1:])
+            else:
+                C.append(np.full((len(t) - 1, 3), np.nan))
+    info = dict(info or {}, links_direct=int(n_direct), links_over_surface=int(n_over),
+                runs_left_out=[int(x) for x in left_out], gaps_not_linked=not_linked,
+                clearance_surface=surface[0])  # fmt: skip
+    return ToolPath(np.vstack(T), np.vstack(A), np.concatenate(M), np.concatenate(P),
+                    np.vstack(C) if has_cc else None, None, cutter, name, {}, info)  # fmt: skip
+
+
+__all__ = ["clearance_surface", "link_runs"]

@@ -1,0 +1,88 @@
+"""Links that never cross the part (issue 28, item 1): direct where clear, over the clearance surface
+else, a stretch no clear link reaches left out and reported.
+
+The part is a floor with a bridge over it (a plate 12 mm up over 0 <= x <= 20): a short tool (ball D6,
+body 10 mm long) cuts under the bridge, where nothing may come down from above. The links are checked
+by the tool-body check and by a closed form written here: the body against the plate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import machsurf_cad as ms
+from machsurf_cad import BallEndMill, builders
+from machsurf_cad.cam.toolpath import Move
+from machsurf_cad.linking import link_runs
+
+TOOL = BallEndMill(6, length=10.0)
+
+
+def _part():
+    floor = builders.plane_patch((-30, -30, 0), (80, 0, 0), (0, 60, 0), name="floor")
+    bridge = builders.plane_patch((0, -30, 12), (20, 0, 0), (0, 60, 0), name="bridge")
+    return [floor, bridge]
+
+
+def _runs():
+    ys = np.linspace(-20, 20, 21)
+    out = []
+    for k, x in enumerate((-10.0, 10.0, 30.0)):
+        y = ys if k % 2 == 0 else ys[::-1]
+        tips = np.column_stack([np.full(y.size, x), y, np.zeros(y.size)])
+        out.append((tips, np.tile([0.0, 0, 1], (y.size, 1)), tips.copy()))
+    return out
+
+
+def _through_bridge(tp, step=0.1) -> float:
+    """Deepest the body (radius 3, from the tip up 10 mm) overlaps the plate's plane inside its footprint,
+    over every move sampled every ``step`` mm (closed form: the axis's plan distance to the footprint)."""
+    worst = 0.0
+    for a, b in zip(tp.tip[:-1], tp.tip[1:]):
+        n = max(2, int(np.ceil(np.linalg.norm(b - a) / step)) + 1)
+        for t in a + np.linspace(0, 1, n)[:, None] * (b - a):
+            dx = max(0.0 - t[0], t[0] - 20.0, 0.0)
+            if dx < 3.0 and t[2] < 12.0 < t[2] + 10.0:
+                worst = max(worst, min(3.0 - dx, t[2] + 10.0 - 12.0))
+    return worst
+
+
+def test_direct_links_under_the_bridge():
+    tp = link_runs(_runs(), _part(), TOOL, clearance=1.0)
+    assert tp.info["links_direct"] == 2 and tp.info["runs_left_out"] == []
+    assert ms.verify(_part(), tp).clean
+    assert _through_bridge(tp) == 0.0
+    assert tp.n_cut == 63
+
+
+def test_a_run_no_link_reaches_is_left_out_not_crossed():
+    """With 5 mm retracts the body would rise into the bridge from the middle run: it is left out."""
+    tp = link_runs(_runs(), _part(), TOOL, clearance=5.0)
+    assert tp.info["runs_left_out"] == [1]
+    assert len(tp.info["gaps_not_linked"]) == 1
+    assert tp.info["gaps_not_linked"][0]["to_mm"] == [10.0, 20.0, 0.0]
+    assert ms.verify(_part(), tp).clean
+    assert _through_bridge(tp) == 0.0
+    assert tp.n_cut == 42
+    rapid = tp.move == Move.RAPID
+    assert tp.tip[rapid, 2].max() == pytest.approx(17.0)  # over the plane 5 mm above the part
+
+
+def test_nothing_reachable_is_an_input_error():
+    runs = [r for k, r in enumerate(_runs()) if k == 1]
+    with pytest.raises(ms.InputError, match="crossing the part"):
+        link_runs(runs, _part(), TOOL, clearance=5.0)
+
+
+def test_check_toolpath_trims_and_links_without_crossing():
+    """A path through the bridge's pillar-free span, planned too low under it: trimmed and relinked."""
+    part = _part()
+    runs = _runs()
+    tips = [r[0] for r in runs]
+    tips[1] = tips[1] + [0, 0, 3.0]  # the middle pass 3 mm up: its body reaches into the bridge
+    planned = ms.ToolPath.from_passes(tips, [r[1] for r in runs], cutter=TOOL, clearance=1.0)
+    pc = ms.check_toolpath(planned, part, on_gouge="trim", clearance=1.0)
+    assert pc.verdict == "trimmed"
+    assert pc.recheck.clean and _through_bridge(pc.toolpath) == 0.0
+    assert pc.toolpath.n_cut == 42
