@@ -25,6 +25,7 @@ from .. import checks
 from ..cam.toolpath import Move, ToolPath
 from ..cutters import FlatEndMill
 from ..errors import InputError
+from ..typing import FaceLike, PartLike, ToolLike
 from . import cache
 from .dropcutter import default_seed_spacing, drop_cutter
 from .faceset import face_set as build_face_set
@@ -235,12 +236,12 @@ def _carried(tp: ToolPath, d: _Dense, row: np.ndarray):
 
 def trim_to_reach(
     toolpath: ToolPath,
-    part,
+    part: PartLike,
     *,
     gouge_tolerance: float = 0.01,
     clearance: float = 5.0,
-    tool=None,
-    face=None,
+    tool: ToolLike | None = None,
+    face: FaceLike | None = None,
 ) -> ToolPath:
     """``toolpath`` (fixed axis) without the positions the tool cannot reach, its runs skim-linked.
 
@@ -286,7 +287,7 @@ def trim_to_reach(
     cutter = checks.tool(tool if tool is not None else toolpath.cutter)
     tol = checks.positive("gouge_tolerance", gouge_tolerance)
     clearance = checks.positive("clearance", clearance)
-    faces = list(part)
+    faces = list(part) if isinstance(part, (list, tuple)) else [part]
     if not faces:
         raise InputError("trimming to the tool's reach needs the part's faces")
     a = _fixed_axis(toolpath)
