@@ -24,11 +24,11 @@ from .gougecheck import CLEAR, verify
 
 
 def clearance_surface(faces, axes: np.ndarray, clearance: float):
-    """``("plane", height)`` above the part along a fixed axis, else ``("sphere", (centre, radius))``."""
+    """``("plane", (height, axis))`` above the part along a fixed axis, else ``("sphere", (centre, radius))``."""
     poles = np.concatenate([np.asarray(getattr(f, "surface", f).poles, float).reshape(-1, 3) for f in faces])
     a = axes[0]
     if np.abs(axes - a).max() <= 1e-9:
-        return "plane", float((poles @ a).max()) + float(clearance)
+        return "plane", (float((poles @ a).max()) + float(clearance), a)
     lo, hi = poles.min(axis=0), poles.max(axis=0)
     return "sphere", (0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + float(clearance))
 
@@ -45,7 +45,7 @@ def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndar
     if kind == "plane":
         a = a0 if a0 is not None else a1
         pts = [q for q in (up0, up1) if q is not None]
-        lifted = [q + max(geo - float(q @ a), 0.0) * a for q in pts]
+        lifted = [q + max(geo[0] - float(q @ a), 0.0) * a for q in pts]
         tips = np.array([pts[0], lifted[0], *lifted[1:], *pts[1:]] if up0 is not None else [lifted[0], pts[0]])
     else:
         if up0 is None or up1 is None:
@@ -113,7 +113,7 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
                 p1, a1 = (None, None) if j >= n else ends[j][:2]
                 new[(i, j)] = cand[(i, j)] = _candidates(p0, a0, p1, a1, clearance, surface)
         if new:
-            ok.update(_clear(new, ends, faces, cutter, gouge_tolerance, link_clearance))
+            ok.update(_clear(new, ends, faces, cutter, gouge_tolerance, link_clearance, surface))
 
     def first_clear(key):
         check([key])
@@ -147,28 +147,47 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
     return _assemble(runs, dict(chosen), cand, cutter, name, info, surface, sorted(left_out), not_linked)
 
 
-def _clear(cand, ends, faces, cutter, gouge_tolerance, link_clearance) -> dict:
-    """Whether each candidate link is clear: all of them in one tool-body check (each from its own start)."""
+def _on_surface(tips: np.ndarray, surface) -> np.ndarray:
+    """Which link positions lie on the clearance surface (a move between two of them cannot meet the part:
+    the whole tool is above the plane, or outside the sphere pointing out of it)."""
+    kind, geo = surface
+    if kind == "plane":
+        return tips @ geo[1] >= geo[0] - 1e-9
+    return np.linalg.norm(tips - geo[0], axis=1) >= geo[1] - 1e-9
+
+
+def _clear(cand, ends, faces, cutter, gouge_tolerance, link_clearance, surface) -> dict:
+    """Whether each candidate link is clear: all of them in one tool-body check (each from its own start;
+    moves on the clearance surface left out)."""
     T: list = []
     A: list = []
     M: list = []
     P: list = []
+    first: list = []
     keys: list[tuple] = []
     for key, links in cand.items():
         i = key[0]
         for c, (tips, axes, moves) in enumerate(links):
             start = ends[i][2:] if i >= 0 else (tips[0], axes[0])
-            T += [start[0][None, :], tips]
-            A += [start[1][None, :], axes]
-            M += [[Move.RAPID], moves]
-            P.append(np.full(len(tips) + 1, len(keys)))
+            X, Y = np.vstack([start[0], tips]), np.vstack([start[1], axes])
+            mv = np.concatenate([[Move.RAPID], np.asarray(moves, np.int8)])
+            on = _on_surface(X, surface)
+            check = ~(on[:-1] & on[1:])  # move k: X[k] -> X[k + 1]
+            for seg in np.split(np.arange(check.size), np.nonzero(np.diff(check.astype(int)))[0] + 1):
+                if not check[seg[0]]:
+                    continue
+                rows = np.arange(seg[0], seg[-1] + 2)
+                T.append(X[rows])
+                A.append(Y[rows])
+                M.append(mv[rows])
+                P.append(np.full(rows.size, len(keys)))
+                first.append(np.r_[True, np.zeros(rows.size - 1, bool)])
             keys.append((key, c))
-    tp = ToolPath(np.vstack(T), np.vstack(A), np.concatenate([np.asarray(m, np.int8) for m in M]),
-                  np.concatenate(P), cutter=cutter)  # fmt: skip
+    tp = ToolPath(np.vstack(T), np.vstack(A), np.concatenate(M), np.concatenate(P), cutter=cutter)
     res = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance, clearance=link_clearance)
-    status = np.asarray(res.status)
-    first = np.r_[True, np.diff(tp.pass_index) != 0]  # the move into a candidate's start is no part of it
-    return {key: bool(np.all(status[(tp.pass_index == k) & ~first] == CLEAR)) for k, key in enumerate(keys)}
+    bad = (np.asarray(res.status) != CLEAR) & ~np.concatenate(first)
+    bad_keys = set(np.unique(tp.pass_index[bad]).tolist())
+    return {key: k not in bad_keys for k, key in enumerate(keys)}
 
 
 def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_linked) -> ToolPath:
