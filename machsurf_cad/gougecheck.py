@@ -296,6 +296,7 @@ def _coarse(c, tree, P, h, tolerance, T, A, progress=None):
 
 _RECENT: OrderedDict = OrderedDict()
 _MAX_RECENT = 2
+_SAMPLED: OrderedDict = OrderedDict()
 
 
 def _memo_key(faces, toolpath, tool, params, map_chunks) -> str:
@@ -415,8 +416,7 @@ def verify(
         for w in res.warnings:
             warnings.warn(w, stacklevel=2)
         return replace(res, toolpath=toolpath)
-    smp = _sample_part(faces, h, max_samples)
-    tree = cKDTree(smp.P)
+    smp, tree = _sampled(faces, h, max_samples)
     T, A, owner = _placements(toolpath, step, angle_step)
     m = T.shape[0]
     t1 = time.perf_counter()
@@ -476,6 +476,23 @@ class _Samples(NamedTuple):
     SV: np.ndarray
     dus: list
     dvs: list
+
+
+def _sampled(faces: list[Face], h: float, max_samples: int):
+    """The part's samples and their k-d tree, kept for the last two parts and spacings by content (a path's
+    links are checked in several calls on the same part)."""
+    from .contentkey import faces_key
+
+    key = (faces_key(faces), float(h), int(max_samples))
+    if key in _SAMPLED:
+        _SAMPLED.move_to_end(key)
+        return _SAMPLED[key]
+    smp = _sample_part(faces, h, max_samples)
+    out = (smp, cKDTree(smp.P))
+    _SAMPLED[key] = out
+    while len(_SAMPLED) > 2:
+        _SAMPLED.popitem(last=False)
+    return out
 
 
 def _sample_part(faces: list[Face], h: float, max_samples: int) -> _Samples:
