@@ -84,14 +84,16 @@ def _link_axes(tips, a0, a1, kind, geo):
 
 def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: float = 0.01,
               link_clearance: float = 0.01, name: str = "toolpath", info=None) -> ToolPath:  # fmt: skip
-    """Join ``runs`` (each ``(tips, axes)`` of consecutive cutting positions, with optional ``"cc"`` as a
-    third item) by links the tool-body check finds clear (module docstring).
+    """Join ``runs`` (each ``(tips, axes)`` of consecutive cutting positions, optionally with their contact
+    points and their indices in the planned path as third and fourth items) by links the tool-body check
+    finds clear (module docstring).
 
     Returns
     -------
     ToolPath
-        ``info`` adds ``links_direct``, ``links_over_surface``, ``runs_left_out`` and ``gaps_not_linked``
-        (where: the two ends, mm), ``clearance_surface`` (``plane`` or ``sphere``).
+        ``extras["planned_index"]`` (given the indices; -1 on links); ``info`` adds ``links_direct``,
+        ``links_over_surface``, ``runs_left_out``, ``gaps_not_linked`` (where: the two ends, mm) and
+        ``clearance_surface`` (``plane`` or ``sphere``).
     """
     runs = [r for r in runs if len(r[0]) >= 1]
     if not runs:
@@ -104,23 +106,31 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
     cand: dict[tuple[int, int], list] = {}
     ok: dict[tuple[tuple[int, int], int], bool] = {}
 
-    def check(keys):
-        """Candidates of the gaps ``keys``, checked together."""
-        new = {}
-        for i, j in keys:
-            if (i, j) not in cand:
-                p0, a0 = (None, None) if i < 0 else ends[i][2:]
-                p1, a1 = (None, None) if j >= n else ends[j][:2]
-                new[(i, j)] = cand[(i, j)] = _candidates(p0, a0, p1, a1, clearance, surface)
-        if new:
-            ok.update(_clear(new, ends, faces, cutter, gouge_tolerance, link_clearance, surface))
+    def candidates(key):
+        if key not in cand:
+            i, j = key
+            p0, a0 = (None, None) if i < 0 else ends[i][2:]
+            p1, a1 = (None, None) if j >= n else ends[j][:2]
+            cand[key] = _candidates(p0, a0, p1, a1, clearance, surface)
+        return cand[key]
+
+    def check(keys, c):
+        """Candidate ``c`` of the gaps ``keys`` (those that have one and are not known), checked together."""
+        todo = {k: candidates(k)[c] for k in keys if c < len(candidates(k)) and (k, c) not in ok}
+        if todo:
+            ok.update(_clear(todo, c, ends, faces, cutter, gouge_tolerance, link_clearance, surface))
 
     def first_clear(key):
-        check([key])
-        return next((c for c in range(len(cand[key])) if ok[(key, c)]), None)
+        for c in range(len(candidates(key))):
+            check([key], c)
+            if ok[(key, c)]:
+                return c
+        return None
 
-    # the gaps between neighbours, the path's start and every run's retract to the end, in one check
-    check([(-1, 0)] + [(i, i + 1) for i in range(n - 1)] + [(i, n) for i in range(n)])
+    # the direct links between neighbours in one check, then the links over the surface where they collide
+    gaps = [(-1, 0)] + [(i, i + 1) for i in range(n - 1)] + [(n - 1, n)]
+    check(gaps, 0)
+    check([k for k in gaps if not ok.get((k, 0), False)], 1)
     chosen: list[tuple[tuple[int, int], int]] = []
     left_out: list[int] = []
     not_linked: list[dict] = []
@@ -156,44 +166,47 @@ def _on_surface(tips: np.ndarray, surface) -> np.ndarray:
     return np.linalg.norm(tips - geo[0], axis=1) >= geo[1] - 1e-9
 
 
-def _clear(cand, ends, faces, cutter, gouge_tolerance, link_clearance, surface) -> dict:
-    """Whether each candidate link is clear: all of them in one tool-body check (each from its own start;
-    moves on the clearance surface left out)."""
+def _clear(todo, c, ends, faces, cutter, gouge_tolerance, link_clearance, surface) -> dict:
+    """Whether candidate ``c`` of each gap in ``todo`` (gap -> its candidate) is clear: all in one tool-body
+    check, each from its own start, moves on the clearance surface left out. Placements every 2 mm keep
+    ``link_clearance`` plus what a motion of 2 mm can hide (``2^2 / (8 R)``)."""
     T: list = []
     A: list = []
     M: list = []
     P: list = []
     first: list = []
     keys: list[tuple] = []
-    for key, links in cand.items():
+    for key, (tips, axes, moves) in todo.items():
         i = key[0]
-        for c, (tips, axes, moves) in enumerate(links):
-            start = ends[i][2:] if i >= 0 else (tips[0], axes[0])
-            X, Y = np.vstack([start[0], tips]), np.vstack([start[1], axes])
-            mv = np.concatenate([[Move.RAPID], np.asarray(moves, np.int8)])
-            on = _on_surface(X, surface)
-            check = ~(on[:-1] & on[1:])  # move k: X[k] -> X[k + 1]
-            for seg in np.split(np.arange(check.size), np.nonzero(np.diff(check.astype(int)))[0] + 1):
-                if not check[seg[0]]:
-                    continue
-                rows = np.arange(seg[0], seg[-1] + 2)
-                T.append(X[rows])
-                A.append(Y[rows])
-                M.append(mv[rows])
-                P.append(np.full(rows.size, len(keys)))
-                first.append(np.r_[True, np.zeros(rows.size - 1, bool)])
-            keys.append((key, c))
+        start = ends[i][2:] if i >= 0 else (tips[0], axes[0])
+        X, Y = np.vstack([start[0], tips]), np.vstack([start[1], axes])
+        mv = np.concatenate([[Move.RAPID], np.asarray(moves, np.int8)])
+        on = _on_surface(X, surface)
+        check = ~(on[:-1] & on[1:])  # move k: X[k] -> X[k + 1]
+        for seg in np.split(np.arange(check.size), np.nonzero(np.diff(check.astype(int)))[0] + 1):
+            if not check[seg[0]]:
+                continue
+            rows = np.arange(seg[0], seg[-1] + 2)
+            T.append(X[rows])
+            A.append(Y[rows])
+            M.append(mv[rows])
+            P.append(np.full(rows.size, len(keys)))
+            first.append(np.r_[True, np.zeros(rows.size - 1, bool)])
+        keys.append((key, c))
     tp = ToolPath(np.vstack(T), np.vstack(A), np.concatenate(M), np.concatenate(P), cutter=cutter)
-    res = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance, clearance=link_clearance)
+    step = 2.0
+    hidden = step**2 / (8.0 * max(cutter.radius, 1e-3))
+    res = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance, clearance=link_clearance + hidden, step=step)
     bad = (np.asarray(res.status) != CLEAR) & ~np.concatenate(first)
     bad_keys = set(np.unique(tp.pass_index[bad]).tolist())
     return {key: k not in bad_keys for k, key in enumerate(keys)}
 
 
 def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_linked) -> ToolPath:
-    T, A, M, P, C = [], [], [], [], []
+    T, A, M, P, C, X = [], [], [], [], [], []
     n_direct = n_over = 0
     has_cc = all(len(r) > 2 and r[2] is not None for r in runs)
+    has_idx = all(len(r) > 3 and r[3] is not None for r in runs)
     for (i, j), c in sorted(chosen.items(), key=lambda kv: kv[0][1]):
         tips, axes, moves = cand[(i, j)][c]
         if 0 <= i and j < len(runs):
@@ -206,7 +219,11 @@ def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_lin
         M.append(np.asarray(moves, np.int8))
         P.append(np.full(len(tips), k))
         C.append(np.full((len(tips), 3), np.nan))
+        X.append(np.full(len(tips), -1))
         if j < len(runs):  # the run itself (its first position is the link's approach end)
+            if has_idx:
+                X[-1][-1] = runs[j][3][0]
+                X.append(np.asarray(runs[j][3][1:], int))
             t, a = np.asarray(runs[j][0], float), np.asarray(runs[j][1], float)
             T.append(t[1:])
             A.append(a[1:])
@@ -222,7 +239,8 @@ def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_lin
                 runs_left_out=[int(x) for x in left_out], gaps_not_linked=not_linked,
                 clearance_surface=surface[0])  # fmt: skip
     return ToolPath(np.vstack(T), np.vstack(A), np.concatenate(M), np.concatenate(P),
-                    np.vstack(C) if has_cc else None, None, cutter, name, {}, info)  # fmt: skip
+                    np.vstack(C) if has_cc else None, None, cutter, name,
+                    {"planned_index": np.concatenate(X)} if has_idx else {}, info)  # fmt: skip
 
 
 __all__ = ["clearance_surface", "link_runs"]

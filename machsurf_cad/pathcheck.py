@@ -12,7 +12,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from .cam.toolpath import ToolPath
+import numpy as np
+
+from .cam.toolpath import Move, ToolPath
 from .checks import positive
 from .errors import InputError
 from .gougecheck import VerifyResult, clear_stretches, verify
@@ -82,7 +84,7 @@ def _relinked(toolpath, res, part, tool, gouge_tolerance, clearance, clear) -> T
     cc = toolpath.cc
     try:
         return link_runs(
-            [(toolpath.tip[r], toolpath.axis[r], None if cc is None else cc[r]) for r in runs],
+            [(toolpath.tip[r], toolpath.axis[r], None if cc is None else cc[r], r) for r in runs],
             _faces(part),
             tool if tool is not None else toolpath.cutter,
             clearance=clearance,
@@ -162,3 +164,33 @@ def check_toolpath(
             if again.clean:
                 return PathCheck(toolpath, cut, res, again, "trimmed", float(clearance))
     return PathCheck(toolpath, None, res, None, "refused", float(clearance))
+
+
+def machined_area_fraction(face, planned: ToolPath, kept, *, step: float = 1.0, samples: int = 80) -> float:
+    """Area-weighted share of ``face`` left to the kept positions: the face sampled on a
+    ``samples x samples`` grid (inside its trimming), each sample given to the nearest point of the
+    planned path's contact polyline (its cutting moves sampled every ``step`` mm), counted when that point
+    lies on a kept position or on a move whose two ends are kept. ``kept``: indices into ``planned``."""
+    from scipy.spatial import cKDTree
+
+    from .geometry.face import Face
+    from .threeaxis.reach import _samples
+
+    if planned.cc is None:
+        return float("nan")
+    cc = np.asarray(planned.cc, float)
+    keep = np.zeros(planned.n_positions, bool)
+    keep[np.asarray(kept, int)] = True
+    cutting = ((planned.move == Move.CUT) | (planned.move == Move.APPROACH)) & np.all(np.isfinite(cc), axis=1)
+    idx = np.nonzero(cutting)[0]
+    if idx.size == 0:
+        return float("nan")
+    mv = idx[1:][(np.diff(idx) == 1) & (planned.pass_index[idx[1:]] == planned.pass_index[idx[:-1]])]
+    k = np.maximum(np.ceil(np.linalg.norm(cc[mv] - cc[mv - 1], axis=1) / step).astype(int), 1)
+    j = np.repeat(np.arange(mv.size), k)
+    w = ((np.arange(j.size) - np.repeat(np.cumsum(k) - k, k) + 0.5) / np.repeat(k, k))[:, None]
+    pts = np.concatenate([cc[idx], cc[mv[j] - 1] * (1 - w) + cc[mv[j]] * w])
+    ok = np.concatenate([keep[idx], keep[mv[j] - 1] & keep[mv[j]]])
+    P, _, wt = _samples(face if isinstance(face, Face) else Face(face), samples)
+    _, near = cKDTree(pts).query(P)
+    return float(wt[ok[near]].sum() / wt.sum()) if wt.sum() > 0 else float("nan")

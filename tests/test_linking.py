@@ -86,3 +86,25 @@ def test_check_toolpath_trims_and_links_without_crossing():
     assert pc.verdict == "trimmed"
     assert pc.recheck.clean and _through_bridge(pc.toolpath) == 0.0
     assert pc.toolpath.n_cut == 42
+
+
+def test_trimmed_machined_area_against_closed_form():
+    """Dense passes over a floor with a boss, trimmed by the body check: the share of the floor kept is
+    the area a ball D6 reaches, all but the boss's footprint grown by R = 3 (a rounded rectangle)."""
+    from test_reach_paths import _pocket_with_boss
+
+    from machsurf_cad.pathcheck import machined_area_fraction
+
+    floor, part = _pocket_with_boss()
+    tool = BallEndMill(6, length=20.0)
+    ys = np.arange(-29.0, 29.01, 0.5)
+    tips = [np.column_stack([np.full(ys.size, x), ys if k % 2 == 0 else ys[::-1], np.zeros(ys.size)])
+            for k, x in enumerate(np.arange(-29.0, 29.01, 2.0))]  # fmt: skip
+    planned = ms.ToolPath.from_passes(tips, [np.tile([0.0, 0, 1], (ys.size, 1))] * len(tips), cc=tips, cutter=tool)
+    pc = ms.check_toolpath(planned, part, on_gouge="trim", clearance=5.0)
+    assert pc.verdict == "trimmed" and pc.recheck.clean
+    kept = pc.toolpath.extras["planned_index"]
+    frac = machined_area_fraction(floor, planned, kept[kept >= 0], step=0.25)
+    expected = 1 - (10 * 20 + 2 * 3 * (10 + 20) + np.pi * 9) / 3600.0
+    assert abs(frac - expected) < 0.02
+    assert pc.toolpath.info["links_direct"] > 0 and pc.toolpath.info["runs_left_out"] == []

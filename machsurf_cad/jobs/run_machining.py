@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from .base import EXIT_OK, JobOutcome, Say, Staging, face_input, finish
 from .specs import MachiningSurfaceJob
 
@@ -165,7 +167,20 @@ def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: d
             f"warning: chordal {spec.chordal_tolerance:g} + fit tolerance {spec.tolerance:g} mm reach the "
             f"gouge tolerance {spec.gouge_tolerance:g} mm: chords on convex regions may be refused as gouges"
         )
-    rep["verify"], code = write_checked_toolpath(st, say, tp, part(), spec, tolerance=spec.gouge_tolerance, render=True)
+    check = None
+    if spec.trim_gouges:  # the share of the face the kept stretches machine
+        from ..pathcheck import check_toolpath, machined_area_fraction
+
+        check = check_toolpath(tp, part(), gouge_tolerance=spec.gouge_tolerance, on_gouge="trim",
+                               clearance=spec.clearance)  # fmt: skip
+        if check.verdict == "trimmed" and check.toolpath is not None:
+            pi = np.asarray(check.toolpath.extras.get("planned_index", []), int)
+            frac = machined_area_fraction(ms.nominal, tp, pi[pi >= 0], step=0.2 * ms.cutter.radius)
+            rep["machined_area_fraction"] = frac
+            say(f"machined area after trimming: {100 * frac:.1f} % of the face")
+    rep["verify"], code = write_checked_toolpath(
+        st, say, tp, part(), spec, tolerance=spec.gouge_tolerance, render=True, check=check
+    )
     return code
 
 

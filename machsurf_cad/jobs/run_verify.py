@@ -122,8 +122,10 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
         assert cut is not None and again is not None
         say(
             f"tool path cut down to its clear stretches (--trim-gouges): {cut.n_cut} of {tp.n_cut} cutting "
-            f"positions in {cut.n_passes} pass(es), linking {pc.link_clearance:g} mm along the axis; checked "
-            f"again: clean, max gouge {again.max_gouge:.3g} mm"
+            f"positions in {cut.n_passes} pass(es); links checked clear: {cut.info.get('links_direct', 0)} direct, "
+            f"{cut.info.get('links_over_surface', 0)} over the {cut.info.get('clearance_surface', 'plane')} around "
+            f"the part, {len(cut.info.get('runs_left_out', []))} stretch(es) left out that no clear link reaches; "
+            f"checked again: clean, max gouge {again.max_gouge:.3g} mm"
         )
     elif pc.verdict == "gouges allowed":
         say("tool path written with its gouges and collisions (--allow-gouge): see verify.worst in the report")
