@@ -218,6 +218,11 @@ def _machining_surface_parser(sub) -> None:
     m.add_argument("--lead-min", type=_finite, default=0.0, help="--lead auto: smallest lead, degrees")
     m.add_argument("--lead-rate", type=_finite, default=2.0, help="--lead auto: largest lead change, deg per mm")
     m.add_argument("--tilt", type=_finite, default=0.0, help="tilt angle Omega_n, degrees (5 axes)")
+    m.add_argument("--max-lead", type=_finite, default=None,
+                   help="5 axes, tilt away: largest lead the axis may take to clear the part, degrees")  # fmt: skip
+    m.add_argument("--max-tilt", type=_finite, default=None,
+                   help="5 axes, tilt away: largest tilt either side the axis may take to clear the part, degrees; "
+                   "what no orientation clears is cut out of the path")  # fmt: skip
     m.add_argument("--axis", default=None, help="fixed axis x,y,z for 3 axes / 3+2 (default 0,0,1)")
     m.add_argument("--tip", action="store_true", help="3 axes: S1 at the tool tip instead of the torus plane")
     m.add_argument("--tolerance", type=_finite, default=1e-3, help="fit tolerance, max-norm mm (default 0.001)")

@@ -85,6 +85,8 @@ TERMS: dict[str, Term] = {
     "lead_min": Term(_DEG, "lead auto: smallest lead"),
     "lead_rate": Term("deg/mm", "lead auto: largest lead change per mm of path"),
     "lead_check_faces": Term("", "lead auto: faces the tool body is checked against"),
+    "max_lead": Term(_DEG, "tilt away: largest lead the axis may take to clear the part"),
+    "max_tilt": Term(_DEG, "tilt away: largest tilt either side the axis may take to clear the part"),
     "tip": Term("", "3 axes: the guiding surface at the tool tip instead of the torus plane"),
     "stepover": Term(_MM, "distance between adjacent passes"),
     "scallop": Term(_MM, "cusp height left between adjacent passes"),

@@ -14,6 +14,7 @@ from typing import Literal
 
 import numpy as np
 
+from . import checks
 from .cam.toolpath import Move, ToolPath
 from .checks import positive
 from .errors import InputError
@@ -44,6 +45,9 @@ class PathCheck(Result):
     recheck: VerifyResult | None
     verdict: Literal["clean", "trimmed", "gouges allowed", "refused"]
     link_clearance: float
+    trimmed_from: ToolPath | None = None
+    """The planned path with points inserted along its long cutting moves, which the trimmed path's
+    ``extras["planned_index"]`` refers to."""
 
     @property
     def written(self) -> bool:
@@ -71,6 +75,37 @@ class PathCheck(Result):
                 "recheck": self.recheck.report(),
             }
         return rep
+
+
+def densified(toolpath: ToolPath, step: float) -> ToolPath:
+    """``toolpath`` with points inserted along its cutting moves longer than ``step`` mm (tips and contacts
+    on the chord, axes interpolated and normalised, the same motion): a stretch to cut out is then found
+    to within ``step``. The path itself when no move is that long."""
+    t, a = toolpath.tip, toolpath.axis
+    cut = toolpath.move == Move.CUT
+    length = np.r_[0.0, np.linalg.norm(np.diff(t, axis=0), axis=1)]
+    k = np.where(cut, np.ceil(length / step).astype(int), 1)
+    k[0] = 1
+    if k.max() <= 1:
+        return toolpath
+    src = np.repeat(np.arange(toolpath.n_positions), k)  # each position, preceded by the points before it
+    w = (np.arange(src.size) - np.repeat(np.cumsum(k) - k, k) + 1) / np.repeat(k, k)
+    prev = np.maximum(src - 1, 0)
+    wc = w[:, None]
+    tips = t[prev] * (1 - wc) + t[src] * wc
+    axes = a[prev] * (1 - wc) + a[src] * wc
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    inserted = w < 1
+    move = np.where(inserted, Move.CUT, toolpath.move[src]).astype(np.int8)
+    cc = None
+    if toolpath.cc is not None:
+        cc = np.asarray(toolpath.cc)[prev] * (1 - wc) + np.asarray(toolpath.cc)[src] * wc
+    extras = {}
+    for key, v in toolpath.extras.items():
+        v = np.asarray(v)
+        extras[key] = v[src]
+    return ToolPath(tips, axes, move, toolpath.pass_index[src], cc, None if toolpath.feed is None else
+                    np.asarray(toolpath.feed)[src], toolpath.cutter, toolpath.name, extras, toolpath.info)  # fmt: skip
 
 
 def _relinked(toolpath, res, part, tool, gouge_tolerance, clearance, clear) -> ToolPath | None:
@@ -158,11 +193,16 @@ def check_toolpath(
     if on_gouge == "allow":
         return PathCheck(toolpath, toolpath, res, None, "gouges allowed", float(clearance))
     if on_gouge == "trim":
-        cut = _relinked(toolpath, res, part, tool, gouge_tolerance, clearance, clear)
+        cutter = checks.tool(tool if tool is not None else toolpath.cutter)
+        dense = densified(toolpath, max(0.5 * cutter.radius, 0.25))
+        res_d = (
+            res if dense is toolpath else verify(part, dense, tool, gouge_tolerance=gouge_tolerance, clearance=clear)
+        )
+        cut = _relinked(dense, res_d, part, tool, gouge_tolerance, clearance, clear)
         if cut is not None:
             again = verify(part, cut, tool, gouge_tolerance=gouge_tolerance, clearance=clear)
             if again.clean:
-                return PathCheck(toolpath, cut, res, again, "trimmed", float(clearance))
+                return PathCheck(toolpath, cut, res, again, "trimmed", float(clearance), dense)
     return PathCheck(toolpath, None, res, None, "refused", float(clearance))
 
 

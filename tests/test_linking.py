@@ -85,7 +85,9 @@ def test_check_toolpath_trims_and_links_without_crossing():
     pc = ms.check_toolpath(planned, part, on_gouge="trim", clearance=1.0)
     assert pc.verdict == "trimmed"
     assert pc.recheck.clean and _through_bridge(pc.toolpath) == 0.0
-    assert pc.toolpath.n_cut == 42
+    cut = pc.toolpath.tip[(pc.toolpath.move == Move.CUT) | (pc.toolpath.move == Move.APPROACH)]
+    assert set(cut[:, 0].tolist()) == {-10.0, 30.0}  # the middle pass, under the bridge, is cut out
+    assert pc.toolpath.n_cut == 2 * 41  # the 2 mm moves of the two others split in two to trim finely
 
 
 def test_trimmed_machined_area_against_closed_form():
@@ -104,7 +106,7 @@ def test_trimmed_machined_area_against_closed_form():
     pc = ms.check_toolpath(planned, part, on_gouge="trim", clearance=5.0)
     assert pc.verdict == "trimmed" and pc.recheck.clean
     kept = pc.toolpath.extras["planned_index"]
-    frac = machined_area_fraction(floor, planned, kept[kept >= 0], step=0.25)
+    frac = machined_area_fraction(floor, pc.trimmed_from or planned, kept[kept >= 0], step=0.25)
     expected = 1 - (10 * 20 + 2 * 3 * (10 + 20) + np.pi * 9) / 3600.0
     assert abs(frac - expected) < 0.02
     assert pc.toolpath.info["links_direct"] > 0 and pc.toolpath.info["runs_left_out"] == []

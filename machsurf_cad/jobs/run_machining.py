@@ -35,9 +35,11 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
             faces_of_part.extend(part_faces(spec.part) if spec.part else [face])
         return faces_of_part
 
+    axis_field, tilt_rep = _tilt_away(say, spec, face, cutter, part) if spec.tilt_away else (None, None)
     ms = machining_surface(
         face,
         cutter,
+        axis_field=axis_field,
         axes=spec.axes,
         strategy=spec.strategy,
         lead=spec.lead,
@@ -56,6 +58,8 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
     )
     t_fit = time.perf_counter() - t0
     rep = ms.report()
+    if tilt_rep is not None:
+        rep["tilt_away"] = tilt_rep
     _say_surfaces(say, spec, ms, rep, cutter, desc)
     code = EXIT_OK
     with Staging(out) as st:
@@ -168,14 +172,15 @@ def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: d
             f"gouge tolerance {spec.gouge_tolerance:g} mm: chords on convex regions may be refused as gouges"
         )
     check = None
-    if spec.trim_gouges:  # the share of the face the kept stretches machine
+    if spec.trim_gouges or spec.tilt_away:  # cut out what no tool reaches; the share of the face kept
         from ..pathcheck import check_toolpath, machined_area_fraction
 
         check = check_toolpath(tp, part(), gouge_tolerance=spec.gouge_tolerance, on_gouge="trim",
                                clearance=spec.clearance)  # fmt: skip
         if check.verdict == "trimmed" and check.toolpath is not None:
             pi = np.asarray(check.toolpath.extras.get("planned_index", []), int)
-            frac = machined_area_fraction(ms.nominal, tp, pi[pi >= 0], step=0.2 * ms.cutter.radius)
+            planned = check.trimmed_from if check.trimmed_from is not None else tp
+            frac = machined_area_fraction(ms.nominal, planned, pi[pi >= 0], step=0.2 * ms.cutter.radius)
             rep["machined_area_fraction"] = frac
             say(f"machined area after trimming: {100 * frac:.1f} % of the face")
     rep["verify"], code = write_checked_toolpath(
@@ -199,3 +204,29 @@ def _trimmed_to_reach(say: Say, spec: MachiningSurfaceJob, ms, tp, faces):
         + ("" if frac is None else f"; machined area {100 * frac:.1f} % of the face")
     )
     return out
+
+
+def _tilt_away(say: Say, spec: MachiningSurfaceJob, face, cutter, part):
+    """The axis field turned away from the part within ``--max-lead``/``--max-tilt``
+    (:func:`machsurf_cad.machining.avoid.clear_axis_field`), and its report, said."""
+    from ..machining.avoid import clear_axis_field
+
+    lead = float(spec.lead)
+    field, rep = clear_axis_field(
+        face,
+        cutter,
+        spec.strategy,
+        part(),
+        lead=lead,
+        tilt=spec.tilt,
+        max_lead=lead if spec.max_lead is None else spec.max_lead,
+        max_tilt=spec.max_tilt or 0.0,
+        gouge_tolerance=spec.gouge_tolerance,
+    )
+    say(
+        f"tilt away within lead {lead:g}..{rep['max_lead_deg']:g} deg, tilt +-{rep['max_tilt_deg']:g} deg on all "
+        f"{len(part())} faces: {rep['lattice_points_tilted']} of {rep['lattice_points']} lattice points tilted (axis "
+        f"turned up to {rep['axis_change_max_deg']:.3g} deg, at most {rep['axis_turn_max_deg_per_mm']:.3g} deg/mm), "
+        f"{rep['lattice_points_clear_nowhere']} clear with no orientation (cut out of the path)"
+    )
+    return field, rep

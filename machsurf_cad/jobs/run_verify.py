@@ -98,7 +98,8 @@ def _draw_check(st: Staging, tp, res, rep: dict, tolerance: float) -> None:
 def on_gouge(spec) -> str:
     """The body check's policy of a path-writing job: ``trim`` (--trim-gouges), ``allow`` (--allow-gouge)
     or ``refuse``."""
-    return "trim" if spec.trim_gouges else "allow" if spec.allow_gouge else "refuse"
+    trim = spec.trim_gouges or getattr(spec, "tilt_away", False)  # tilting away trims what it cannot clear
+    return "trim" if trim else "allow" if spec.allow_gouge else "refuse"
 
 
 def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool, check=None):

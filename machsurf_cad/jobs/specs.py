@@ -121,6 +121,10 @@ class MachiningSurfaceJob(_Post, JobSpec):
     lead_margin: float = 1.0
     lead_min: float = 0.0
     lead_rate: float = 2.0
+    max_lead: float | None = None
+    """Tilt away (5 axes): largest lead, degrees (with ``max_tilt``; :mod:`machsurf_cad.machining.avoid`)."""
+    max_tilt: float | None = None
+    """Tilt away (5 axes): largest tilt either side, degrees; what no orientation clears is cut out."""
     tip: bool = False
     tolerance: float = 1e-3
     degree: int = 3
@@ -173,7 +177,26 @@ class MachiningSurfaceJob(_Post, JobSpec):
             raise InputError(f"max_poles must be an integer >= 16, got {self.max_poles!r}")
         if self.axis is not None and len(self.axis) != 3:
             raise InputError("axis must be x,y,z")
+        self._check_tilt_away()
         self._check_post()
+
+    @property
+    def tilt_away(self) -> bool:
+        return self.max_lead is not None or self.max_tilt is not None
+
+    def _check_tilt_away(self) -> None:
+        for name in ("max_lead", "max_tilt"):
+            x = getattr(self, name)
+            if x is not None and not (isinstance(x, (int, float)) and 0.0 <= x <= 90.0):
+                raise InputError(f"--{name.replace('_', '-')} must be within 0..90 degrees, got {x!r}")
+        if not self.tilt_away:
+            return
+        if self.axes != 5:
+            raise InputError("--max-lead and --max-tilt turn a 5-axis axis away from the part: use --axes 5")
+        if self.lead == "auto":
+            raise InputError("--max-lead/--max-tilt start from a given lead: give --lead in degrees, not auto")
+        if self.max_lead is not None and self.max_lead < float(self.lead):
+            raise InputError(f"--max-lead ({self.max_lead:g} deg) is below --lead ({float(self.lead):g} deg)")
 
     def _check_combinations(self) -> None:
         """Refuse options that the chosen route would ignore (each names what it needs)."""

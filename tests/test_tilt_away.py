@@ -1,0 +1,117 @@
+"""Tilt away (issue 28, item 2): a 5-axis axis field turned away from a blade leaning over the machined
+floor, what no orientation clears cut out; the written path checked by the tool-body check and by a
+brute force written here (the ball-ended body against dense samples of every face, every move
+interpolated)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import machsurf_cad as ms
+from machsurf_cad import BallEndMill, builders
+from machsurf_cad.cam.toolpath import Move
+from machsurf_cad.machining.avoid import clear_axis_field
+from machsurf_cad.pathcheck import machined_area_fraction
+
+R, L = 3.0, 25.0
+TOOL = BallEndMill(2 * R, length=L)
+
+
+def _part():
+    """A floor 40 x 20 and a blade leaning over it: from y = 20 at the floor to y = 12 at z = 20."""
+    floor = ms.Face(builders.plane_patch((0, 0, 0), (40, 0, 0), (0, 20, 0), name="floor"), name="floor")
+    blade = ms.Face(builders.plane_patch((0, 20, 0), (40, 0, 0), (0, -8, 20), name="blade"), name="blade")
+    return floor, [floor, blade]
+
+
+def _brute_force(tp, faces, step=0.3) -> np.ndarray:
+    """Per move the least signed distance (mm) of the faces' samples to the body over the move (a ball
+    of radius R on a cylinder up to L from the tip), every ``step`` mm and 1 deg."""
+    from scipy.spatial import cKDTree
+
+    P = np.concatenate(
+        [f.surface.evaluate(*np.meshgrid(np.linspace(0, 1, 161), np.linspace(0, 1, 161))) for f in faces]
+    )
+    P = P.reshape(-1, 3)
+    tree = cKDTree(P)
+    out = np.full(tp.n_positions, np.inf)
+    for i in range(1, tp.n_positions):
+        a0, a1 = tp.axis[i - 1], tp.axis[i]
+        turn = math.degrees(math.acos(min(1.0, float(a0 @ a1))))
+        n = max(2, int(math.ceil(max(np.linalg.norm(tp.tip[i] - tp.tip[i - 1]) / step, turn))) + 1)
+        for w in np.linspace(0, 1, n):
+            t = tp.tip[i - 1] * (1 - w) + tp.tip[i] * w
+            a = a0 * (1 - w) + a1 * w
+            a /= np.linalg.norm(a)
+            near = tree.query_ball_point(t + 0.5 * L * a, 0.5 * L + R + 0.5)
+            if not near:
+                continue
+            q = P[near] - t
+            s = q @ a
+            d = np.where(
+                s <= R,
+                np.linalg.norm(q - R * a, axis=1) - R,
+                np.linalg.norm(q - s[:, None] * a, axis=1) - R,
+            )
+            d = np.where(s > L, np.inf, d)
+            out[i] = min(out[i], float(d.min()))
+    return out
+
+
+@pytest.fixture(scope="module")
+def leaning():
+    floor, part = _part()
+    field, rep = clear_axis_field(floor, TOOL, "planes:x", part, lead=0.0, max_lead=40.0, max_tilt=90.0, grid=15,
+                                  step=10.0)  # fmt: skip
+    avoid = ms.machining_surface(floor, TOOL, axes=5, strategy="planes:x", axis_field=field)
+    nominal = ms.machining_surface(floor, TOOL, axes=5, strategy="planes:x")
+    paths = {}
+    for name, surf in (("nominal", nominal), ("avoid", avoid)):
+        tp = ms.tool_paths(surf, stepover=2.0, chordal_tolerance=0.005, safe_sphere=ms.part_sphere(part, 5.0))
+        paths[name] = (tp, ms.check_toolpath(tp, part, on_gouge="trim", clearance=2.0))
+    return floor, part, rep, paths
+
+
+def test_the_nominal_axis_collides_with_the_blade(leaning):
+    _, _, rep, paths = leaning
+    assert not paths["nominal"][1].check.clean
+    assert rep["lattice_points_tilted"] > 0
+    assert rep["axis_change_max_deg"] <= 40.0 + 1e-6
+
+
+def test_tilting_away_machines_more_of_the_floor(leaning):
+    floor, _, _, paths = leaning
+    frac = {}
+    for name, (tp, pc) in paths.items():
+        assert pc.toolpath is not None and pc.recheck is not None and pc.recheck.clean
+        kept = pc.toolpath.extras["planned_index"]
+        frac[name] = machined_area_fraction(floor, pc.trimmed_from or tp, kept[kept >= 0], step=0.5)
+    # closed forms: a vertical body (radius 3, up to z = 25) clears the blade (y = 20 - 0.4 z up to z = 20)
+    # where y + 3 <= 12, 45 % of the floor; a ball leaning 40 deg away clears it up to where the ball itself
+    # meets the blade (its centre 3 mm from the blade's plane: y = 15.57), 77.9 %: neither can be beaten
+    assert 0.35 < frac["nominal"] <= 0.45 + 0.01
+    assert 0.6 < frac["avoid"] <= 0.779 + 0.01
+    assert frac["avoid"] > frac["nominal"] + 0.2
+
+
+def test_the_tilted_path_is_clean_by_brute_force(leaning):
+    _, part, _, paths = leaning
+    tp = paths["avoid"][1].toolpath
+    d = _brute_force(tp, part)
+    cutting = (tp.move == Move.CUT) | (tp.move == Move.APPROACH)
+    assert d[cutting].min() > -0.01 - 0.003  # the gouge tolerance, plus the samples' spacing on the floor
+    assert d[tp.move == Move.RAPID].min() > 0.0
+
+
+def test_limits_are_checked():
+    floor, part = _part()
+    for kw in (
+        {"max_lead": -1.0, "max_tilt": 0.0},
+        {"max_lead": 10.0, "max_tilt": 91.0},
+        {"max_lead": 5.0, "max_tilt": 0.0},
+    ):
+        with pytest.raises(ms.InputError):
+            clear_axis_field(floor, TOOL, "planes:x", part, lead=10.0, **kw)
