@@ -26,20 +26,25 @@ from ..errors import InputError
 from .strategies import AxisField, LeadTilt, as_feed
 
 
-def _candidates(lead: float, lowest: float, max_lead: float, max_tilt: float, step: float) -> list:
-    """(lead, tilt) pairs within the limits, nearest the nominal ``(lead, 0)`` first (distance of the leans
-    ``sin(lead) (cos tilt, sin tilt)``)."""
+def _candidates(lead: float, lowest: float, max_lead: float, max_tilt: float, step: float, limit: int) -> list:
+    """(lead, tilt) pairs within the limits about ``step`` degrees of lean apart (fewer tilts at small
+    leads; one axis at lead 0), the ``limit`` nearest the nominal ``(lead, 0)`` (distance of the leans
+    ``sin(lead) (cos tilt, sin tilt)``), nearest first."""
     top = min(max(max_lead, lead), 85.0)
     leads = np.unique(np.r_[np.arange(lead, top + 1e-9, step), np.arange(lead, lowest - 1e-9, -step)])
-    tilts = np.unique(np.r_[np.arange(0.0, max_tilt + 1e-9, step), -np.arange(0.0, max_tilt + 1e-9, step)])
 
     def lean(lt, tl):
         r = np.sin(np.radians(lt))
         return np.array([r * np.cos(np.radians(tl)), r * np.sin(np.radians(tl))])
 
+    out = set()
+    for a in leads:
+        k = int(np.ceil(max_tilt * np.sin(np.radians(abs(a))) / step)) if max_tilt > 0 else 0
+        for b in np.linspace(-max_tilt, max_tilt, 2 * k + 1) if k > 0 else [0.0]:
+            out.add((round(float(a), 9), round(float(b), 9)))
     w0 = lean(lead, 0.0)
-    out = [(float(a), float(b)) for a in leads for b in tilts]
-    return sorted(out, key=lambda c: (round(float(np.linalg.norm(lean(*c) - w0)), 12), abs(c[1]), -c[1], -c[0]))
+    ranked = sorted(out, key=lambda c: (round(float(np.linalg.norm(lean(*c) - w0)), 12), abs(c[1]), -c[1], -c[0]))
+    return ranked[: max(1, int(limit))]
 
 
 def _placements(face, cutter, feed, lead, tilt, us, vs):
@@ -79,6 +84,7 @@ def clear_axis_field(
     grid: int = 31,
     step: float = 5.0,
     max_turn: float = 2.0,
+    max_candidates: int = 60,
 ) -> tuple[AxisField, dict]:
     """The tilt-away axis field of ``cutter`` on ``face`` (module docstring) and its report.
 
@@ -102,6 +108,9 @@ def clear_axis_field(
         Lattice points per parameter direction.
     step : float
         Angle step of the candidate orientations, degrees.
+    max_candidates : int
+        Orientations tried at most per lattice point, nearest the nominal first (the rest of the limits
+        is not searched: reported as ``candidates`` against ``candidates_within_limits``).
     max_turn : float
         Largest change of the axis's angle from the normal per mm across the face (deg/mm): the rebuilt
         orientation surface must not fold (a turn of ``1 / D`` radian per mm folds it).
@@ -119,7 +128,7 @@ def clear_axis_field(
     U, V = np.meshgrid(us, vs, indexing="ij")
     inside = face.contains_uv(U, V) if face.is_trimmed else np.ones(U.shape, bool)
     ball = cutter.end_mill_radii("tilt away").is_ball
-    cands = _candidates(lead, -max_lead if ball else lead, max_lead, max_tilt, step)
+    cands = _candidates(lead, -max_lead if ball else lead, max_lead, max_tilt, step, max_candidates)
     nominal_tips, nominal_axes = _placements(face, cutter, feed, lead, tilt, us, vs)
     axes = nominal_axes.copy()
     choice = np.full(U.shape, -1)  # candidate index per lattice point, -1: none clears
@@ -159,6 +168,9 @@ def clear_axis_field(
     report = {
         "grid": [int(grid), int(grid)],
         "candidates": len(cands),
+        "candidates_within_limits": len(
+            _candidates(lead, -max_lead if ball else lead, max_lead, max_tilt, step, 10**9)
+        ),  # fmt: skip
         "angle_step_deg": float(step),
         "max_lead_deg": float(max_lead),
         "max_tilt_deg": float(max_tilt),
