@@ -84,6 +84,10 @@ def test_features_recompute_headless(tmp_path):
     )
     assert q["types"] == ["App::PropertyLength", "App::PropertyAngle", "App::PropertyLength", "App::PropertyAngle"]
     assert q["migrated"] == ["App::PropertyLength", 0.002, "App::PropertyAngle", 7.5]
+    ax = r["axes_int"]  # Axes = 3 from a script works; 4 is one line; a 0.3 enumeration comes back as 3
+    assert ax["type"] == "App::PropertyIntegerConstraint" and ax["value"] == 3 and ax["status"] == "ok"
+    assert ax["four_status"] == "error: Axes must be 3 or 5, got 4"
+    assert ax["migrated"] == ["App::PropertyIntegerConstraint", 3] and ax["factory"] == 3
     it = r["invalid_tool"]  # nothing of the previous recompute survives an error
     assert it["shape_null"] and it["max_s1"] == 0.0 and it["report"] == "" and it["poles"] == ""
     assert it["status"].startswith("error: ") and "\n" not in it["status"]
@@ -137,6 +141,14 @@ def test_cam_operation_in_a_path_job(tmp_path):
     assert op["status"] == "ok" and op["in_job"] and op["verdict"].startswith("clean")
     assert op["tool"] == "flat:D=5" and op["tc_diameter"] == 5.0 and 0 <= op["max_gouge"] <= 0.01
     assert op["n_g1"] == c["rows"] > 500 and op["cut_points"] >= c["cut_rows"] > 500 and op["n_g0"] >= 2
+    # safe G-code: up to the clearance height (above the stock), across at it, then machsurf's path; back up
+    sm = r["safe_moves"]
+    assert not sm["status_after_make"].startswith("error"), sm["status_after_make"]
+    z_clear = sm["first"][0]["Z"]
+    assert z_clear >= sm["stock_top"] + 5.0 - 1e-9 and set(sm["first"][0]) == {"Z"}
+    assert sm["first"][1]["Z"] == z_clear and sm["first"][1]["X"] == sm["path_first"]["X"]
+    assert sm["first"][1]["B"] == sm["path_first"]["B"] and sm["first"][1]["C"] == sm["path_first"]["C"]
+    assert set(sm["last"]) == {"Z"} and sm["last"]["Z"] >= z_clear
     assert c["max_dev"] is not None and c["max_dev"] < 1e-6
     assert m["bull"] == "bull:D=10,r=2,L=20" and m["ball"] == "ball:D=6" and "not supported" in m["chamfer"]
     ps = r["path_simulator"]  # FreeCAD's simulator runs every move: material removed, the part still inside

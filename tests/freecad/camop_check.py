@@ -9,6 +9,27 @@ import traceback
 import types
 
 out_path = os.environ["MACHSURF_FC_OUT"]
+
+
+def _split(commands):
+    """(machsurf's own moves, the safe moves the operation adds, marked by a comment with their count)."""
+    own, safe, skip = [], [], 0
+    for c in commands:
+        if c.Name.startswith("(machsurf safe moves"):
+            skip = int(c.Name.split()[3].rstrip(":"))
+        elif c.Name in ("G0", "G1"):
+            (safe if skip else own).append(c)
+            skip = max(skip - 1, 0)
+    return own, safe
+
+
+def path_moves(commands):
+    return _split(commands)[0]
+
+
+def safe_moves(commands):
+    return _split(commands)[1]
+
 root = os.environ["MACHSURF_ROOT"]
 result = {"ok": False}
 try:
@@ -29,6 +50,7 @@ try:
         key=lambda i: part.Shape.Faces[i].Area,
     )
     op = features.make("CamOperation", doc, (part, [f"Face{top + 1}"]), Pattern="raster", StepOver=4.0)
+    status_after_make = op.Status  # the Job's creation recomputed the document: no false "no tool" error
     doc.recompute()
     job = find_job(doc, create=False)
     g1 = [c for c in op.Path.Commands if c.Name == "G1"]
@@ -91,7 +113,16 @@ try:
     m5 = ms.machining_surface(faces[top], "ball:D=6", axes=5, strategy="planes:-0,1,0", lead=10.0, tolerance=1e-3)
     tp5 = ms.tool_paths(m5, stepover=4.0, chordal_tolerance=0.005, clearance=5.0,
                         safe_sphere=ms.part_sphere(faces, 5.0))  # fmt: skip
-    moves = [c for c in five.Path.Commands if c.Name in ("G0", "G1")]
+    moves = path_moves(five.Path.Commands)
+    safe = safe_moves(five.Path.Commands)
+    result["safe_moves"] = {
+        "first": [dict(c.Parameters) for c in safe[:2]],
+        "last": dict(safe[-1].Parameters) if safe else None,
+        "path_first": dict(moves[0].Parameters),
+        "path_last": dict(moves[-1].Parameters),
+        "stock_top": job.Stock.Shape.BoundBox.ZMax,
+        "status_after_make": status_after_make,
+    }
     tips = np.array([[c.Parameters[k] for k in "XYZ"] for c in moves])
     bc = np.radians([[c.Parameters["B"], c.Parameters["C"]] for c in moves])
     axes = np.stack([np.sin(bc[:, 0]) * np.cos(bc[:, 1]), np.sin(bc[:, 0]) * np.sin(bc[:, 1]), np.cos(bc[:, 0])], 1)
@@ -141,7 +172,7 @@ try:
     fl.ToolController = None
     doc.recompute()
     fr = ms.flank(face_to_numpy(ruled.Shape.Faces[0], "Ruled"), "cyl:D=20,L=80", whole=True, tolerance=0.05)
-    fmoves = [c for c in fl.Path.Commands if c.Name in ("G0", "G1")]
+    fmoves = path_moves(fl.Path.Commands)
     ftips = np.array([[c.Parameters[k] for k in "XYZ"] for c in fmoves])
     fsame = len(fmoves) == len(fr.toolpath.tip)
     result["flank"] = {

@@ -96,8 +96,26 @@ try:
             old.Lead.Value,
         ],
     )
-    doc.removeObject(q.Name)
-    doc.removeObject(old.Name)
+    # Axes from a script: the integer users write (and "3" through the factory); a 0.3 enumeration migrated
+    q.Axes = 3
+    q.Lead = 0.0
+    doc.recompute()
+    axes_int = {"value": q.Axes, "status": q.Status, "type": q.getTypeIdOfProperty("Axes")}
+    q.Axes = 4
+    doc.recompute()
+    axes_int["four_status"] = q.Status
+    enum = doc.addObject("Part::FeaturePython", "OldAxes")
+    enum.addProperty("App::PropertyEnumeration", "Axes", "Strategy", "as saved by 0.3")
+    enum.Axes = ["5", "3"]
+    enum.Axes = "3"
+    features.MachiningSurfaceFeature(enum)
+    enum.Proxy.onDocumentRestored(enum)
+    axes_int["migrated"] = [enum.getTypeIdOfProperty("Axes"), enum.Axes]
+    factory = features.make("MachiningSurface", doc, (part, [fname]), Tool="ball:D=10", Axes="3", Lead=0.0)
+    axes_int["factory"] = factory.Axes
+    step("axes_int", **axes_int)
+    for o in (q, old, enum, factory):
+        doc.removeObject(o.Name)
     # an invalid tool after a good recompute: the shape and every result emptied, one line, no stale number
     ms.Tool = "bull:D=-1,r=2"
     doc.recompute()

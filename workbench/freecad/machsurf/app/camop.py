@@ -37,6 +37,9 @@ from .features import ANGLE, LENGTH, TOOL_SIDES, _add, _Base, attach_view, tool_
 
 PATTERNS = ("raster", "waterline", "5-axis surface", "flank")
 SIMULATION_SAMPLES = 40_000
+SAFE_MARK = "machsurf safe moves"
+"""A comment before the moves the operation adds around machsurf's path (to and from the clearance
+height); its number says how many G0 follow."""
 
 # the ToolBit shapes machsurf maps (FreeCAD's names), and how
 TOOLBIT_SHAPES = ("endmill", "ballend", "bullnose")
@@ -175,6 +178,12 @@ class CamOperationFeature(_Base):
         super().clear(obj)
         obj.CutPoints = 0
 
+    def execute(self, obj):
+        if getattr(self, "configuring", False):  # inside make_operation: no tool yet, not an error
+            obj.Status = "waiting for its Job and ToolController"
+            return
+        super().execute(obj)
+
     def tool_controller(self, obj):
         """The operation's ToolController, else (without a Tool text) the Job's first one, else None."""
         if obj.ToolController is not None or obj.Tool:
@@ -306,6 +315,13 @@ class CamOperationFeature(_Base):
         cmds = [Path.Command(f"({obj.Label}: machsurf {obj.Pattern}, {obj.CutterUsed})")]
         if five:
             cmds.append(Path.Command("(B: tool axis angle from Z, C: its azimuth about Z, degrees; B-C head)"))
+        z_clear = self.clearance_height(obj, tp)
+        first = {"X": float(tp.tip[0, 0]), "Y": float(tp.tip[0, 1])}
+        if five:
+            first.update(B=float(b[0]), C=float(c[0]))
+        # from wherever the last operation left the tool: up to the clearance height, across, then down
+        cmds.append(Path.Command(f"({SAFE_MARK} 2: clearance height {z_clear:.3f} mm)"))
+        cmds += [Path.Command("G0", {"Z": z_clear}), Path.Command("G0", {**first, "Z": z_clear})]
         for i, (p, m) in enumerate(zip(tp.tip, tp.move)):
             words = {"X": float(p[0]), "Y": float(p[1]), "Z": float(p[2])}
             if five:
@@ -314,7 +330,28 @@ class CamOperationFeature(_Base):
                 cmds.append(Path.Command("G0", words))
             else:
                 cmds.append(Path.Command("G1", {**words, "F": horiz if m == Move.CUT else vert}))
+        cmds.append(Path.Command(f"({SAFE_MARK} 1: back to the clearance height)"))
+        cmds.append(Path.Command("G0", {"Z": max(z_clear, float(tp.tip[-1, 2]))}))
         return cmds
+
+    def clearance_height(self, obj, tp) -> float:
+        """The Job's clearance height: above its stock (or the part) by the Job's ClearanceHeightOffset
+        (else this operation's Clearance), and never below the path's highest point."""
+        job = find_job(obj.Document, create=False)
+        top = float(np.max(tp.tip[:, 2]))
+        offset = value_of(obj.Clearance)
+        if job is not None:
+            stock = getattr(job, "Stock", None)
+            if stock is not None and hasattr(stock, "Shape") and not stock.Shape.isNull():
+                top = max(top, float(stock.Shape.BoundBox.ZMax))
+            sheet = getattr(job, "SetupSheet", None)
+            off = getattr(sheet, "ClearanceHeightOffset", None) if sheet is not None else None
+            if off is not None:
+                try:
+                    offset = max(offset, float(getattr(off, "Value", off)))
+                except (TypeError, ValueError):
+                    pass
+        return top + offset
 
 
 def rotary_angles(axis):
@@ -335,9 +372,11 @@ def rotary_angles(axis):
 
 
 def make_operation(doc, source, **props):
-    """The CamOperation in the document's Job (created on the source part when there is none)."""
+    """The CamOperation in the document's Job (created on the source part when there is none). It does
+    not compute until its Job and ToolController are set (a Job's creation recomputes the document)."""
     obj = doc.addObject("Path::FeaturePython", "CamOperation")
     CamOperationFeature(obj)
+    obj.Proxy.configuring = True
     if source is not None:
         obj.Source = [source] if isinstance(source, tuple) else source
     job = find_job(doc, obj.Source[0][0] if obj.Source else None)
@@ -347,5 +386,7 @@ def make_operation(doc, source, **props):
             obj.ToolController = job.Tools.Group[0]
     for k, v in props.items():
         setattr(obj, k, v)
+    obj.Proxy.configuring = False
+    obj.touch()
     attach_view(obj)
     return obj

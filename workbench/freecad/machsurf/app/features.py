@@ -19,7 +19,7 @@ from .. import ensure_core
 
 ensure_core()
 
-from machsurf_cad.errors import MachsurfError
+from machsurf_cad.errors import InputError, MachsurfError
 from machsurf_cad.results import strict_json
 
 from ..convert import face_to_numpy, face_to_part, surface_to_part
@@ -210,7 +210,14 @@ class MachiningSurfaceFeature(_Base):
     def properties(self, obj):
         _add(obj, "App::PropertyLinkSub", "Source", "Nominal", "Face to machine")
         _add(obj, "App::PropertyString", "Tool", "Cutter", "ball:D=.., flat:D=.., bull:D=..,r=.. (mm)", "bull:D=20,r=4")
-        _add(obj, "App::PropertyEnumeration", "Axes", "Strategy", "3 or 5 axes", ["5", "3"])
+        old_axes = None  # migration: an enumeration of "5" and "3" before 0.4 (Axes = 3 from a script failed)
+        if "Axes" in obj.PropertiesList and obj.getTypeIdOfProperty("Axes") == "App::PropertyEnumeration":
+            old_axes = int(str(obj.Axes))
+            obj.removeProperty("Axes")
+        _add(obj, "App::PropertyIntegerConstraint", "Axes", "Strategy", "3 (fixed axis along z) or 5 (lead and tilt)",
+             (5, 3, 5, 2))  # fmt: skip
+        if old_axes is not None:
+            obj.Axes = old_axes
         _add(
             obj,
             "App::PropertyString",
@@ -281,6 +288,8 @@ class MachiningSurfaceFeature(_Base):
 
         f = face_to_numpy(source_face(obj), "F")
         axes = int(obj.Axes)
+        if axes not in (3, 5):
+            raise InputError(f"Axes must be 3 or 5, got {axes}")
         ms = machining_surface(
             f,
             tool_text(obj.Tool),
@@ -560,6 +569,8 @@ def make(kind, doc=None, source=None, **props):
     if source is not None:
         obj.Source = source
     for k, v in props.items():
+        if k == "Axes" and isinstance(v, str) and v.strip().isdigit():  # Axes="3" as the 0.3 enumeration took it
+            v = int(v)
         setattr(obj, k, v)
     attach_view(obj)
     return obj
