@@ -125,7 +125,8 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
         split = f" (the planned {tp.n_cut} with points inserted along long moves)" if dense is not tp else ""
         say(
             f"tool path cut down to its clear stretches: {cut.n_cut} of {dense.n_cut} cutting "
-            f"positions{split} in {cut.n_passes} pass(es); links checked clear: {cut.info.get('links_direct', 0)} direct, "
+            f"positions{split} in {cut.n_passes} pass(es); links checked clear: "
+            f"{cut.info.get('links_direct', 0)} direct, "
             f"{cut.info.get('links_over_surface', 0)} over the {cut.info.get('clearance_surface', 'plane')} around "
             f"the part, {len(cut.info.get('runs_left_out', []))} stretch(es) left out that no clear link reaches; "
             f"checked again: clean, max gouge {again.max_gouge:.3g} mm"
