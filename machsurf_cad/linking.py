@@ -4,7 +4,8 @@ Each gap between two runs of cutting positions gets the first of these links the
 clear (all candidates of all gaps are checked in one :func:`~machsurf_cad.verify` call):
 
 1. **direct**: retract ``clearance`` along the axis, straight across to ``clearance`` above the next run
-   along its axis, approach - the short link that stays down on the part;
+   along its axis, approach - the short link that stays down on the part; then the same with a 1 mm lift
+   (in a channel a full retract would leave);
 2. **over the clearance surface**: out along the axis to the plane above the part (a fixed axis) or to the
    sphere around it (the axis turning), over it, and back in along the next run's axis.
 
@@ -35,13 +36,17 @@ def clearance_surface(faces, axes: np.ndarray, clearance: float):
 
 def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndarray, np.ndarray, list]]:
     """The links from position ``p0`` (axis ``a0``; None at the path's start) to ``p1`` (axis ``a1``; None at
-    its end), in order of preference: (tips, axes, moves) without ``p0``, with ``p1``."""
+    its end), in order of preference: (tips, axes, moves, kind) without ``p0``, with ``p1``; the direct link
+    also with a 1 mm lift (a narrow channel that a full retract would leave)."""
     kind, geo = surface
     out = []
     up0 = None if p0 is None else p0 + clearance * a0
     up1 = None if p1 is None else p1 + clearance * a1
     if p0 is not None and p1 is not None:
-        out.append((np.array([up0, up1, p1]), np.array([a0, a1, a1]), [Move.RETRACT, Move.RAPID, Move.APPROACH]))
+        for lift in sorted({clearance, min(clearance, 1.0)}, reverse=True):
+            q0, q1 = p0 + lift * a0, p1 + lift * a1
+            out.append((np.array([q0, q1, p1]), np.array([a0, a1, a1]), [Move.RETRACT, Move.RAPID, Move.APPROACH],
+                        "direct"))  # fmt: skip
     if kind == "plane":
         a = a0 if a0 is not None else a1
         pts = [q for q in (up0, up1) if q is not None]
@@ -64,7 +69,7 @@ def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndar
         moves = [Move.RAPID] * len(tips)
     if p1 is not None:
         tips, axes, moves = np.vstack([tips, p1]), np.vstack([axes, a1]), moves + [Move.APPROACH]
-    out.append((tips, axes, moves))
+    out.append((tips, axes, moves, "surface"))
     return out
 
 
@@ -130,7 +135,8 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
     # the direct links between neighbours in one check, then the links over the surface where they collide
     gaps = [(-1, 0)] + [(i, i + 1) for i in range(n - 1)] + [(n - 1, n)]
     check(gaps, 0)
-    check([k for k in gaps if not ok.get((k, 0), False)], 1)
+    for c in (1, 2):
+        check([k for k in gaps if not any(ok.get((k, x), False) for x in range(c))], c)
     chosen: list[tuple[tuple[int, int], int]] = []
     left_out: list[int] = []
     not_linked: list[dict] = []
@@ -176,7 +182,7 @@ def _clear(todo, c, ends, faces, cutter, gouge_tolerance, link_clearance, surfac
     P: list = []
     first: list = []
     keys: list[tuple] = []
-    for key, (tips, axes, moves) in todo.items():
+    for key, (tips, axes, moves, _) in todo.items():
         i = key[0]
         start = ends[i][2:] if i >= 0 else (tips[0], axes[0])
         X, Y = np.vstack([start[0], tips]), np.vstack([start[1], axes])
@@ -208,9 +214,9 @@ def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_lin
     has_cc = all(len(r) > 2 and r[2] is not None for r in runs)
     has_idx = all(len(r) > 3 and r[3] is not None for r in runs)
     for (i, j), c in sorted(chosen.items(), key=lambda kv: kv[0][1]):
-        tips, axes, moves = cand[(i, j)][c]
+        tips, axes, moves, kind = cand[(i, j)][c]
         if 0 <= i and j < len(runs):
-            direct = c == 0 and len(cand[(i, j)]) > 1
+            direct = kind == "direct"
             n_direct += int(direct)
             n_over += int(not direct)
         k = max(i, 0) if j >= len(runs) else j

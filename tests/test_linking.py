@@ -35,7 +35,7 @@ def _runs():
     return out
 
 
-def _through_bridge(tp, step=0.1) -> float:
+def _through_bridge(tp, step=0.1, length=10.0) -> float:
     """Deepest the body (radius 3, from the tip up 10 mm) overlaps the plate's plane inside its footprint,
     over every move sampled every ``step`` mm (closed form: the axis's plan distance to the footprint)."""
     worst = 0.0
@@ -43,27 +43,31 @@ def _through_bridge(tp, step=0.1) -> float:
         n = max(2, int(np.ceil(np.linalg.norm(b - a) / step)) + 1)
         for t in a + np.linspace(0, 1, n)[:, None] * (b - a):
             dx = max(0.0 - t[0], t[0] - 20.0, 0.0)
-            if dx < 3.0 and t[2] < 12.0 < t[2] + 10.0:
-                worst = max(worst, min(3.0 - dx, t[2] + 10.0 - 12.0))
+            if dx < 3.0 and t[2] < 12.0 < t[2] + length:
+                worst = max(worst, min(3.0 - dx, t[2] + length - 12.0))
     return worst
 
 
 def test_direct_links_under_the_bridge():
     tp = link_runs(_runs(), _part(), TOOL, clearance=1.0)
     assert tp.info["links_direct"] == 2 and tp.info["runs_left_out"] == []
+    low = link_runs(_runs(), _part(), TOOL, clearance=5.0)  # a 5 mm lift hits the bridge: the 1 mm one does not
+    assert low.info["links_direct"] == 2 and low.info["runs_left_out"] == [] and _through_bridge(low) == 0.0
     assert ms.verify(_part(), tp).clean
     assert _through_bridge(tp) == 0.0
     assert tp.n_cut == 63
 
 
 def test_a_run_no_link_reaches_is_left_out_not_crossed():
-    """With 5 mm retracts the body would rise into the bridge from the middle run: it is left out."""
-    tp = link_runs(_runs(), _part(), TOOL, clearance=5.0)
+    """A body 11.5 mm long fits under the bridge (12 mm up) but any lift (5 mm, or the 1 mm of the low
+    direct link) takes it into the bridge: the middle run cannot be reached or left, and is left out."""
+    tool = BallEndMill(6, length=11.5)
+    tp = link_runs(_runs(), _part(), tool, clearance=5.0)
     assert tp.info["runs_left_out"] == [1]
     assert len(tp.info["gaps_not_linked"]) == 1
     assert tp.info["gaps_not_linked"][0]["to_mm"] == [10.0, 20.0, 0.0]
-    assert ms.verify(_part(), tp).clean
-    assert _through_bridge(tp) == 0.0
+    assert ms.verify(_part(), tp, tool).clean
+    assert _through_bridge(tp, length=11.5) == 0.0
     assert tp.n_cut == 42
     rapid = tp.move == Move.RAPID
     assert tp.tip[rapid, 2].max() == pytest.approx(17.0)  # over the plane 5 mm above the part
