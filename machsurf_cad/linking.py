@@ -34,7 +34,7 @@ def clearance_surface(faces, axes: np.ndarray, clearance: float):
     return "sphere", (0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + float(clearance))
 
 
-def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndarray, np.ndarray, list]]:
+def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndarray, np.ndarray, list, str]]:
     """The links from position ``p0`` (axis ``a0``; None at the path's start) to ``p1`` (axis ``a1``; None at
     its end), in order of preference: (tips, axes, moves, kind) without ``p0``, with ``p1``; the direct link
     also with a 1 mm lift (a narrow channel that a full retract would leave)."""

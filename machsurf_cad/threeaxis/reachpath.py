@@ -287,7 +287,7 @@ def trim_to_reach(
     cutter = checks.tool(tool if tool is not None else toolpath.cutter)
     tol = checks.positive("gouge_tolerance", gouge_tolerance)
     clearance = checks.positive("clearance", clearance)
-    faces = list(part) if isinstance(part, (list, tuple)) else [part]
+    faces: list = list(part) if isinstance(part, (list, tuple)) else [part]
     if not faces:
         raise InputError("trimming to the tool's reach needs the part's faces")
     a = _fixed_axis(toolpath)

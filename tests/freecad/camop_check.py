@@ -30,6 +30,7 @@ def path_moves(commands):
 def safe_moves(commands):
     return _split(commands)[1]
 
+
 root = os.environ["MACHSURF_ROOT"]
 result = {"ok": False}
 try:
