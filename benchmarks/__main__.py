@@ -11,6 +11,7 @@ import platform
 import sys
 
 from . import (
+    bench_avoid,
     bench_batch,
     bench_dropcutter,
     bench_envelope,
@@ -45,6 +46,11 @@ def main(argv=None) -> int:
         (bench_step.step_rows, None),
         (bench_simulate.simulate_rows, "* brute force on a random subset of the finest samples, scaled to all samples"),
         (bench_batch.batch_rows, None),
+        (
+            bench_avoid.avoid_rows,
+            "* avoidance: time per position in the report (ms_per_position); reference = the "
+            "whole-part check of the path it wrote (max diff = that check's max gouge)",
+        ),
         (
             bench_dropcutter.dropcutter_rows,
             "* drop-cutter: OpenCAMLib on an OCCT mesh of the same STEP (deflection 0.001 mm), speed-up = CPU time "
