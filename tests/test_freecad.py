@@ -165,6 +165,15 @@ def test_cam_operation_in_a_path_job(tmp_path):
     apt = r["apt"]  # the APT beside it (machsurf's writer, 5 decimals): same positions and axes
     assert apt["n"] == f5["n_direct"] and apt["tip_dev"] <= 5e-6 and apt["axis_dev"] < 1e-9
     assert apt["feed_line"].startswith("FEDRAT/")
+    tr = r["trim"]  # a gouging 5-axis path: refused; cut down and relinked; or tilted away, then cut down
+    assert tr["refused"]["status"].startswith("error: the path gouges the part") and tr["refused"]["n_moves"] == 0
+    t = tr["trimmed"]
+    assert t["status"] == "ok" and t["verdict"].startswith("trimmed, then clean"), t
+    assert t["independent_clean"] and t["max_gouge"] <= 0.01 and 0.5 <= t["area"] < 1.0, t
+    t = tr["tilted"]  # raising the lead where the face is concave: clean, or nearly so and trimmed
+    assert t["status"] == "ok" and t["verdict"].startswith(("clean", "trimmed, then clean")), t
+    assert t["independent_clean"] and t["max_gouge"] <= 0.01
+    assert t["area"] is None or t["area"] >= tr["trimmed"]["area"]
     bad = r["bad_input"]  # every bad value: one line, an empty path; restored, the operation recovers
     assert len(bad["cases"]) == 7
     for case, b in bad["cases"].items():

@@ -112,8 +112,8 @@ def clear_axis_field(
         Orientations tried at most per lattice point, nearest the nominal first (the rest of the limits
         is not searched: reported as ``candidates`` against ``candidates_within_limits``).
     max_turn : float
-        Largest change of the axis's angle from the normal per mm across the face (deg/mm): the rebuilt
-        orientation surface must not fold (a turn of ``1 / D`` radian per mm folds it).
+        Largest change of the axis's angle from the normal per mm across the face (deg/mm), and at most
+        half of ``1 / D`` radian per mm: the rebuilt orientation surface, ``D`` up the axis, folds at that.
     """
     for name, x in (("max_lead", max_lead), ("max_tilt", max_tilt)):
         if not (np.isfinite(x) and 0.0 <= x <= 90.0):
@@ -150,6 +150,7 @@ def clear_axis_field(
         todo = todo[first < 0]
     raw = axes.copy()
     lead_min = 0.0 if ball else lead
+    max_turn = min(max_turn, 0.5 * np.degrees(1.0 / cutter.D))  # S2 is D up the axis: 1 / D rad/mm folds it
     smooth, not_clear = _smoothed(
         face, cutter, feed, raw, nominal_axes, choice, inside, check_faces, gouge_tolerance, us, vs,
         (max_turn, lead_min, max_lead),
@@ -196,7 +197,9 @@ def _smoothed(face, cutter, feed, raw, nominal, choice, inside, check_faces, gou
     smallest field that changes by at most ``rate`` degrees per mm (so it tapers off around the tilted
     points instead of jumping) and its direction is that of the nearest tilted point, blurred; the lean is kept
     within ``lead_min`` and ``max_lead`` of the normal (``limits = (rate, lead_min, max_lead)``). The
-    smoothed placements of the lattice points that had a clear orientation are checked again."""
+    field is blurred further where it still turns faster than ``rate`` (tilted regions leaning different
+    ways meeting). The smoothed placements of the lattice points that had a clear orientation are checked
+    again."""
     from scipy.ndimage import distance_transform_edt, gaussian_filter
 
     from .autolead import lipschitz_envelope
@@ -222,18 +225,38 @@ def _smoothed(face, cutter, feed, raw, nominal, choice, inside, check_faces, gou
         direction = np.stack([gaussian_filter(direction[..., k], 2.0, mode="nearest") for k in range(2)], -1)
         direction /= np.maximum(np.linalg.norm(direction, axis=-1, keepdims=True), 1e-12)
         w = w_nom + env[..., None] * direction
-    m = np.linalg.norm(w, axis=-1)
-    scale = np.clip(m, lo, hi) / np.maximum(m, 1e-300)
-    w = np.where((m > 1e-12)[..., None], w * scale[..., None], np.stack([np.full(m.shape, lo), 0 * m], -1))
-    h = np.sqrt(np.maximum(1.0 - (w**2).sum(-1), 0.0))[..., None]
-    smooth = h * n + w[..., :1] * f + w[..., 1:] * g
-    smooth /= np.linalg.norm(smooth, axis=-1, keepdims=True)
+    for _ in range(40):  # where tilted regions leaning different ways meet: blurred until the turn is in bound
+        m = np.linalg.norm(w, axis=-1)
+        scale = np.clip(m, lo, hi) / np.maximum(m, 1e-300)
+        w = np.where((m > 1e-12)[..., None], w * scale[..., None], np.stack([np.full(m.shape, lo), 0 * m], -1))
+        h = np.sqrt(np.maximum(1.0 - (w**2).sum(-1), 0.0))[..., None]
+        smooth = h * n + w[..., :1] * f + w[..., 1:] * g
+        smooth /= np.linalg.norm(smooth, axis=-1, keepdims=True)
+        if _turn_max(smooth, frame.point, inside) <= rate * (1 + 1e-6) or not tilted.any():
+            break
+        w = np.stack([gaussian_filter(w[..., k], 1.0, mode="nearest") for k in range(2)], -1)
     idx = np.argwhere(inside & (choice >= 0))
     tips, axes = MachiningMaps(face, cutter, 5, _GridAxes(us, vs, smooth, feed), cutter.D, False).tool_placements(
         us, vs
     )
     ok = _clear(check_faces, cutter, tips[idx[:, 0], idx[:, 1]], axes[idx[:, 0], idx[:, 1]], gouge_tolerance)
     return smooth, int((~ok).sum())
+
+
+def _turn_max(axes, points, inside) -> float:
+    """The largest turn of ``axes`` between neighbouring lattice points inside the face, degrees per mm."""
+    out = 0.0
+    for k in (0, 1):
+        da = np.diff(axes, axis=k)
+        dp = np.linalg.norm(np.diff(points, axis=k), axis=-1)
+        a0 = axes[:-1] if k == 0 else axes[:, :-1]
+        a1 = a0 + da
+        both = (inside[1:] & inside[:-1]) if k == 0 else (inside[:, 1:] & inside[:, :-1])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = _angle_deg(a0, a1) / dp
+        t = t[both & np.isfinite(t)]
+        out = max(out, float(t.max(initial=0.0)))
+    return out
 
 
 class _GridAxes:

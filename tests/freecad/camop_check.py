@@ -149,6 +149,29 @@ try:
         "axis_dev": float(np.abs(back.axis - tp5.axis).max()) if len(back.tip) == len(tp5.tip) else None,
         "feed_line": next((ln.strip() for ln in open(apt) if ln.startswith("FEDRAT")), ""),
     }
+    # a bull D40 r2 at lead 3 gouges the block's top (its concave parts): refused, or cut down and relinked
+    # (TrimGouges), or tilted away (the lead raised where it must be)
+    trim = {}
+    for name, props in (("refused", {}), ("trimmed", {"TrimGouges": True}),
+                        ("tilted", {"MaxLead": 30.0})):  # fmt: skip
+        op2 = features.make("CamOperation", doc, (part, [f"Face{top + 1}"]), Pattern="5-axis surface", StepOver=4.0,
+                            Tool="bull:D=40,r=2", Lead=3.0, **props)  # fmt: skip
+        op2.ToolController = None
+        doc.recompute()
+        own = path_moves(op2.Path.Commands)
+        entry = {"status": op2.Status, "verdict": op2.Verdict, "n_moves": len(own), "max_gouge": op2.MaxGouge.Value}
+        if own:
+            t2 = np.array([[c.Parameters[k] for k in "XYZ"] for c in own])
+            b2 = np.radians([[c.Parameters["B"], c.Parameters["C"]] for c in own])
+            a2 = np.stack([np.sin(b2[:, 0]) * np.cos(b2[:, 1]), np.sin(b2[:, 0]) * np.sin(b2[:, 1]),
+                           np.cos(b2[:, 0])], 1)  # fmt: skip
+            mv = np.array([ms.Move.RAPID if c.Name == "G0" else ms.Move.CUT for c in own])
+            written = ms.ToolPath(t2, a2, mv, np.zeros(len(own), int), cutter=ms.parse_cutter("bull:D=40,r=2"))
+            entry["independent_clean"] = bool(ms.verify(faces, written, gouge_tolerance=0.011).clean)
+            entry["area"] = json.loads(op2.Report).get("machined_area_fraction")
+        trim[name] = entry
+        doc.removeObject(op2.Name)
+    result["trim"] = trim
     # bad input on the operation: a one-line status, an empty path, the document intact; then it recovers
     bad = {}
     for prop, value in (("StepOver", 0.0), ("StepOver", 1e9), ("Lead", 95.0), ("SurfaceTolerance", 0.0),

@@ -152,6 +152,11 @@ class CamOperationFeature(_Base):
         _add(obj, LENGTH, "GougeTolerance", "Accuracy", "Deepest the tool body may go into the part", 0.01)
         _add(obj, "App::PropertyBool", "AllowGouge", "Accuracy", "Write a gouging path anyway (listed in Verdict)",
              False)  # fmt: skip
+        _add(obj, "App::PropertyBool", "TrimGouges", "Accuracy", "Cut out the stretches that gouge or collide and "
+             "join the rest by links checked clear (what is left out is in Report)", False)  # fmt: skip
+        _add(obj, ANGLE, "MaxLead", "5-axis", "Tilt away: largest lead the axis may take where the tool would touch "
+             "the part (0: no tilting); what no orientation clears is cut out", 0.0)  # fmt: skip
+        _add(obj, ANGLE, "MaxTilt", "5-axis", "Tilt away: largest tilt either side the axis may take", 0.0)
         _add(obj, LENGTH, "Clearance", "Linking", "Rapid height above the part, along the tool axis", 5.0)
         _add(obj, "App::PropertyBool", "SimulateScallops", "Simulation", "Also simulate the cut and map the "
              "material left (takes a few seconds)", False)  # fmt: skip
@@ -215,7 +220,7 @@ class CamOperationFeature(_Base):
             tp,
             faces + others,
             gouge_tolerance=gtol,
-            on_gouge="allow" if obj.AllowGouge else "refuse",
+            on_gouge="trim" if obj.TrimGouges or self.tilts_away(obj) else "allow" if obj.AllowGouge else "refuse",
             clearance=value_of(obj.Clearance),
             progress=bar,
         )
@@ -223,12 +228,36 @@ class CamOperationFeature(_Base):
         v = pc.check
         vr = v.report()
         rep = {"toolpath": tp.report(), "verify": pc.report(), "cutter": cutter.spec()}
+        if self.tilts_away(obj) and getattr(self, "tilt_report", None) is not None:
+            rep["tilt_away"] = self.tilt_report
+        if pc.verdict == "trimmed" and pc.toolpath is not None and len(faces) == 1:
+            kept = np.asarray(pc.toolpath.extras.get("planned_index", []), int)
+            planned = pc.trimmed_from if pc.trimmed_from is not None else tp
+            from machsurf_cad.pathcheck import machined_area_fraction
+
+            rep["machined_area_fraction"] = machined_area_fraction(
+                faces[0], planned, kept[kept >= 0], step=0.2 * cutter.radius
+            )
         obj.MaxGouge = float(v.max_gouge)
         obj.CutterUsed = cutter.spec()
         obj.Verdict = verdict_text(vr)
+        if pc.verdict == "trimmed" and pc.toolpath is not None and pc.recheck is not None:
+            obj.MaxGouge = float(pc.recheck.max_gouge)  # what is written
+            info = pc.toolpath.info
+            frac = rep.get("machined_area_fraction")
+            obj.Verdict = (
+                f"trimmed, then clean: {pc.toolpath.n_cut} cutting positions kept"
+                + (f" ({100 * frac:.1f} % of the face)" if frac is not None else "")
+                + f", {len(info.get('runs_left_out', []))} stretch(es) no clear link reaches left out; planned: "
+                + verdict_text(vr)
+            )
         if pc.toolpath is None:
             obj.Path = Path.Path()
-            raise InputError(f"the path gouges the part ({obj.Verdict}): not written (AllowGouge writes it)")
+            raise InputError(
+                f"the path gouges the part ({obj.Verdict}): not written (TrimGouges cuts the gouges out, AllowGouge "
+                "writes it)"
+            )
+        tp = pc.toolpath  # the path as planned, or cut down to its clear stretches (TrimGouges, tilt away)
         obj.Path = Path.Path(self.commands(obj, tp))
         if str(obj.AptFile):
             ms.write_apt(str(obj.AptFile), tp, self.post_options(obj, ms))
@@ -279,13 +308,26 @@ class CamOperationFeature(_Base):
             obj.SurfaceError = 0.0
             return res.toolpath
         a = math.radians(value_of(obj.Angle))  # passes along the raster direction: planes normal to it in xy
-        m = ms.machining_surface(faces[0], cutter, axes=5, strategy=f"planes:{-math.sin(a):.12g},{math.cos(a):.12g},0",
-                                 lead=value_of(obj.Lead), tilt=value_of(obj.Tilt),
+        strategy = f"planes:{-math.sin(a):.12g},{math.cos(a):.12g},0"
+        field = None
+        if self.tilts_away(obj):  # the axis turned away from the part within MaxLead / MaxTilt
+            from machsurf_cad.machining.avoid import clear_axis_field
+
+            lead = value_of(obj.Lead)
+            limits = {"lead": lead, "tilt": value_of(obj.Tilt), "max_lead": max(value_of(obj.MaxLead), lead),
+                      "max_tilt": value_of(obj.MaxTilt), "gouge_tolerance": value_of(obj.GougeTolerance)}  # fmt: skip
+            field, tilt_rep = clear_axis_field(faces[0], cutter, strategy, faces + others, **limits)
+            self.tilt_report = tilt_rep
+        m = ms.machining_surface(faces[0], cutter, axes=5, strategy=strategy, lead=value_of(obj.Lead),
+                                 tilt=value_of(obj.Tilt), axis_field=field,
                                  tolerance=value_of(obj.SurfaceTolerance), progress=bar)  # fmt: skip
         obj.SurfaceError = float(m.s1_fit.max_error)
         sphere = ms.part_sphere(faces + others, value_of(obj.Clearance))  # passes linked over the whole part
         return ms.tool_paths(m, stepover=value_of(obj.StepOver), chordal_tolerance=value_of(obj.ChordalTolerance),
                              clearance=value_of(obj.Clearance), safe_sphere=sphere)  # fmt: skip
+
+    def tilts_away(self, obj) -> bool:
+        return str(obj.Pattern) == "5-axis surface" and (value_of(obj.MaxLead) > 0 or value_of(obj.MaxTilt) > 0)
 
     def feeds(self, obj):
         """(cutting, plunge) feeds in mm/s (FreeCAD's unit) from the ToolController, else 1000 and 300 mm/min."""
