@@ -103,7 +103,11 @@ def densified(toolpath: ToolPath, step: float) -> ToolPath:
     extras = {}
     for key, v in toolpath.extras.items():
         v = np.asarray(v)
-        extras[key] = v[src]
+        if v.dtype.kind == "f":  # per-position figures along the chord, like the tips
+            w_ = w.reshape((-1,) + (1,) * (v.ndim - 1))
+            extras[key] = v[prev] * (1 - w_) + v[src] * w_
+        else:
+            extras[key] = v[src]
     return ToolPath(tips, axes, move, toolpath.pass_index[src], cc, None if toolpath.feed is None else
                     np.asarray(toolpath.feed)[src], toolpath.cutter, toolpath.name, extras, toolpath.info)  # fmt: skip
 
