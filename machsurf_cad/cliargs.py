@@ -17,9 +17,8 @@ from .jobs.specs import SPECS, JobSpec
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message):  # bad usage is bad input: exit 1 with one line
-        self.print_usage(sys.stderr)
-        print(f"machsurf: error: {message}", file=sys.stderr)
+    def error(self, message):  # bad usage is bad input: exit 1 with one line (the usage is one --help away)
+        print(f"machsurf: error: {message} ({self.prog} --help lists the options)", file=sys.stderr)
         raise SystemExit(EXIT_INPUT)
 
 

@@ -241,7 +241,8 @@ def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_lin
                 C.append(cc[1:])
             else:
                 C.append(np.full((len(t) - 1, 3), np.nan))
-    info = dict(info or {}, links_direct=int(n_direct), links_over_surface=int(n_over),
+    n_cut = int(sum(len(runs[j][0]) for (_, j) in chosen if j < len(runs)))
+    info = dict(info or {}, n_cut_positions=n_cut, links_direct=int(n_direct), links_over_surface=int(n_over),
                 runs_left_out=[int(x) for x in left_out], gaps_not_linked=not_linked,
                 clearance_surface=surface[0])  # fmt: skip
     return ToolPath(np.vstack(T), np.vstack(A), np.concatenate(M), np.concatenate(P),

@@ -59,6 +59,7 @@ class PathCheck(Result):
             rep["trimmed"] = {
                 "n_cut_kept": self.toolpath.n_cut,
                 "n_cut_before": self.planned.n_cut,
+                "n_cut_split": (self.trimmed_from or self.planned).n_cut,  # long moves split before trimming
                 "n_passes": self.toolpath.n_passes,
                 "clearance_mm": self.link_clearance,
                 **{

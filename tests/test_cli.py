@@ -88,6 +88,12 @@ def test_usage_errors_exit_1():
     assert r.returncode == 1 and "Traceback" not in r.stderr
     r = run("frobnicate")
     assert r.returncode == 1
+    r = run("machining-surface", "--example", "bezier5", "--tool", "ball:D=6", "--max-tilt", "nan")
+    lines = [ln for ln in (r.stdout + r.stderr).splitlines() if ln.strip()]
+    assert r.returncode == 1 and len(lines) == 1 and "--max-tilt: must be a finite number" in lines[0], lines
+    # a clearance larger than the part: a unit mistake, refused before any work
+    r = run("machining-surface", "--example", "bezier5", "--tool", "ball:D=6", "--toolpath", "--clearance", "10000")
+    assert r.returncode == 1 and r.stdout.strip() == "" and "larger than the part (144.8 mm" in r.stderr, r.stderr
 
 
 @needs_pyvista

@@ -35,6 +35,8 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
             faces_of_part.extend(part_faces(spec.part) if spec.part else [face])
         return faces_of_part
 
+    if spec.toolpath:
+        _check_clearance(spec.clearance, part())  # before any work
     axis_field, tilt_rep = _tilt_away(say, spec, face, cutter, part) if spec.tilt_away else (None, None)
     ms = machining_surface(
         face,
@@ -199,8 +201,10 @@ def _trimmed_to_reach(say: Say, spec: MachiningSurfaceJob, ms, tp, faces):
     frac = i.get("machined_area_fraction")
     say(
         f"reach along the axis on all {len(faces)} faces (exact drop-cutter): {i['reach_positions_trimmed']} of "
-        f"{i['reach_positions_planned']} cutting positions cut out where the part stops the tool; "
-        f"{i['reach_runs']} run(s), {i['links_skim']} skim link(s) (highest {i['link_height_max_mm']:.4g} mm)"
+        f"{i['reach_positions_planned']} planned positions lie where the part stops the tool; "
+        f"{i['reach_positions_kept']} cutting positions kept ({i['reach_positions_inserted']} put along moves "
+        f"the part stops part-way) in {i['reach_runs']} run(s), {i['links_skim']} skim link(s) (highest "
+        f"{i['link_height_max_mm']:.4g} mm above its ends)"
         + ("" if frac is None else f"; machined area {100 * frac:.1f} % of the face")
     )
     return out
@@ -230,3 +234,17 @@ def _tilt_away(say: Say, spec: MachiningSurfaceJob, face, cutter, part):
         f"{rep['lattice_points_clear_nowhere']} clear with no orientation (cut out of the path)"
     )
     return field, rep
+
+
+def _check_clearance(clearance: float, faces) -> None:
+    """Refuse a clearance larger than the part itself (its poles' bounding box diagonal): a unit mistake,
+    and links that high make the path and its check needlessly long."""
+    from ..errors import InputError
+
+    poles = np.concatenate([np.asarray(getattr(f, "surface", f).poles, float).reshape(-1, 3) for f in faces])
+    size = float(np.linalg.norm(np.ptp(poles, axis=0)))
+    if clearance > max(size, 1.0):
+        raise InputError(
+            f"clearance {clearance:g} mm is larger than the part ({size:.4g} mm across its bounding box): "
+            "check the units (mm)"
+        )

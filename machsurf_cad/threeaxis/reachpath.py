@@ -266,7 +266,9 @@ def trim_to_reach(
     ToolPath
         The kept runs, skim-linked (module docstring). ``extras["planned_index"]`` gives each position's
         index in ``toolpath`` (-1 on links); ``info`` adds ``reach_positions_planned``,
-        ``reach_positions_trimmed``, ``reach_runs``, ``machined_area_fraction`` (with ``face``),
+        ``reach_positions_trimmed`` (planned positions where the part stops the tool),
+        ``reach_positions_kept`` (with ``reach_positions_inserted`` points put along moves the part stops
+        part-way), ``reach_runs``, ``machined_area_fraction`` (with ``face``),
         ``links_skim``, ``link_height_max_mm`` (the highest link above the higher of its two ends) and
         ``safe_plane_mm``.
 
@@ -356,6 +358,8 @@ def trim_to_reach(
         reach_positions_planned=n_cut,
         reach_positions_trimmed=n_cut - int(kept.sum()),
         reach_positions_inserted=n_inserted,
+        reach_positions_kept=int(sum(len(r) for r in runs)),
+        n_cut_positions=int(sum(len(r) for r in runs)),
         reach_runs=len(runs),
         links_skim=len(runs) - 1,
         link_height_max_mm=float(link_max) if np.isfinite(link_max) else 0.0,
