@@ -9,10 +9,11 @@ clear (all candidates of all gaps are checked in one :func:`~machsurf_cad.verify
 2. **over the clearance surface**: out along the axis to the plane above the part (a fixed axis) or to the
    sphere around it (the axis turning), over it, and back in along the next run's axis.
 
-A gap no link clears is not bridged by a crossing move: the run after it is left out and the gap reported
-(where it is), and the next run is tried from the same end; a run whose way out to the clearance surface at
-the end of the path is not clear is left out too. The path's first approach and last retract
-come from and go to the clearance surface, checked the same way.
+A run that no clear link enters at its start is tried reversed, entered at its end (the same moves
+backwards; reported in ``runs_reversed``). A gap no link clears is not bridged by a crossing move: the run
+after it is left out and the gap reported (where it is), and the next run is tried from the same end; a
+run whose way out to the clearance surface at the end of the path is not clear is left out too. The
+path's first approach and last retract come from and go to the clearance surface, checked the same way.
 """
 
 from __future__ import annotations
@@ -108,14 +109,21 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
     surface = clearance_surface(faces, np.concatenate([np.asarray(r[1]) for r in runs]), clearance)
     ends = [(np.asarray(t[0], float), np.asarray(a[0], float), np.asarray(t[-1], float), np.asarray(a[-1], float))
             for t, a, *_ in runs]  # fmt: skip
-    cand: dict[tuple[int, int], list] = {}
-    ok: dict[tuple[tuple[int, int], int], bool] = {}
+
+    def entry(node):  # a run entered at its start (o = 0) or, reversed, at its end (o = 1)
+        j, o = node
+        return (None, None) if j >= n else (ends[j][:2] if o == 0 else ends[j][2:])
+
+    def exit_(node):
+        i, o = node
+        return (None, None) if i < 0 else (ends[i][2:] if o == 0 else ends[i][:2])
+
+    cand: dict[tuple, list] = {}
+    ok: dict[tuple, bool] = {}
 
     def candidates(key):
         if key not in cand:
-            i, j = key
-            p0, a0 = (None, None) if i < 0 else ends[i][2:]
-            p1, a1 = (None, None) if j >= n else ends[j][:2]
+            (p0, a0), (p1, a1) = exit_(key[0]), entry(key[1])
             cand[key] = _candidates(p0, a0, p1, a1, clearance, surface)
         return cand[key]
 
@@ -123,7 +131,8 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
         """Candidate ``c`` of the gaps ``keys`` (those that have one and are not known), checked together."""
         todo = {k: candidates(k)[c] for k in keys if c < len(candidates(k)) and (k, c) not in ok}
         if todo:
-            ok.update(_clear(todo, c, ends, faces, cutter, gouge_tolerance, link_clearance, surface))
+            starts = {k: exit_(k[0]) for k in todo}
+            ok.update(_clear(todo, c, starts, faces, cutter, gouge_tolerance, link_clearance, surface))
 
     def first_clear(key):
         for c in range(len(candidates(key))):
@@ -133,34 +142,45 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
         return None
 
     # the direct links between neighbours in one check, then the links over the surface where they collide
-    gaps = [(-1, 0)] + [(i, i + 1) for i in range(n - 1)] + [(n - 1, n)]
+    gaps = [((i, 0), (i + 1, 0)) for i in range(-1, n)]
     check(gaps, 0)
     for c in (1, 2):
         check([k for k in gaps if not any(ok.get((k, x), False) for x in range(c))], c)
-    chosen: list[tuple[tuple[int, int], int]] = []
+    chosen, left_out, not_linked = _walk(n, first_clear, exit_, entry)
+    return _assemble(runs, dict(chosen), cand, cutter, name, info, surface, sorted(left_out), not_linked)
+
+
+def _walk(n, first_clear, exit_, entry):
+    """Runs in order, each entered at its start or else, reversed, at its end, by the first clear link from
+    the last one kept; a run no clear link enters is left out; a run no clear link leaves at the path's end
+    is left out too (and its way in dropped)."""
+    chosen: list[tuple[tuple, int]] = []
     left_out: list[int] = []
     not_linked: list[dict] = []
-    i, j = -1, 0
+    cur, j = (-1, 0), 0
     while True:
-        if i < 0 and j >= n:
+        if cur[0] < 0 and j >= n:
             raise InputError("no run of the path can be reached and left without crossing the part")
-        c = first_clear((i, j))
-        if c is not None:
-            chosen.append(((i, j), c))
+        tries = [(j, 0), (j, 1)] if j < n else [(n, 0)]
+        got = next(((node, c) for node in tries for c in [first_clear((cur, node))] if c is not None), None)
+        if got is not None:
+            chosen.append(((cur, got[0]), got[1]))
             if j == n:
                 break
-            i, j = j, j + 1
+            cur, j = got[0], j + 1
             continue
-        not_linked.append({"from_mm": None if i < 0 else ends[i][2].tolist(),
-                           "to_mm": None if j >= n else ends[j][0].tolist()})  # fmt: skip
+        p0, p1 = exit_(cur)[0], entry((j, 0))[0]
+        not_linked.append(
+            {"from_mm": None if p0 is None else p0.tolist(), "to_mm": None if p1 is None else p1.tolist()}
+        )
         if j < n:  # no clear way into run j: it is left out
             left_out.append(j)
             j += 1
-        else:  # no clear way out of run i to the end: it is left out, and its way in dropped
-            left_out.append(i)
+        else:  # no clear way out of the last run to the end: it is left out, and its way in dropped
+            left_out.append(cur[0])
             chosen.pop()
-            i = chosen[-1][0][1] if chosen else -1
-    return _assemble(runs, dict(chosen), cand, cutter, name, info, surface, sorted(left_out), not_linked)
+            cur = chosen[-1][0][1] if chosen else (-1, 0)
+    return chosen, left_out, not_linked
 
 
 def _on_surface(tips: np.ndarray, surface) -> np.ndarray:
@@ -172,7 +192,7 @@ def _on_surface(tips: np.ndarray, surface) -> np.ndarray:
     return np.linalg.norm(tips - geo[0], axis=1) >= geo[1] - 1e-9
 
 
-def _clear(todo, c, ends, faces, cutter, gouge_tolerance, link_clearance, surface) -> dict:
+def _clear(todo, c, starts, faces, cutter, gouge_tolerance, link_clearance, surface) -> dict:
     """Whether candidate ``c`` of each gap in ``todo`` (gap -> its candidate) is clear: all in one tool-body
     check, each from its own start, moves on the clearance surface left out. Placements every 2 mm keep
     ``link_clearance`` plus what a motion of 2 mm can hide (``2^2 / (8 R)``)."""
@@ -183,8 +203,7 @@ def _clear(todo, c, ends, faces, cutter, gouge_tolerance, link_clearance, surfac
     first: list = []
     keys: list[tuple] = []
     for key, (tips, axes, moves, _) in todo.items():
-        i = key[0]
-        start = ends[i][2:] if i >= 0 else (tips[0], axes[0])
+        start = starts[key] if starts[key][0] is not None else (tips[0], axes[0])
         X, Y = np.vstack([start[0], tips]), np.vstack([start[1], axes])
         mv = np.concatenate([[Move.RAPID], np.asarray(moves, np.int8)])
         on = _on_surface(X, surface)
@@ -213,37 +232,43 @@ def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_lin
     n_direct = n_over = 0
     has_cc = all(len(r) > 2 and r[2] is not None for r in runs)
     has_idx = all(len(r) > 3 and r[3] is not None for r in runs)
-    for (i, j), c in sorted(chosen.items(), key=lambda kv: kv[0][1]):
-        tips, axes, moves, kind = cand[(i, j)][c]
+    reversed_runs = []
+    for key, c in sorted(chosen.items(), key=lambda kv: kv[0][1][0]):
+        (i, _), (j, oj) = key
+        tips, axes, moves, kind = cand[key][c]
         if 0 <= i and j < len(runs):
             direct = kind == "direct"
             n_direct += int(direct)
             n_over += int(not direct)
-        k = max(i, 0) if j >= len(runs) else j
         T.append(tips)
         A.append(axes)
         M.append(np.asarray(moves, np.int8))
-        P.append(np.full(len(tips), k))
+        P.append(np.full(len(tips), max(i, 0) if j >= len(runs) else j))
         C.append(np.full((len(tips), 3), np.nan))
         X.append(np.full(len(tips), -1))
-        if j < len(runs):  # the run itself (its first position is the link's approach end)
-            if has_idx:
-                X[-1][-1] = runs[j][3][0]
-                X.append(np.asarray(runs[j][3][1:], int))
-            t, a = np.asarray(runs[j][0], float), np.asarray(runs[j][1], float)
-            T.append(t[1:])
-            A.append(a[1:])
-            M.append(np.full(len(t) - 1, Move.CUT, np.int8))
-            P.append(np.full(len(t) - 1, j))
-            if has_cc:
-                cc = np.asarray(runs[j][2], float)
-                C[-1][-1] = cc[0]
-                C.append(cc[1:])
-            else:
-                C.append(np.full((len(t) - 1, 3), np.nan))
-    n_cut = int(sum(len(runs[j][0]) for (_, j) in chosen if j < len(runs)))
+        if j >= len(runs):
+            continue
+        order = slice(None, None, -1 if oj else 1)  # the run itself, its first position the link's approach end
+        if oj:
+            reversed_runs.append(int(j))
+        t, a = np.asarray(runs[j][0], float)[order], np.asarray(runs[j][1], float)[order]
+        if has_idx:
+            idx = np.asarray(runs[j][3], int)[order]
+            X[-1][-1] = idx[0]
+            X.append(idx[1:])
+        T.append(t[1:])
+        A.append(a[1:])
+        M.append(np.full(len(t) - 1, Move.CUT, np.int8))
+        P.append(np.full(len(t) - 1, j))
+        if has_cc:
+            cc = np.asarray(runs[j][2], float)[order]
+            C[-1][-1] = cc[0]
+            C.append(cc[1:])
+        else:
+            C.append(np.full((len(t) - 1, 3), np.nan))
+    n_cut = int(sum(len(runs[j][0]) for (_, (j, _o)) in chosen if j < len(runs)))
     info = dict(info or {}, n_cut_positions=n_cut, links_direct=int(n_direct), links_over_surface=int(n_over),
-                runs_left_out=[int(x) for x in left_out], gaps_not_linked=not_linked,
+                runs_left_out=[int(x) for x in left_out], runs_reversed=reversed_runs, gaps_not_linked=not_linked,
                 clearance_surface=surface[0])  # fmt: skip
     return ToolPath(np.vstack(T), np.vstack(A), np.concatenate(M), np.concatenate(P),
                     np.vstack(C) if has_cc else None, None, cutter, name,

@@ -68,6 +68,7 @@ class PathCheck(Result):
                         "links_direct",
                         "links_over_surface",
                         "runs_left_out",
+                        "runs_reversed",
                         "gaps_not_linked",
                         "clearance_surface",
                     )

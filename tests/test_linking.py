@@ -114,3 +114,26 @@ def test_trimmed_machined_area_against_closed_form():
     expected = 1 - (10 * 20 + 2 * 3 * (10 + 20) + np.pi * 9) / 3600.0
     assert abs(frac - expected) < 0.02
     assert pc.toolpath.info["links_direct"] > 0 and pc.toolpath.info["runs_left_out"] == []
+
+
+def test_a_run_whose_start_is_blocked_is_entered_reversed():
+    """A bridge over the start side of every pass (y <= -10): the first pass's start cannot be approached from
+    the plane above the part, its end can; entered at its end and cut backwards, it is kept, and the others are
+    joined by 1 mm lifts under the bridge."""
+    floor = builders.plane_patch((-30, -30, 0), (80, 0, 0), (0, 60, 0), name="floor")
+    bridge = builders.plane_patch((-20, -30, 12), (60, 0, 0), (0, 20, 0), name="bridge")
+    part = [floor, bridge]
+    tp = link_runs(_runs(), part, TOOL, clearance=5.0)
+    assert tp.info["runs_left_out"] == [] and tp.info["runs_reversed"] == [0]
+    assert ms.verify(part, tp).clean and tp.n_cut == 63
+    cut = (tp.move == Move.CUT) | (tp.move == Move.APPROACH)
+    first = tp.tip[cut][:21]
+    assert first[0].tolist() == [-10.0, 20.0, 0.0] and first[-1].tolist() == [-10.0, -20.0, 0.0]
+    worst = 0.0  # the body (radius 3, 10 up from the tip) against the bridge plate, every move every 0.1 mm
+    for a, b in zip(tp.tip[:-1], tp.tip[1:]):
+        for t in a + np.linspace(0, 1, max(2, int(np.ceil(np.linalg.norm(b - a) / 0.1)) + 1))[:, None] * (b - a):
+            dx = max(-20.0 - t[0], t[0] - 40.0, 0.0)
+            dy = max(-30.0 - t[1], t[1] + 10.0, 0.0)
+            if np.hypot(dx, dy) < 3.0 and t[2] < 12.0 < t[2] + 10.0:
+                worst = max(worst, t[2] + 10.0 - 12.0)
+    assert worst == 0.0
