@@ -10,7 +10,8 @@ clear (all candidates of all gaps are checked in one :func:`~machsurf_cad.verify
    sphere around it (the axis turning), over it, and back in along the next run's axis.
 
 A run that no clear link enters at its start is tried reversed, entered at its end (the same moves
-backwards; reported in ``runs_reversed``). A gap no link clears is not bridged by a crossing move: the run
+backwards; reported in ``runs_reversed``); a run still left out is visited later, between two runs whose
+links to and from it are clear (``runs_visited_later``). A gap no link clears is not bridged by a crossing move: the run
 after it is left out and the gap reported (where it is), and the next run is tried from the same end; a
 run whose way out to the clearance surface at the end of the path is not clear is left out too. The
 path's first approach and last retract come from and go to the clearance surface, checked the same way.
@@ -147,7 +148,43 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
     for c in (1, 2):
         check([k for k in gaps if not any(ok.get((k, x), False) for x in range(c))], c)
     chosen, left_out, not_linked = _walk(n, first_clear, exit_, entry)
-    return _assemble(runs, dict(chosen), cand, cutter, name, info, surface, sorted(left_out), not_linked)
+    inserted = _insert_left_out(chosen, left_out, ends, check, first_clear)
+    info = dict(info or {}, runs_visited_later=inserted)
+    return _assemble(runs, chosen, cand, cutter, name, info, surface, sorted(left_out), not_linked)
+
+
+def _insert_left_out(chosen, left_out, ends, check, first_clear, near: int = 3) -> list[int]:
+    """Visit left-out runs later: a link ``a -> b`` of the path replaced by ``a -> L -> b`` (``L`` either way
+    round) where both links are clear, trying the ``near`` links whose start is nearest ``L``; the first
+    links of all tries checked together. Changes ``chosen`` and ``left_out``; returns the runs visited."""
+    if not left_out:
+        return []
+    starts = np.array([np.full(3, np.nan) if a[0] < 0 else ends[a[0]][2] if a[1] == 0 else ends[a[0]][0]
+                       for (a, _), _c in chosen])  # fmt: skip
+    tries = {}
+    for L in left_out:
+        d = np.linalg.norm(starts - ends[L][0], axis=1)
+        d = np.where(np.isfinite(d), d, np.inf)
+        tries[L] = [int(k) for k in np.argsort(d)[:near] if np.isfinite(d[k])]
+    keys = [(chosen[k][0][0], (L, o)) for L, ks in tries.items() for k in ks for o in (0, 1)]
+    check(keys, 0)  # the direct links into the left-out runs, together
+    done = []
+    for L in list(left_out):
+        for k in tries[L]:
+            if k >= len(chosen):
+                continue
+            (a, b), _ = chosen[k]
+            for o in (0, 1):
+                c1 = first_clear((a, (L, o)))
+                c2 = None if c1 is None else first_clear(((L, o), b))
+                if c2 is not None:
+                    chosen[k : k + 1] = [((a, (L, o)), c1), (((L, o), b), c2)]
+                    left_out.remove(L)
+                    done.append(int(L))
+                    break
+            if L in done:
+                break
+    return done
 
 
 def _walk(n, first_clear, exit_, entry):
@@ -233,7 +270,7 @@ def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_lin
     has_cc = all(len(r) > 2 and r[2] is not None for r in runs)
     has_idx = all(len(r) > 3 and r[3] is not None for r in runs)
     reversed_runs = []
-    for key, c in sorted(chosen.items(), key=lambda kv: kv[0][1][0]):
+    for key, c in chosen:  # in the path's order
         (i, _), (j, oj) = key
         tips, axes, moves, kind = cand[key][c]
         if 0 <= i and j < len(runs):
@@ -266,7 +303,7 @@ def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_lin
             C.append(cc[1:])
         else:
             C.append(np.full((len(t) - 1, 3), np.nan))
-    n_cut = int(sum(len(runs[j][0]) for (_, (j, _o)) in chosen if j < len(runs)))
+    n_cut = int(sum(len(runs[j][0]) for ((_, (j, _o)), _c) in chosen if j < len(runs)))
     info = dict(info or {}, n_cut_positions=n_cut, links_direct=int(n_direct), links_over_surface=int(n_over),
                 runs_left_out=[int(x) for x in left_out], runs_reversed=reversed_runs, gaps_not_linked=not_linked,
                 clearance_surface=surface[0])  # fmt: skip

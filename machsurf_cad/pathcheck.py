@@ -69,6 +69,7 @@ class PathCheck(Result):
                         "links_over_surface",
                         "runs_left_out",
                         "runs_reversed",
+                        "runs_visited_later",
                         "gaps_not_linked",
                         "clearance_surface",
                     )

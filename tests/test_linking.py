@@ -137,3 +137,30 @@ def test_a_run_whose_start_is_blocked_is_entered_reversed():
             if np.hypot(dx, dy) < 3.0 and t[2] < 12.0 < t[2] + 10.0:
                 worst = max(worst, t[2] + 10.0 - 12.0)
     assert worst == 0.0
+
+
+def test_a_run_reached_only_from_another_is_visited_later():
+    """A bridge over the whole first pass (x <= 0): nothing comes down onto it from the plane above the part,
+    either way round; a 1 mm lift from the second pass reaches it under the bridge, and another leaves it
+    for the third: the passes are cut in the order 1, 0, 2."""
+    floor = builders.plane_patch((-30, -30, 0), (80, 0, 0), (0, 60, 0), name="floor")
+    bridge = builders.plane_patch((-20, -30, 12), (20, 0, 0), (0, 60, 0), name="bridge")
+    part = [floor, bridge]
+    tp = link_runs(_runs(), part, TOOL, clearance=5.0)
+    assert tp.info["runs_left_out"] == [] and tp.info["runs_visited_later"] == [0]
+    assert ms.verify(part, tp).clean and tp.n_cut == 63
+    cut = (tp.move == Move.CUT) | (tp.move == Move.APPROACH)
+    order = [int(x) for x in dict.fromkeys(tp.tip[cut][:, 0].tolist())]
+    assert order == [10, -10, 30]
+    assert _through_bridge_at(tp, (-20.0, 0.0)) == 0.0
+
+
+def _through_bridge_at(tp, xs, step=0.1) -> float:
+    """As :func:`_through_bridge` for a plate over ``xs[0] <= x <= xs[1]`` (all y)."""
+    worst = 0.0
+    for a, b in zip(tp.tip[:-1], tp.tip[1:]):
+        for t in a + np.linspace(0, 1, max(2, int(np.ceil(np.linalg.norm(b - a) / step)) + 1))[:, None] * (b - a):
+            dx = max(xs[0] - t[0], t[0] - xs[1], 0.0)
+            if dx < 3.0 and t[2] < 12.0 < t[2] + 10.0:
+                worst = max(worst, min(3.0 - dx, t[2] + 10.0 - 12.0))
+    return worst

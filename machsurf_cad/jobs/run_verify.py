@@ -128,7 +128,8 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
             f"positions{split} in {cut.n_passes} pass(es); links checked clear: "
             f"{cut.info.get('links_direct', 0)} direct, "
             f"{cut.info.get('links_over_surface', 0)} over the {cut.info.get('clearance_surface', 'plane')} around "
-            f"the part, {len(cut.info.get('runs_reversed', []))} stretch(es) cut backwards to be reached, "
+            f"the part, {len(cut.info.get('runs_reversed', []))} stretch(es) cut backwards and "
+            f"{len(cut.info.get('runs_visited_later', []))} visited later to be reached, "
             f"{len(cut.info.get('runs_left_out', []))} stretch(es) left out that no clear link reaches; "
             f"checked again: clean, max gouge {again.max_gouge:.3g} mm"
         )
