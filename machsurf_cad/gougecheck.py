@@ -299,12 +299,11 @@ _MAX_RECENT = 2
 _SAMPLED: OrderedDict = OrderedDict()
 
 
-def _memo_key(faces, toolpath, tool, params, map_chunks) -> str:
-    """The content key of a check (faces, positions, axes, moves, the whole tool, every parameter); empty when
-    it cannot be keyed (faces not given as faces, a custom chunk runner)."""
-    from .contentkey import content_key, faces_key
+def _memo_key(fk: str, toolpath, tool, params, map_chunks) -> str:
+    """The content key of a check (the faces' key ``fk``, positions, axes, moves, the whole tool, every
+    parameter); empty when it cannot be keyed (faces not given as faces, a custom chunk runner)."""
+    from .contentkey import content_key
 
-    fk = faces_key(faces)
     if not fk or map_chunks is not None:
         return ""
     tp = toolpath
@@ -409,14 +408,17 @@ def verify(
     faces = _faces(part)
     h = positive("spacing", spacing) if spacing is not None else _auto_spacing(faces, c, max_samples)
     _check_placements(toolpath, step, angle_step)
-    key = _memo_key(faces, toolpath, c, (gouge_tolerance, clear, step, angle_step, h, max_samples), map_chunks)
+    from .contentkey import faces_key
+
+    fk = faces_key(faces)  # once: the check's memo and the part's samples are both keyed by it
+    key = _memo_key(fk, toolpath, c, (gouge_tolerance, clear, step, angle_step, h, max_samples), map_chunks)
     if key in _RECENT:  # the very same check just ran (a raster's own check, then the check before writing)
         _RECENT.move_to_end(key)
         res = _RECENT[key]
         for w in res.warnings:
             warnings.warn(w, stacklevel=2)
         return replace(res, toolpath=toolpath)
-    smp, tree = _sampled(faces, h, max_samples)
+    smp, tree = _sampled(faces, fk, h, max_samples)
     T, A, owner = _placements(toolpath, step, angle_step)
     m = T.shape[0]
     t1 = time.perf_counter()
@@ -478,17 +480,17 @@ class _Samples(NamedTuple):
     dvs: list
 
 
-def _sampled(faces: list[Face], h: float, max_samples: int):
-    """The part's samples and their k-d tree, kept for the last two parts and spacings by content (a path's
-    links are checked in several calls on the same part)."""
-    from .contentkey import faces_key
-
-    key = (faces_key(faces), float(h), int(max_samples))
-    if key in _SAMPLED:
+def _sampled(faces: list[Face], fk: str, h: float, max_samples: int):
+    """The part's samples and their k-d tree, kept for the last two parts (by their content key ``fk``) and
+    spacings (a path's links are checked in several calls on the same part)."""
+    key = (fk, float(h), int(max_samples))
+    if fk and key in _SAMPLED:
         _SAMPLED.move_to_end(key)
         return _SAMPLED[key]
     smp = _sample_part(faces, h, max_samples)
     out = (smp, cKDTree(smp.P))
+    if not fk:
+        return out
     _SAMPLED[key] = out
     while len(_SAMPLED) > 2:
         _SAMPLED.popitem(last=False)

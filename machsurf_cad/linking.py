@@ -11,29 +11,31 @@ clear (all candidates of all gaps are checked in one :func:`~machsurf_cad.verify
 
 A run that no clear link enters at its start is tried reversed, entered at its end (the same moves
 backwards; reported in ``runs_reversed``); a run still left out is visited later, between two runs whose
-links to and from it are clear (``runs_visited_later``). A gap no link clears is not bridged by a crossing move: the run
-after it is left out and the gap reported (where it is), and the next run is tried from the same end; a
-run whose way out to the clearance surface at the end of the path is not clear is left out too. The
-path's first approach and last retract come from and go to the clearance surface, checked the same way.
+links to and from it are clear (``runs_visited_later``). A gap no link clears is not bridged by a crossing
+move: the run after it is left out and the gap reported (where it is), and the next run is tried from the
+same end; a run whose way out to the clearance surface at the end of the path is not clear is left out
+too. The path's first approach and last retract come from and go to the clearance surface, checked the
+same way.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .cam.toolpath import Move, ToolPath, _over_sphere
+from .cam.toolpath import Move, ToolPath, _exit_point, _over_sphere
 from .errors import InputError
 from .gougecheck import CLEAR, verify
 
 
 def clearance_surface(faces, axes: np.ndarray, clearance: float):
-    """``("plane", (height, axis))`` above the part along a fixed axis, else ``("sphere", (centre, radius))``."""
-    poles = np.concatenate([np.asarray(getattr(f, "surface", f).poles, float).reshape(-1, 3) for f in faces])
+    """``("plane", (height, axis))`` above the part along a fixed axis (:func:`~machsurf_cad.part_plane`),
+    else ``("sphere", (centre, radius))`` around it (:func:`~machsurf_cad.part_sphere`)."""
+    from .machining.toolpath import part_plane, part_sphere
+
     a = axes[0]
     if np.abs(axes - a).max() <= 1e-9:
-        return "plane", (float((poles @ a).max()) + float(clearance), a)
-    lo, hi = poles.min(axis=0), poles.max(axis=0)
-    return "sphere", (0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + float(clearance))
+        return "plane", (part_plane(faces, a, clearance), a)
+    return "sphere", part_sphere(faces, clearance)
 
 
 def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndarray, np.ndarray, list, str]]:
@@ -55,13 +57,10 @@ def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndar
         lifted = [q + max(geo[0] - float(q @ a), 0.0) * a for q in pts]
         tips = np.array([pts[0], lifted[0], *lifted[1:], *pts[1:]] if up0 is not None else [lifted[0], pts[0]])
     else:
-        if up0 is None or up1 is None:
+        if up0 is None or up1 is None:  # the path's start or end: along the axis to the sphere
             q = up1 if up0 is None else up0
-            a = a1 if up0 is None else a0
-            w = q - geo[0]
-            b = float(w @ a)
-            lam = -b + np.sqrt(max(b * b - float(w @ w) + geo[1] ** 2, 0.0))
-            tips = np.array([q + max(lam, 0.0) * a, q]) if up0 is None else np.array([q, q + max(lam, 0.0) * a])
+            out_ = _exit_point(q, a1 if up0 is None else a0, np.asarray(geo[0], float), geo[1])
+            tips = np.array([out_, q]) if up0 is None else np.array([q, out_])
         else:
             tips, _ = _over_sphere(up0, a0, up1, a1, geo)
     axes = _link_axes(tips, a0, a1, kind, geo)

@@ -35,16 +35,17 @@ def _runs():
     return out
 
 
-def _through_bridge(tp, step=0.1, length=10.0) -> float:
-    """Deepest the body (radius 3, from the tip up 10 mm) overlaps the plate's plane inside its footprint,
-    over every move sampled every ``step`` mm (closed form: the axis's plan distance to the footprint)."""
+def _through_bridge(tp, step=0.1, length=10.0, xs=(0.0, 20.0), ys=(-np.inf, np.inf)) -> float:
+    """Deepest the body (radius 3, from the tip up ``length`` mm) overlaps the plate 12 mm up over
+    ``xs`` x ``ys``, over every move sampled every ``step`` mm (closed form: the axis's plan distance to the
+    plate's footprint)."""
     worst = 0.0
     for a, b in zip(tp.tip[:-1], tp.tip[1:]):
         n = max(2, int(np.ceil(np.linalg.norm(b - a) / step)) + 1)
         for t in a + np.linspace(0, 1, n)[:, None] * (b - a):
-            dx = max(0.0 - t[0], t[0] - 20.0, 0.0)
-            if dx < 3.0 and t[2] < 12.0 < t[2] + length:
-                worst = max(worst, min(3.0 - dx, t[2] + length - 12.0))
+            d = np.hypot(max(xs[0] - t[0], t[0] - xs[1], 0.0), max(ys[0] - t[1], t[1] - ys[1], 0.0))
+            if d < 3.0 and t[2] < 12.0 < t[2] + length:
+                worst = max(worst, min(3.0 - d, t[2] + length - 12.0))
     return worst
 
 
@@ -129,14 +130,7 @@ def test_a_run_whose_start_is_blocked_is_entered_reversed():
     cut = (tp.move == Move.CUT) | (tp.move == Move.APPROACH)
     first = tp.tip[cut][:21]
     assert first[0].tolist() == [-10.0, 20.0, 0.0] and first[-1].tolist() == [-10.0, -20.0, 0.0]
-    worst = 0.0  # the body (radius 3, 10 up from the tip) against the bridge plate, every move every 0.1 mm
-    for a, b in zip(tp.tip[:-1], tp.tip[1:]):
-        for t in a + np.linspace(0, 1, max(2, int(np.ceil(np.linalg.norm(b - a) / 0.1)) + 1))[:, None] * (b - a):
-            dx = max(-20.0 - t[0], t[0] - 40.0, 0.0)
-            dy = max(-30.0 - t[1], t[1] + 10.0, 0.0)
-            if np.hypot(dx, dy) < 3.0 and t[2] < 12.0 < t[2] + 10.0:
-                worst = max(worst, t[2] + 10.0 - 12.0)
-    assert worst == 0.0
+    assert _through_bridge(tp, xs=(-20.0, 40.0), ys=(-30.0, -10.0)) == 0.0
 
 
 def test_a_run_reached_only_from_another_is_visited_later():
@@ -152,15 +146,4 @@ def test_a_run_reached_only_from_another_is_visited_later():
     cut = (tp.move == Move.CUT) | (tp.move == Move.APPROACH)
     order = [int(x) for x in dict.fromkeys(tp.tip[cut][:, 0].tolist())]
     assert order == [10, -10, 30]
-    assert _through_bridge_at(tp, (-20.0, 0.0)) == 0.0
-
-
-def _through_bridge_at(tp, xs, step=0.1) -> float:
-    """As :func:`_through_bridge` for a plate over ``xs[0] <= x <= xs[1]`` (all y)."""
-    worst = 0.0
-    for a, b in zip(tp.tip[:-1], tp.tip[1:]):
-        for t in a + np.linspace(0, 1, max(2, int(np.ceil(np.linalg.norm(b - a) / step)) + 1))[:, None] * (b - a):
-            dx = max(xs[0] - t[0], t[0] - xs[1], 0.0)
-            if dx < 3.0 and t[2] < 12.0 < t[2] + 10.0:
-                worst = max(worst, min(3.0 - dx, t[2] + 10.0 - 12.0))
-    return worst
+    assert _through_bridge(tp, xs=(-20.0, 0.0)) == 0.0

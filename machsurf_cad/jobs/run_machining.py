@@ -240,9 +240,9 @@ def _check_clearance(clearance: float, faces) -> None:
     """Refuse a clearance larger than the part itself (its poles' bounding box diagonal): a unit mistake,
     and links that high make the path and its check needlessly long."""
     from ..errors import InputError
+    from ..machining.toolpath import part_sphere
 
-    poles = np.concatenate([np.asarray(getattr(f, "surface", f).poles, float).reshape(-1, 3) for f in faces])
-    size = float(np.linalg.norm(np.ptp(poles, axis=0)))
+    size = 2.0 * part_sphere(faces, 0.0)[1]
     if clearance > max(size, 1.0):
         raise InputError(
             f"clearance {clearance:g} mm is larger than the part ({size:.4g} mm across its bounding box): "

@@ -26,10 +26,10 @@ from ..errors import InputError
 from .strategies import AxisField, LeadTilt, as_feed
 
 
-def _candidates(lead: float, lowest: float, max_lead: float, max_tilt: float, step: float, limit: int) -> list:
+def _candidates(lead: float, lowest: float, max_lead: float, max_tilt: float, step: float) -> list:
     """(lead, tilt) pairs within the limits about ``step`` degrees of lean apart (fewer tilts at small
-    leads; one axis at lead 0), the ``limit`` nearest the nominal ``(lead, 0)`` (distance of the leans
-    ``sin(lead) (cos tilt, sin tilt)``), nearest first."""
+    leads; one axis at lead 0), nearest the nominal ``(lead, 0)`` first (distance of the leans
+    ``sin(lead) (cos tilt, sin tilt)``)."""
     top = min(max(max_lead, lead), 85.0)
     leads = np.unique(np.r_[np.arange(lead, top + 1e-9, step), np.arange(lead, lowest - 1e-9, -step)])
 
@@ -43,8 +43,7 @@ def _candidates(lead: float, lowest: float, max_lead: float, max_tilt: float, st
         for b in np.linspace(-max_tilt, max_tilt, 2 * k + 1) if k > 0 else [0.0]:
             out.add((round(float(a), 9), round(float(b), 9)))
     w0 = lean(lead, 0.0)
-    ranked = sorted(out, key=lambda c: (round(float(np.linalg.norm(lean(*c) - w0)), 12), abs(c[1]), -c[1], -c[0]))
-    return ranked[: max(1, int(limit))]
+    return sorted(out, key=lambda c: (round(float(np.linalg.norm(lean(*c) - w0)), 12), abs(c[1]), -c[1], -c[0]))
 
 
 def _placements(face, cutter, feed, lead, tilt, us, vs):
@@ -128,8 +127,9 @@ def clear_axis_field(
     U, V = np.meshgrid(us, vs, indexing="ij")
     inside = face.contains_uv(U, V) if face.is_trimmed else np.ones(U.shape, bool)
     ball = cutter.end_mill_radii("tilt away").is_ball
-    cands = _candidates(lead, -max_lead if ball else lead, max_lead, max_tilt, step, max_candidates)
-    nominal_tips, nominal_axes = _placements(face, cutter, feed, lead, tilt, us, vs)
+    within = _candidates(lead, -max_lead if ball else lead, max_lead, max_tilt, step)
+    cands = within[: max(1, int(max_candidates))]
+    _, nominal_axes = _placements(face, cutter, feed, lead, tilt, us, vs)
     axes = nominal_axes.copy()
     choice = np.full(U.shape, -1)  # candidate index per lattice point, -1: none clears
     todo = np.argwhere(inside)
@@ -155,23 +155,14 @@ def clear_axis_field(
         face, cutter, feed, raw, nominal_axes, choice, inside, check_faces, gouge_tolerance, us, vs,
         (max_turn, lead_min, max_lead),
     )  # fmt: skip
-    d = face.surface.derivatives_grid(us, vs, 0).point
-    step_u = np.linalg.norm(np.diff(d, axis=0), axis=-1)
-    step_v = np.linalg.norm(np.diff(d, axis=1), axis=-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        turn_u = _angle_deg(smooth[1:], smooth[:-1]) / step_u
-        turn_v = _angle_deg(smooth[:, 1:], smooth[:, :-1]) / step_v
-    both = lambda m: m[1:] & m[:-1]  # noqa: E731
-    turn = np.concatenate([turn_u[both(inside)], turn_v[inside[:, 1:] & inside[:, :-1]]])
+    turn = _turn_max(smooth, face.surface.derivatives_grid(us, vs, 0).point, inside)
     change = _angle_deg(smooth, nominal_axes)[inside]
     tilted = inside & (choice > 0)
     nowhere = inside & (choice < 0)
     report = {
         "grid": [int(grid), int(grid)],
         "candidates": len(cands),
-        "candidates_within_limits": len(
-            _candidates(lead, -max_lead if ball else lead, max_lead, max_tilt, step, 10**9)
-        ),  # fmt: skip
+        "candidates_within_limits": len(within),
         "angle_step_deg": float(step),
         "max_lead_deg": float(max_lead),
         "max_tilt_deg": float(max_tilt),
@@ -181,7 +172,7 @@ def clear_axis_field(
         "lattice_points_clear_nowhere": int(nowhere.sum()),
         "nowhere_uv": np.stack([U[nowhere], V[nowhere]], -1)[:20].tolist(),
         "axis_change_max_deg": float(change.max(initial=0.0)),
-        "axis_turn_max_deg_per_mm": float(np.nanmax(turn, initial=0.0)) if turn.size else 0.0,
+        "axis_turn_max_deg_per_mm": turn,
         "lattice_points_not_clear_smoothed": not_clear,
     }
     from ..geometry.builders import interpolate_grid
@@ -236,9 +227,7 @@ def _smoothed(face, cutter, feed, raw, nominal, choice, inside, check_faces, gou
             break
         w = np.stack([gaussian_filter(w[..., k], 1.0, mode="nearest") for k in range(2)], -1)
     idx = np.argwhere(inside & (choice >= 0))
-    tips, axes = MachiningMaps(face, cutter, 5, _GridAxes(us, vs, smooth, feed), cutter.D, False).tool_placements(
-        us, vs
-    )
+    tips, axes = MachiningMaps(face, cutter, 5, _GridAxes(smooth, feed), cutter.D, False).tool_placements(us, vs)
     ok = _clear(check_faces, cutter, tips[idx[:, 0], idx[:, 1]], axes[idx[:, 0], idx[:, 1]], gouge_tolerance)
     return smooth, int((~ok).sum())
 
@@ -262,8 +251,8 @@ def _turn_max(axes, points, inside) -> float:
 class _GridAxes:
     """The axes of a lattice as a strategy at the lattice's own points (no interpolation needed there)."""
 
-    def __init__(self, us, vs, axes, feed):
-        self.us, self.vs, self.axes, self.feed = us, vs, axes, feed
+    def __init__(self, axes, feed):
+        self.axes, self.feed = axes, feed
 
     def axis(self, frame) -> np.ndarray:
         return self.axes.reshape(frame.normal.shape)

@@ -25,11 +25,11 @@ from .. import checks
 from ..cam.toolpath import Move, ToolPath
 from ..cutters import FlatEndMill
 from ..errors import InputError
+from ..machining.toolpath import part_plane
 from ..typing import FaceLike, PartLike, ToolLike
 from . import cache
 from .dropcutter import default_seed_spacing, drop_cutter
 from .faceset import face_set as build_face_set
-from .reach import _samples
 
 _LINK_SAMPLES_MAX = 2000
 LINK_MARGIN = 0.05
@@ -168,42 +168,16 @@ def _link_height(heights: _Heights, a: np.ndarray, b: np.ndarray, R: float) -> f
     return float(np.nanmax(H)) if np.any(np.isfinite(H)) else -math.inf
 
 
-def _machined_fraction(face, tp: ToolPath, d: _Dense, runs, step: float, n: int = 80) -> float:
-    """Area-weighted share of ``face``'s samples whose nearest point of the planned contact polylines
-    (sampled every ``step`` mm) lies on a kept stretch."""
-    from scipy.spatial import cKDTree
+def _machined_fraction(face, tp: ToolPath, d: _Dense, runs, step: float) -> float:
+    """:func:`~machsurf_cad.pathcheck.machined_area_fraction` of the planned path with the points ``d``
+    inserted (contacts along the chords), the runs' rows kept."""
+    from ..pathcheck import machined_area_fraction
 
-    from ..geometry.face import Face
-
+    w = d.w[:, None]
     cc = np.asarray(tp.cc, float)
-    cutting = (tp.move == Move.CUT) | (tp.move == Move.APPROACH)
-    idx = np.nonzero(cutting & np.all(np.isfinite(cc), axis=1))[0]
-    if idx.size == 0:
-        return float("nan")
-    # kept intervals of each move m (ending at planned position m): keys m + w / 2, w in [0, 1]
-    ka, kb = [], []
-    for r in runs:
-        i1, w = d.i1[r], d.w[r]
-        wa = np.where(i1[:-1] == i1[1:], w[:-1], 0.0)
-        ka.append(i1[1:] + 0.5 * wa)
-        kb.append(i1[1:] + 0.5 * w[1:])
-        ka.append(i1[:1] + 0.5 * w[:1])  # the run's first point itself
-        kb.append(i1[:1] + 0.5 * w[:1])
-    ka_, kb_ = np.concatenate(ka), np.concatenate(kb)
-    order = np.argsort(ka_)
-    ka_, kb_ = ka_[order], kb_[order]
-    mv = idx[1:][(np.diff(idx) == 1) & (tp.pass_index[idx[1:]] == tp.pass_index[idx[:-1]])]
-    plan = np.linalg.norm(cc[mv] - cc[mv - 1], axis=1)
-    k = np.maximum(np.ceil(plan / step).astype(int), 1)
-    j = np.repeat(np.arange(mv.size), k)
-    w = (np.arange(j.size) - np.repeat(np.cumsum(k) - k, k) + 1) / np.repeat(k, k)
-    pts = np.concatenate([cc[idx], cc[mv[j] - 1] * (1 - w[:, None]) + cc[mv[j]] * w[:, None]])
-    key = np.concatenate([idx + 0.5, mv[j] + 0.5 * w])
-    at = np.searchsorted(ka_, key + 1e-12, side="right") - 1
-    kept = (at >= 0) & (kb_[np.maximum(at, 0)] >= key - 1e-12)
-    P, _, wt = _samples(face if isinstance(face, Face) else Face(face), n)
-    _, near = cKDTree(pts).query(P)
-    return float(wt[kept[near]].sum() / wt.sum()) if wt.sum() > 0 else float("nan")
+    dense = ToolPath(tp.tip[d.i0] * (1 - w) + tp.tip[d.i1] * w, tp.axis[d.i1], np.full(d.w.size, Move.CUT),
+                     d.pass_index, cc[d.i0] * (1 - w) + cc[d.i1] * w)  # fmt: skip
+    return machined_area_fraction(face, dense, np.concatenate(runs), step=step)
 
 
 def _carried(tp: ToolPath, d: _Dense, row: np.ndarray):
@@ -309,8 +283,7 @@ def trim_to_reach(
     for r in runs:
         kept[d.planned[r][d.planned[r] >= 0]] = True
     qd = d.points()
-    poles = np.concatenate([np.asarray(getattr(f, "surface", f).poles, float).reshape(-1, 3) for f in faces])
-    z_plane = float((poles @ F[2]).max()) + clearance
+    z_plane = part_plane(faces, F[2], clearance)
     R = cutter.radius
     T: list[np.ndarray] = []
     M: list[int] = []
