@@ -187,3 +187,35 @@ def test_an_edge_grazing_the_disc_between_its_samples_lifts_the_tool(engine):
     r = ms.drop_cutter([floor, fin], ms.BallEndMill(10), [[0.0, 0.0]], engine=engine)
     expected = 20.0 - (5.0 - np.sqrt(25.0 - 4.99999**2))
     assert abs(r.height[0] - expected) <= 1e-9
+
+
+@pytest.mark.parametrize("name", ["mould_insert.step", "freeform_block.step"])
+def test_fine_cells_cover_every_face_point(parts, name):
+    """The compiled kernel skips a neighbourhood when its cells' bounds cannot beat a contact found. That is
+    exact only if every face point lies within a fine sample's cover, that fine sample's cell (its owner)
+    within ``radius`` of it, and the cell inside its seed sample's cover: checked on random points of every
+    face (inside its trim) against a brute-force nearest search written here."""
+    from machsurf_cad.threeaxis.cells import fine_cells
+
+    fs = ms.threeaxis.faceset.face_set(parts[name], spacing=5 / 3)
+    c = fine_cells(fs)
+    assert c.factor == 4 and c.contained
+    pool = np.concatenate([fs.sample_xyz, fs.edge_xyz])
+    owner = np.repeat(np.arange(pool.shape[0]), np.diff(c.start))
+    fine_face = np.concatenate([fs.sample_face, fs.edge_face[fs.edge_id]])[owner]
+    assert np.all(np.linalg.norm(c.xyz - pool[owner], axis=1) + c.cover <= c.radius[owner] * (1 + 1e-12))
+    assert np.all(c.radius <= fs.cover * (1 + 1e-9))
+    rng = np.random.default_rng(3)
+    checked = 0
+    for i, face in enumerate(fs.faces):
+        u0, u1, v0, v1 = face.uv_bounds
+        u, v = rng.uniform(u0, u1, 400), rng.uniform(v0, v1, 400)
+        keep = face.contains_uv(u, v)
+        p = face.surface.evaluate(u[keep], v[keep])
+        mine = np.nonzero(fine_face == i)[0]
+        d = np.linalg.norm(p[:, None, :] - c.xyz[mine][None, :, :], axis=2)
+        near = mine[np.argmin(d, axis=1)]
+        assert np.all(d.min(axis=1) <= c.cover[near])
+        assert np.all(np.linalg.norm(p - pool[owner[near]], axis=1) <= c.radius[owner[near]])
+        checked += p.shape[0]
+    assert checked > 2000

@@ -17,6 +17,7 @@ import numpy as np
 from ..cutter_profiles import ArcSegment, LineSegment
 from ..geometry.bspline import _POWER_MAX_DEGREE
 from ..geometry.face import TRIM_TOLERANCE
+from .cells import fine_cells
 from .faceset import FaceSet
 
 
@@ -190,13 +191,14 @@ def _profile(prof):
 
 
 def _pool(fs: FaceSet):
+    c = fine_cells(fs)
     n_int = fs.sample_xyz.shape[0]
     xyz = np.ascontiguousarray(np.concatenate([fs.sample_xyz, fs.edge_xyz]))
     pf = np.concatenate([fs.sample_face, fs.edge_face[fs.edge_id]]).astype(np.int64)
     puv = np.ascontiguousarray(np.concatenate([fs.sample_uv, fs.edge_uv]))
     return (xyz, pf, puv, n_int, fs.edge_id.astype(np.int64), fs.edge_t.astype(float), fs.edge_dt.astype(float),
             fs.cover.astype(float), fs.rise.astype(float), fs.min_tilt.astype(float),
-            fs.edge_cover.astype(float))  # fmt: skip
+            fs.edge_cover.astype(float), c.start, c.xyz, c.rise, c.cover, c.radius, c.top)  # fmt: skip
 
 
 def _grid(xyz: np.ndarray, reach: float):
@@ -231,14 +233,16 @@ def drop(fs: FaceSet, prof, C: np.ndarray):
 
     S, E, T, SM = _packed(fs)
     cache = fs.__dict__["_compiled"]
-    key = ("grid", round(prof.R + fs.spacing, 12))
+    cells = fine_cells(fs)
+    reach = prof.R + max(fs.spacing, float(cells.radius.max(initial=0.0)) if cells.contained else 0.0)
+    key = ("grid", round(reach, 12))
     if key not in cache:
-        cache[key] = _grid(SM[0], prof.R + fs.spacing)
+        cache[key] = _grid(SM[0], reach)
     G = cache[key]
     PR = _profile(prof)
     h0 = float(prof(np.zeros(1))[0][0])
     K = np.array([prof.R, fs.spacing, prof.max_tilt, prof.h_R, 1.0 if prof.pointed else 0.0, len(fs.faces),
-                  max(len(fs.edges), 1), h0])  # fmt: skip
+                  max(len(fs.edges), 1), h0, reach, 1.0 if cells.contained else 0.0])  # fmt: skip
     kinks = np.array(prof.kinks, float).reshape(-1, 2)
     m = C.shape[0]
     height = np.full(m, np.nan)
