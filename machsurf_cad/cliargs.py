@@ -351,6 +351,12 @@ def _flank_parser(sub) -> None:
     f.add_argument(
         "--chunks", type=int, default=1, help="--whole: split the rules into N spans (over the cluster in a batch)"
     )
+    f.add_argument(
+        "--check-faces",
+        default="rest",
+        help="--whole on a STEP part: faces the cylinder is lifted clear of (rules it cannot clear are left out): "
+        "rest (default) | none | 1,2",
+    )
     f.add_argument("--no-render", dest="render", action="store_false", help="numbers and files, no pictures")
     _gouge(f, "--tolerance")
     _post(f)

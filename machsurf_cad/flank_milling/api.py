@@ -5,7 +5,8 @@ from __future__ import annotations
 import math  # noqa: F401  (used by the doctest)
 import time
 from dataclasses import dataclass
-from typing import Any, Literal
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -16,6 +17,9 @@ from ..typing import FaceLike, MapChunks, ToolLike
 from .path import FlankPath
 from .ruled import RuledSurface
 from .settings import SETTINGS, Interference, NoAdmissibleSetting, Setting, interference, tool_setting
+
+if TYPE_CHECKING:
+    from ..geometry.face import Face
 
 SettingKind = Literal["standard-tangent", "standard-distributed", "standard-bisector", "optimum", "minimax"]
 """The tool settings: the paper's standard (tangent to C0, or Rubio's equal error at both directrices),
@@ -72,6 +76,9 @@ class FlankResult(Result):
     the tolerance): its deviation is then measured on the tool positions (None below 2 rules)."""
     smooth: dict | None = None
     """The smooth minimax path beside the rule-by-rule optima (``smooth``), see ``compare_with_rule_optima``."""
+    cleared: Any = None
+    """``whole`` with ``check_faces``: the rules lifted clear of the other faces or left out
+    (:class:`~machsurf_cad.flank_milling.clear.ClearedFlank`); ``path`` is then the cleared path."""
 
     @property
     def R(self) -> float:
@@ -103,6 +110,7 @@ class FlankResult(Result):
                     self.envelope_deviation.report() if self.envelope_deviation is not None else None
                 ),
                 "segments": [_segment_report(*x) for x in self.segment_envelopes],
+                "clear_of_part": self.cleared.report() if self.cleared is not None else None,
             }
         if self.study is not None:
             rep["study"] = self.study
@@ -141,6 +149,8 @@ def flank(
     smooth: float | None = None,
     ruled_tolerance: float = 1e-6,
     clearance: float = 5.0,
+    check_faces: Sequence[Face] | None = None,
+    gouge_tolerance: float | None = None,
     progress: Progress | None = None,
     chunks: int = 1,
     map_chunks: MapChunks = None,
@@ -172,6 +182,11 @@ def flank(
         rule-by-rule optima (:func:`~machsurf_cad.flank_milling.smooth.compare_with_rule_optima`).
     clearance : float
         Approach and retract distance along the axis of the tool path, mm.
+    check_faces : list of Face, optional
+        ``whole``: the part's other faces. Each rule's cylinder is lifted along its axis clear of them, and
+        rules it cannot clear are left out and reported (:func:`~machsurf_cad.flank_milling.clear.clear_flank`).
+    gouge_tolerance : float, optional
+        How far a check face may lie inside the cylinder, mm (default ``tolerance``).
     progress : Progress, optional
         ``progress(done, total, message)`` along the whole surface.
     chunks, map_chunks : int, callable
@@ -184,7 +199,8 @@ def flank(
     Raises
     ------
     InputError
-        Not a cylindrical cutter, rule outside [0, 1], side not +-1, a non-ruled face.
+        Not a cylindrical cutter, rule outside [0, 1], side not +-1, a non-ruled face; no rule of the face
+        clears ``check_faces``.
     NoAdmissibleSetting
         The setting does not exist on that rule (e.g. the optimum beyond R = h_p / (2 sin alpha0)).
 
@@ -195,6 +211,8 @@ def flank(
     >>> abs(res.interference.max_abs - 10 * (1 - math.cos(math.radians(30)))) < 1e-9  # R (1 - cos alpha0)
     True
     """
+    from ..cutters import FlatEndMill
+
     t0 = time.perf_counter()
     cutter = _flank_cutter(tool)
     if not 0.0 <= rule <= 1.0:
@@ -219,9 +237,18 @@ def flank(
     comparison = compare_settings(surf, u_p, R, side=side, profiles=profiles)
     path = tp = env = dev = None
     segment_envelopes: tuple = ()
+    cleared = None
     if whole:
         t1 = time.perf_counter()
-        path, tp = _whole_path(surf, cutter, setting, side, tolerance, clearance, progress, chunks, map_chunks)
+        path = _whole_path(surf, cutter, setting, side, tolerance, progress, chunks, map_chunks)
+        body = FlatEndMill(cutter.D, max(cutter.length, path.length))
+        if check_faces is not None:
+            gtol = tolerance if gouge_tolerance is None else gouge_tolerance
+            cleared = _cleared(path, check_faces, gtol)
+            path = cleared.path
+            tp = _linked(path, body, [*check_faces, _face_of(surface, surf)], clearance, gtol)
+        else:
+            tp = path.toolpath(body, clearance=clearance)
         env, dev, segment_envelopes = _segment_envelopes(path, envelope_tolerance)
         times["whole_s"] = time.perf_counter() - t1
     data = None
@@ -248,7 +275,7 @@ def flank(
     times["total_s"] = time.perf_counter() - t0
     return FlankResult(
         surf, cutter, float(rule), float(u_p), st, e, comparison, path, tp, env, dev, data, rr, times, profiles,
-        segment_envelopes, sm,
+        segment_envelopes, sm, cleared,
     )  # fmt: skip
 
 
@@ -267,17 +294,68 @@ def _flank_cutter(tool) -> Any:
     return cutter
 
 
-def _whole_path(surf: RuledSurface, cutter, setting, side, tolerance, clearance, progress, chunks, map_chunks):
-    """The settings on the whole surface (:func:`flank_path`) and their tool path."""
-    from ..cutters import FlatEndMill
+def _whole_path(surf: RuledSurface, cutter, setting, side, tolerance, progress, chunks, map_chunks):
+    """The settings on the whole surface (:func:`flank_path`)."""
     from .path import flank_path
 
-    R = cutter.D / 2
-    path = flank_path(
-        surf, R, setting, side=side, tolerance=tolerance, progress=progress, chunks=chunks, map_chunks=map_chunks
-    )
-    tp = path.toolpath(FlatEndMill(cutter.D, max(cutter.length, path.length)), clearance=clearance)
-    return path, tp
+    return flank_path(
+        surf, cutter.D / 2, setting, side=side, tolerance=tolerance, progress=progress, chunks=chunks,
+        map_chunks=map_chunks,
+    )  # fmt: skip
+
+
+def _cleared(path, check_faces, gouge_tolerance: float):
+    """The path lifted clear of ``check_faces`` (:func:`.clear.clear_flank`); no rule kept is an input error."""
+    from .clear import clear_flank
+
+    res = clear_flank(path, list(check_faces), gouge_tolerance=gouge_tolerance)
+    if res.path is None:
+        raise InputError(
+            f"no rule of the face can be flank-milled clear of the other faces: the cylinder enters them up to "
+            f"{max(r['deepest_intrusion_mm'] for r in res.rules_left_out):.3g} mm on every rule"
+        )
+    return res
+
+
+LEAD_MM = 0.5
+"""How far off the flank face a segment starts and ends (sideways, away from the face): the links then run
+along the tool axis without touching it."""
+
+
+def _away(s: Setting) -> np.ndarray:
+    """From the rule contact towards the axis, across it: the side the tool leaves the face by."""
+    m2 = np.asarray(s.contacts.get("M2", s.frame.p0 + 0.5 * (s.frame.p1 - s.frame.p0)), float)
+    w = s.q - m2
+    w = w - (w @ s.a) * s.a
+    return w / np.linalg.norm(w)
+
+
+def _face_of(surface, surf: RuledSurface):
+    """The flank face as a :class:`Face` (the one given, or the ruled surface's B-spline)."""
+    from ..geometry.face import Face
+
+    if isinstance(surface, Face):
+        return surface
+    return Face(surf.to_bspline().surface, name=surf.name)
+
+
+def _linked(path: FlankPath, cutter, part, clearance: float, gouge_tolerance: float) -> ToolPath:
+    """The path's continuous segments joined by links the tool-body check finds clear of ``part``
+    (:func:`~machsurf_cad.linking.link_runs`): out along the tool axis, over the clearance surface where a
+    direct link would cross the part."""
+    from ..linking import link_runs
+
+    cc = np.array([s.contacts.get("M2", [np.nan] * 3) for s in path.settings], float).reshape(-1, 3)
+    away = np.array([_away(s) for s in path.settings])
+    runs = []
+    for sl in path.segment_slices():  # each segment entered and left sideways, LEAD_MM off the face
+        t, a, c, w = path.tip[sl], path.axis[sl], cc[sl], away[sl]
+        runs.append((np.concatenate([t[:1] + LEAD_MM * w[:1], t, t[-1:] + LEAD_MM * w[-1:]]),
+                     np.concatenate([a[:1], a, a[-1:]]), np.concatenate([np.full((1, 3), np.nan), c,
+                                                                         np.full((1, 3), np.nan)])))  # fmt: skip
+    tp = link_runs(runs, part, cutter, clearance=clearance, gouge_tolerance=gouge_tolerance,
+                   name=f"flank_{path.kind}", info={"setting": path.kind, "n_rules": len(path.settings)})  # fmt: skip
+    return tp
 
 
 def _segment_envelopes(path, envelope_tolerance: float):

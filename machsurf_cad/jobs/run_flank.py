@@ -43,10 +43,31 @@ def _write_rule_errors(path, profiles: dict) -> str:
     return path.name
 
 
+def _indices(text: str, n: int) -> list[int]:
+    """``--check-faces 3,7``: face indices, each checked to exist."""
+    from ..errors import InputError
+
+    try:
+        idx = [int(x) for x in str(text).split(",") if x.strip()]
+    except ValueError:
+        raise InputError(f"--check-faces takes rest | none | face indices such as 3,7; got {text!r}") from None
+    bad = [i for i in idx if not 0 <= i < n]
+    if bad:
+        raise InputError(f"--check-faces: the part has faces 0..{n - 1}; no face {bad[0]}")
+    return idx
+
+
 def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
     from ..flank_milling import flank
 
     surf, desc = _ruled_input(spec)
+    check = None
+    if spec.part and spec.whole and spec.check_faces != "none":
+        from .inputs import part_faces
+
+        faces = part_faces(spec.part)
+        chosen = range(len(faces)) if spec.check_faces in ("rest", "all") else _indices(spec.check_faces, len(faces))
+        check = [faces[i] for i in chosen if i != spec.face]
     res = flank(
         surf,
         spec.tool,
@@ -60,6 +81,8 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
         radius_range=spec.radius_range,
         smooth=spec.smooth,
         clearance=spec.clearance,
+        check_faces=check,
+        gouge_tolerance=spec.gouge_tolerance,
         progress=progress,
         chunks=int(spec.chunks),
         map_chunks=chunk_map(spec.chunks),
@@ -178,6 +201,20 @@ def _say_whole(say: Say, spec: FlankJob, res) -> None:
         )
         + (f"; {len(path.discontinuities)} setting jump(s)" if path.discontinuities else "")
     )
+    cl = res.cleared
+    if cl is not None:
+        rep = cl.report()
+        say(
+            f"clear of the part's other faces: {rep['n_rules_kept']} of {rep['n_rules_planned']} rules kept, "
+            f"{rep['n_rules_lifted']} lifted along the axis (up to {rep['max_lift_mm'] or 0:.3g} mm); "
+            f"{100 * rep['machined_fraction']:.1f} % of the rules' length in contact (the rest is left to another "
+            "tool and counts in the deviation above)"
+        )
+        for r in rep["rules_left_out"]:
+            say(
+                f"  left out: u in [{r['u_range'][0]:.5g}, {r['u_range'][1]:.5g}], {r['n_rules']} rule(s): the cylinder "
+                f"would enter the part {r['deepest_intrusion_mm']:.3g} mm"
+            )
     if path.fallback_u.size:
         say(
             f"{spec.setting} does not exist on {path.fallback_u.size} of {len(path.settings)} rules "

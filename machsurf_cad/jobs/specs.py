@@ -365,6 +365,8 @@ class FlankJob(_Post, JobSpec):
     gouge_tolerance: float | None = None
     allow_gouge: bool = False
     trim_gouges: bool = False
+    check_faces: str = "rest"
+    """``--whole`` on a STEP part: the faces the cylinder is lifted clear of (rest of the part, none, indices)."""
     command = "flank"
 
     def __post_init__(self) -> None:
