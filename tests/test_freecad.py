@@ -318,3 +318,20 @@ def test_colour_maps_with_legends_in_the_3d_view(tmp_path):
     assert r["shots"]["reff"]["title"] == "effective cutter radius [mm]"
     ae = r["after_error"]
     assert ae["status"].startswith("error: tool 'nonsense'") and ae["n_values"] == 0 and ae["children"] == 0
+
+
+@pytest.mark.skipif((FREECAD is None or XVFB is None) and not IN_CI, reason="FreeCAD GUI or xvfb-run is not installed")
+def test_tolerances_typed_in_the_property_editor_keep_every_digit(tmp_path):
+    """Issue 29 item 1: keys typed into FreeCAD's own property editor (its QuantitySpinBox rounds a length to
+    2 decimals in mm when it stores it): 0.5 um and 0.0005 mm come back as 0.0005 mm on a machining surface
+    and on a CAM operation; 1e-7 mm (shown as 0.00 mm) and a non-length are refused, the value before kept."""
+    r = _run([XVFB, "-a", "-s", "-screen 0 1600x1200x24", FREECAD], tmp_path, "property_edit_check.py")
+    t = r["typed"]
+    assert all(t[k]["editor"] == "Gui::QuantitySpinBox" for k in t)  # FreeCAD's own editor, not ours
+    assert t["0.5 um"]["stored_mm"] == 0.0005 and t["0.5 um"]["shown"] == "500.00 nm"
+    assert t["0.0005 mm"]["stored_mm"] == 0.0005 and t["2.5 um"]["stored_mm"] == 0.0025
+    assert t["0.0000001 mm"]["stored_mm"] == 0.001 and t["3 deg"]["stored_mm"] == 0.001  # refused, kept
+    assert r["status_after"] == "ok"
+    c = r["camop"]
+    assert c["ChordalTolerance"][1] == 0.0005 and c["SurfaceTolerance"][1] == 0.0005
+    assert c["StepOver"][1] == 2.345 and c["Lead"][1] == 12.5

@@ -137,8 +137,9 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
         say("tool path written with its gouges and collisions (--allow-gouge): see verify.worst in the report")
     elif pc.verdict == "refused":
         say(
-            "tool path NOT written: no clear stretch is left, or its linking moves collide (--trim-gouges)"
-            if spec.trim_gouges
+            "tool path NOT written: no clear stretch is left, or no clear link reaches or leaves any of them "
+            "(trimmed: --trim-gouges or tilt away)"
+            if getattr(spec, "trim_gouges", False) or getattr(spec, "tilt_away", False)
             else "tool path NOT written: it gouges or collides beyond the tolerance (--trim-gouges keeps the clear "
             "stretches, --allow-gouge writes it anyway)"
         )

@@ -4,7 +4,7 @@ import os
 
 import FreeCADGui as Gui
 
-from . import commands
+from . import commands, precise_edit
 
 
 class MachsurfWorkbench(Gui.Workbench):
@@ -14,6 +14,7 @@ class MachsurfWorkbench(Gui.Workbench):
 
     def Initialize(self):
         commands.register()
+        precise_edit.install()  # tolerances typed in the property editor keep every digit
         self.appendToolbar("machsurf", commands.NAMES)
         self.appendMenu("machsurf", commands.NAMES)
 
