@@ -266,6 +266,7 @@ def test_gui_command_on_a_selected_face(tmp_path):
     assert r["panel"]["untouched"] == 0.001 and r["panel"]["typed"] == 0.0005 and r["panel"]["status"] == "ok"
     assert r["reopened_view"] == {"before": "NoneType", "after": "ViewProvider"}
     assert r["preferences_ui"] == ["defaultGrid", "defaultTolerance", "toolLibrary"]
+    assert r["preferences"]["icon_saturated"] > 20  # the page's icon is the workbench's, not FreeCAD's black cross
     cmds = r["commands"]  # one icon per command, and tooltips that explain rather than repeat the menu text
     assert len(cmds) == 6 and len({c["pixmap"] for c in cmds.values()}) == 6
     assert all(os.path.isfile(c["pixmap"]) and len(c["tip"]) > len(c["menu"]) + 40 for c in cmds.values())
@@ -315,6 +316,14 @@ def test_colour_maps_with_legends_in_the_3d_view(tmp_path):
         assert max(s["legend_end_colour_error"]) < 0.02, name  # the legend's ends: the scale's colours
         assert 0.05 < s["map_pixel_fraction"] < 0.6, name  # the coloured map fills part of the view
     assert r["shots"]["deviation"]["title"] == "guiding surface deviation [mm]"
+    import re
+
+    for name, s in r["shots"].items():  # one number format per legend (no 0.001 beside 5.00e-04)
+        numbers = [x for t in s["legend_texts"] for x in re.findall(r"-?\d+\.?\d*(?:e-?\d+)?", t)
+                   if t != s["title"]]  # fmt: skip
+        assert numbers and not any("e" in x for x in numbers), (name, s["legend_texts"])
+        assert len({len(x.split(".")[1]) if "." in x else 0 for x in numbers}) == 1, (name, s["legend_texts"])
+        assert s["range_mark_editor_modes"] == [["Hidden"], ["Hidden"]], name  # the editor showed [-0.00, 0.00]
     assert r["shots"]["reff"]["title"] == "effective cutter radius [mm]"
     ae = r["after_error"]
     assert ae["status"].startswith("error: tool 'nonsense'") and ae["n_values"] == 0 and ae["children"] == 0

@@ -84,6 +84,32 @@ try:
     result["preferences_ui"] = sorted(
         w.objectName() for w in ui.findChildren(QtWidgets.QWidget) if w.property("prefEntry")
     )
+    # Edit > Preferences: the machsurf page is listed with the workbench's icon (grabbed, then closed)
+    from PySide2 import QtCore, QtGui
+
+    app = QtWidgets.QApplication.instance()
+    prefs = {}
+
+    def grab_preferences():
+        dlg = app.activeModalWidget()
+        if dlg is None:
+            return
+        for lst in dlg.findChildren(QtWidgets.QListWidget):
+            for k in range(lst.count()):
+                item = lst.item(k)
+                if item.text() == "machsurf":
+                    img = item.icon().pixmap(32, 32).toImage()
+                    rgb = [QtGui.QColor(img.pixel(x, y)) for x in range(32) for y in range(32)]
+                    # FreeCAD's stand-in for a missing icon is a black cross: no saturated pixel
+                    prefs["icon_saturated"] = sum(max(c.red(), c.green(), c.blue()) - min(c.red(), c.green(), c.blue())
+                                                  > 60 for c in rgb)  # fmt: skip
+        prefs["png"] = os.path.join(os.path.dirname(out_path), "freecad_preferences.png")
+        dlg.grab().save(prefs["png"])
+        dlg.reject()
+
+    QtCore.QTimer.singleShot(1500, grab_preferences)
+    Gui.runCommand("Std_DlgPreferences")
+    result["preferences"] = prefs
     result["reopened_view"] = {"before": before, "after": type(doc2.getObject("Bare").ViewObject.Proxy).__name__}
     result["ok"] = True
 except Exception:

@@ -44,6 +44,19 @@ try:
     objs["flank"] = features.make("FlankSetting", doc, (ruled, ["Face1"]), Radius=40.0, Setting="optimum")
     doc.recompute()
     view = Gui.ActiveDocument.ActiveView
+    from freecad.machsurf.gui.colourmap import legend_node
+    from pivy import coin
+
+    def legend_texts(obj):
+        """The strings the legend draws (title, five values, the marks' line)."""
+        sa = coin.SoSearchAction()
+        sa.setType(coin.SoText2.getClassTypeId())
+        sa.setInterest(coin.SoSearchAction.ALL)
+        node = legend_node(obj)
+        sa.apply(node)
+        paths = sa.getPaths()
+        return [paths[k].getTail().string.getValues()[0] for k in range(paths.getLength())]
+
     shots = {}
     for name, obj in objs.items():
         for o in doc.Objects:  # only this feature (and, for the path, nothing of the part) in the picture
@@ -79,6 +92,8 @@ try:
             "n_values": len(obj.MapValues),
             "title": obj.MapTitle,
             "status": obj.Status,
+            "legend_texts": legend_texts(obj),
+            "range_mark_editor_modes": [obj.getEditorMode(n) for n in ("MapRange", "MapMarks")],
         }
     result["shots"] = shots
     # after an error the map is gone from the view too (no stale colours)

@@ -21,7 +21,8 @@ import math
 import numpy as np
 
 GROUP = "Map"
-HIDDEN = 2  # property editor mode: not shown (the arrays are long); the title and range stay visible, read-only
+HIDDEN = 2  # property editor mode: not shown (long arrays; the range and marks are read on the legend, where
+# they keep their digits: the editor showed them as [-0.00, 0.00]); the title stays visible, read-only
 MAX_SIDE = 128  # largest grid drawn per parameter direction (the numbers come from the full grid)
 
 
@@ -32,8 +33,8 @@ def add_properties(obj):
         ("App::PropertyFloatList", "MapValues", "Value at each map point", HIDDEN),
         ("App::PropertyIntegerList", "MapQuads", "Quads of the map, 4 point indices each", HIDDEN),
         ("App::PropertyString", "MapTitle", "What the colour map shows, with its unit", 1),
-        ("App::PropertyFloatList", "MapRange", "Low and high end of the colour scale", 1),
-        ("App::PropertyFloatList", "MapMarks", "Values marked on the legend (tolerance band)", 1),
+        ("App::PropertyFloatList", "MapRange", "Low and high end of the colour scale (the legend shows them)", HIDDEN),
+        ("App::PropertyFloatList", "MapMarks", "Values marked on the legend (tolerance band)", HIDDEN),
         ("App::PropertyBool", "MapDiverging", "Signed values: blue below 0, white at 0, red above", HIDDEN),
     ):
         if name not in obj.PropertiesList:

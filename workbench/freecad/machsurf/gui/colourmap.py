@@ -18,8 +18,18 @@ def has_map(obj) -> bool:
     return "MapValues" in obj.PropertiesList and len(obj.MapValues) > 0 and len(obj.MapQuads) >= 4
 
 
-def _fmt(x: float) -> str:
-    return f"{x:.3g}" if abs(x) >= 1e-3 or x == 0 else f"{x:.2e}"
+def tick_format(values) -> str:
+    """One fixed-point format for all of a legend's numbers: the decimals of their step, up to two more where
+    the ticks need them (``0.0005``, ``0.0010``; never a mix of ``0.001`` and ``5.00e-04``)."""
+    v = np.unique(np.asarray(values, float)[np.isfinite(values)])
+    step = float(np.min(np.diff(v))) if v.size > 1 else float(np.max(np.abs(v), initial=0.0))
+    if not step > 0:
+        return "{:.3f}"
+    d0 = max(0, int(np.ceil(-np.log10(step) - 1e-9)))
+    d = d0
+    while d < min(d0 + 2, 12) and np.max(np.abs(v * 10.0**d - np.round(v * 10.0**d))) > 1e-6:
+        d += 1
+    return f"{{:.{d}f}}"
 
 
 def surface_node(obj) -> coin.SoSeparator:
@@ -111,9 +121,11 @@ def legend_node(obj) -> coin.SoSeparator:
     for node in (coords, mat, binding, bar):
         hud.addChild(node)
     span = values[-1] - values[0] or 1.0
-    for v in np.linspace(values[0], values[-1], 5):
-        _text(hud, (x1 + 0.01, y0 + (y1 - y0) * (v - values[0]) / span - 0.01), _fmt(v))
+    ticks = np.linspace(values[0], values[-1], 5)
     marks = [m for m in obj.MapMarks if values[0] <= m <= values[-1]]
+    fmt = tick_format([*ticks, *marks]).format  # one format for the ticks and the marks
+    for v in ticks:
+        _text(hud, (x1 + 0.01, y0 + (y1 - y0) * (v - values[0]) / span - 0.01), fmt(v))
     if marks:
         mp = []
         for m in marks:
@@ -131,7 +143,7 @@ def legend_node(obj) -> coin.SoSeparator:
         for node in (mc, black, style, lines):
             s.addChild(node)
         hud.addChild(s)
-        _text(hud, (x0, y0 - 0.07), "black lines: tolerance " + ", ".join(_fmt(m) for m in marks))
+        _text(hud, (x0, y0 - 0.07), "black lines: tolerance " + ", ".join(fmt(m) for m in marks))
     _text(hud, (x0, y1 + 0.06), obj.MapTitle)
     annotation = coin.SoAnnotation()
     annotation.addChild(hud)

@@ -23,5 +23,7 @@ class MachsurfWorkbench(Gui.Workbench):
 
 
 Gui.addWorkbench(MachsurfWorkbench())
-# Edit > Preferences > machsurf: default tolerance and grid of new features, the tool library
+# Edit > Preferences > machsurf: default tolerance and grid of new features, the tool library (its icon is
+# resources/preferences-machsurf.svg, found on the icon path by the page group's name)
+Gui.addIconPath(commands.RESOURCES)
 Gui.addPreferencePage(os.path.join(commands.RESOURCES, "preferences.ui"), "machsurf")
