@@ -150,7 +150,13 @@ def test_cam_operation_in_a_path_job(tmp_path):
     assert sm["first"][1]["B"] == sm["path_first"]["B"] and sm["first"][1]["C"] == sm["path_first"]["C"]
     assert set(sm["last"]) == {"Z"} and sm["last"]["Z"] >= z_clear
     assert c["max_dev"] is not None and c["max_dev"] < 1e-6
-    assert m["bull"] == "bull:D=10,r=2,L=20" and m["ball"] == "ball:D=6" and "not supported" in m["chamfer"]
+    assert m["bull"] == "bull:D=10,r=2,L=20" and m["ball"] == "ball:D=6"
+    assert m["chamfer"] == "cone:D=2,angle=45,L=5"  # flat tip 2 FlatRadius, half of 90 deg, up to D 12
+    assert "pointed tip is not supported" in m["pointed_vbit"] and "'drill' is not supported" in m["drill"]
+    mm = r["mismatch"]  # a Tool text against the controller: refused by both names, nothing written
+    assert mm["status"].startswith("error: Tool 'ball:D=6' disagrees with the ToolController") and "flat:D=5" in mm[
+        "status"] and mm["n_commands"] == 0  # fmt: skip
+    assert mm["agreeing_status"] == "ok"
     ps = r["path_simulator"]  # FreeCAD's simulator runs every move: material removed, the part still inside
     assert ps["applied"] == op["n_g1"] + op["n_g0"]
     assert ps["part_volume"] < ps["left_volume"] < ps["stock_volume"] - 10_000
@@ -162,6 +168,7 @@ def test_cam_operation_in_a_path_job(tmp_path):
     assert f5["n_moves"] == f5["n_direct"] > 400 and f5["cut_points"] == f5["direct_cut"]
     assert f5["tip_dev"] < 1e-9 and f5["axis_dev"] < 1e-12 and 0 < f5["max_b"] < 90
     assert 0 < f5["surface_error"] <= 1e-3
+    assert f5["tool_change"] == [["M6", {"T": 1.0}], ["M3", {"S": 10000.0}]] and f5["tool_change_before_moves"]
     apt = r["apt"]  # the APT beside it (machsurf's writer, 5 decimals): same positions and axes
     assert apt["n"] == f5["n_direct"] and apt["tip_dev"] <= 5e-6 and apt["axis_dev"] < 1e-9
     assert apt["feed_line"].startswith("FEDRAT/")

@@ -98,12 +98,29 @@ try:
     # the ToolBit mapping: FreeCAD's bull-nose FlatRadius is D/2 - r
     bull = types.SimpleNamespace(ShapeName="bullnose", Diameter=10.0, FlatRadius=3.0, CuttingEdgeHeight=20.0)
     ball = types.SimpleNamespace(ShapeName="ballend", Diameter=6.0, CuttingEdgeHeight=0.0)
-    try:
-        cutter_from_toolbit(types.SimpleNamespace(ShapeName="chamfer", Diameter=6.0))
-        chamfer = "accepted"
-    except Exception as exc:
-        chamfer = str(exc)
-    result["mapping"] = {"bull": cutter_from_toolbit(bull), "ball": cutter_from_toolbit(ball), "chamfer": chamfer}
+    chamfer = types.SimpleNamespace(ShapeName="chamfer", Diameter=12.0, FlatRadius=1.0, CuttingEdgeAngle=90.0)
+
+    def refused(tool):
+        try:
+            return "accepted: " + cutter_from_toolbit(tool)
+        except Exception as exc:
+            return str(exc)
+
+    result["mapping"] = {
+        "bull": cutter_from_toolbit(bull), "ball": cutter_from_toolbit(ball), "chamfer": cutter_from_toolbit(chamfer),
+        "pointed_vbit": refused(types.SimpleNamespace(ShapeName="v-bit", Diameter=6.0, TipDiameter=0.0,
+                                                      CuttingEdgeAngle=60.0)),
+        "drill": refused(types.SimpleNamespace(ShapeName="drill", Diameter=6.0)),
+    }  # fmt: skip
+    # a Tool text that disagrees with the ToolController is refused by name (the controller's flat D5 stays)
+    op.Tool = "ball:D=6"
+    doc.recompute()
+    result["mismatch"] = {"status": op.Status, "n_commands": len(op.Path.Commands)}
+    op.Tool = "flat:D=5"  # agreeing: fine
+    doc.recompute()
+    result["mismatch"]["agreeing_status"] = op.Status
+    op.Tool = ""
+    doc.recompute()
     # 5 axes on the guiding surface (ball D6, lead 10 deg): B/C give back machsurf's axes, tips as its path
     five = features.make("CamOperation", doc, (part, [f"Face{top + 1}"]), Pattern="5-axis surface", StepOver=4.0,
                          Tool="ball:D=6", Lead=10.0)  # fmt: skip
@@ -141,6 +158,10 @@ try:
         "max_c_jump": float(np.degrees(np.abs(np.diff(bc[:, 1]))).max()),
         "max_b": float(np.degrees(bc[:, 0]).max()),
         "surface_error": five.SurfaceError.Value,
+        # no ToolController: the operation posts its own tool change before its first move
+        "tool_change": [(c.Name, dict(c.Parameters)) for c in five.Path.Commands if c.Name in ("M6", "M3")],
+        "tool_change_before_moves": next(i for i, c in enumerate(five.Path.Commands) if c.Name == "M6")
+        < next(i for i, c in enumerate(five.Path.Commands) if c.Name in ("G0", "G1")),
     }
     back = ms.read_apt(apt)  # the APT beside it: the same positions and axes
     result["apt"] = {

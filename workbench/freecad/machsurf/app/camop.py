@@ -2,9 +2,10 @@
 
 ``features.make("CamOperation", doc, (part, ["Face3", "Face7"]), Pattern="raster", StepOver=1.0)``
 adds a ``Path::FeaturePython`` operation to the document's Job (creating one on the part if there is
-none). Its tool comes from the Job's ToolController (ToolBit shapes endmill, ballend, bullnose:
-diameter and corner radius mapped explicitly, the bull-nose's FlatRadius being D/2 - r) or, without
-one, from the ``Tool`` text. Patterns:
+none). Its tool comes from the Job's ToolController (ToolBit shapes endmill, ballend, bullnose, chamfer
+and V-bit: diameter and corner radius mapped explicitly, the bull-nose's FlatRadius being D/2 - r) or,
+without one, from the ``Tool`` text, and then the operation posts its own tool change; a ``Tool`` text
+that disagrees with the controller is refused by name. Patterns:
 
 - ``raster``, ``waterline``: machsurf's exact 3-axis drop-cutter on the selected faces, avoiding the rest;
 - ``5-axis surface``: the guiding/orientation surfaces of one face (lead, tilt) and the tool path on them,
@@ -42,7 +43,7 @@ SAFE_MARK = "machsurf safe moves"
 height); its number says how many G0 follow."""
 
 # the ToolBit shapes machsurf maps (FreeCAD's names), and how
-TOOLBIT_SHAPES = ("endmill", "ballend", "bullnose")
+TOOLBIT_SHAPES = ("endmill", "ballend", "bullnose", "chamfer", "v-bit")
 
 
 def cutter_from_toolbit(tool) -> str:
@@ -61,7 +62,25 @@ def cutter_from_toolbit(tool) -> str:
         if not 0 < r <= D / 2:
             raise InputError(f"bull-nose ToolBit with D = {D:g} mm and FlatRadius = {flat:g} mm has no corner radius")
         return f"bull:D={D:g},r={r:g}{length}"
+    if shape in ("chamfer", "chamfer.fcstd", "v-bit", "v-bit.fcstd", "vbit"):
+        return _cone_from_toolbit(tool, shape, D)
     raise InputError(f"ToolBit shape '{shape}' is not supported (use {', '.join(TOOLBIT_SHAPES)})")
+
+
+def _cone_from_toolbit(tool, shape: str, D: float) -> str:
+    """A chamfer mill or V-bit as machsurf's cone: its flat tip (``FlatRadius``, a V-bit's ``TipDiameter``) is
+    the cone's D, half its ``CuttingEdgeAngle`` the taper, the cutting edge up to the ToolBit's diameter
+    its length. A pointed tip (no flat) is refused: machsurf's cone has a flat tip."""
+    if not hasattr(tool, "CuttingEdgeAngle"):
+        raise InputError(f"{shape} ToolBit without a CuttingEdgeAngle")
+    half = value_of(tool.CuttingEdgeAngle) / 2.0
+    tip = 2 * value_of(tool.FlatRadius) if hasattr(tool, "FlatRadius") else value_of(getattr(tool, "TipDiameter", 0.0))
+    if not tip > 0:
+        raise InputError(f"{shape} ToolBit with a pointed tip is not supported (machsurf's cone needs a flat tip)")
+    if not 0 < half < 89:
+        raise InputError(f"{shape} ToolBit with CuttingEdgeAngle {2 * half:g} deg is not supported")
+    L = (D - tip) / 2 / math.tan(math.radians(half))
+    return f"cone:D={tip:g},angle={half:g},L={L:.6g}" if L > 0 else f"cone:D={tip:g},angle={half:g}"
 
 
 def _source_faces(obj):
@@ -198,9 +217,19 @@ class CamOperationFeature(_Base):
         return tools[0] if tools else None
 
     def cutter_text(self, obj) -> str:
+        """The ToolController's ToolBit (the tool's one source of truth); the Tool text only without one. A Tool
+        text that disagrees with the controller is refused by name, never silently overridden."""
+        import machsurf_cad as ms
+
         tc = self.tool_controller(obj)
         if tc is not None:
-            return cutter_from_toolbit(tc.Tool)
+            text = cutter_from_toolbit(tc.Tool)
+            if obj.Tool and ms.parse_cutter(tool_text(obj.Tool)).spec() != ms.parse_cutter(text).spec():
+                raise InputError(
+                    f"Tool '{obj.Tool}' disagrees with the ToolController '{tc.Label}' ({text}): clear Tool to use "
+                    "the controller's ToolBit, or set the ToolController of that tool"
+                )
+            return text
         if not obj.Tool:
             raise InputError("no tool: add a ToolController to the Job or set 'Tool' (e.g. ball:D=10)")
         return tool_text(obj.Tool)
@@ -355,6 +384,10 @@ class CamOperationFeature(_Base):
         five = bool(np.any(np.abs(np.asarray(tp.axis)[:, 2] - 1.0) > 1e-12))
         b, c = rotary_angles(tp.axis) if five else (None, None)
         cmds = [Path.Command(f"({obj.Label}: machsurf {obj.Pattern}, {obj.CutterUsed})")]
+        if self.tool_controller(obj) is None:  # no controller posts the change: this operation does
+            opts = self.post_options(obj, _core())
+            cmds += [Path.Command(f"(machsurf tool change: no ToolController, T{opts.tool_number} = {obj.CutterUsed})"),
+                     Path.Command("M6", {"T": opts.tool_number}), Path.Command("M3", {"S": opts.spindle})]  # fmt: skip
         if five:
             cmds.append(Path.Command("(B: tool axis angle from Z, C: its azimuth about Z, degrees; B-C head)"))
         z_clear = self.clearance_height(obj, tp)
@@ -394,6 +427,12 @@ class CamOperationFeature(_Base):
                 except (TypeError, ValueError):
                     pass
         return top + offset
+
+
+def _core():
+    import machsurf_cad
+
+    return machsurf_cad
 
 
 def rotary_angles(axis):
