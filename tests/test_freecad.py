@@ -351,3 +351,18 @@ def test_tolerances_typed_in_the_property_editor_keep_every_digit(tmp_path):
     c = r["camop"]
     assert c["ChordalTolerance"][1] == 0.0005 and c["SurfaceTolerance"][1] == 0.0005
     assert c["StepOver"][1] == 2.345 and c["Lead"][1] == 12.5
+
+
+@pytest.mark.skipif((FREECAD is None or XVFB is None) and not IN_CI, reason="FreeCAD GUI or xvfb-run is not installed")
+def test_cam_operation_task_panel_edited_with_keys_and_mouse(tmp_path):
+    """Issue 29 item 8: the CAM operation's task panel (opened as a double-click does) holds its fields grouped
+    as the property editor groups them, only the groups its pattern uses; the pattern chosen with the arrow
+    keys, 0.5 um and 40 deg typed, a check box clicked and OK clicked store exactly those values and nothing
+    else (the picture: tmp_path/freecad_cam_panel.png, looked at)."""
+    r = _run([XVFB, "-a", "-s", "-screen 0 1600x1200x24", FREECAD], tmp_path, "panel_check.py")
+    assert r["raster_groups"] == ["Accuracy", "Cutter", "Linking", "Simulation", "Strategy"]
+    assert not r["raster_stepdown_visible"]
+    assert r["five_groups"] == ["5-axis", "Accuracy", "Cutter", "Linking", "Simulation", "Strategy"]
+    assert r["stored"] == {"Pattern": "5-axis surface", "ChordalTolerance": 0.0005, "MaxLead": 40.0,
+                           "TrimGouges": True, "GougeTolerance": 0.01, "StepOver": 2.0}  # fmt: skip
+    assert r["panel_closed"]
