@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import math  # noqa: F401  (used by the doctest)
 import time
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np

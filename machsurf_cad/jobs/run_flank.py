@@ -212,8 +212,8 @@ def _say_whole(say: Say, spec: FlankJob, res) -> None:
         )
         for r in rep["rules_left_out"]:
             say(
-                f"  left out: u in [{r['u_range'][0]:.5g}, {r['u_range'][1]:.5g}], {r['n_rules']} rule(s): the cylinder "
-                f"would enter the part {r['deepest_intrusion_mm']:.3g} mm"
+                f"  left out: u in [{r['u_range'][0]:.5g}, {r['u_range'][1]:.5g}], {r['n_rules']} rule(s): the "
+                f"cylinder would enter the part {r['deepest_intrusion_mm']:.3g} mm"
             )
     if path.fallback_u.size:
         say(

@@ -25,7 +25,8 @@ try:
     def click(w, pos=None):
         p = QtCore.QPointF(pos if pos is not None else w.rect().center())
         for kind in (QtCore.QEvent.MouseButtonPress, QtCore.QEvent.MouseButtonRelease):
-            app.sendEvent(w, QtGui.QMouseEvent(kind, p, QtCore.Qt.LeftButton, QtCore.Qt.LeftButton, QtCore.Qt.NoModifier))
+            ev = QtGui.QMouseEvent(kind, p, QtCore.Qt.LeftButton, QtCore.Qt.LeftButton, QtCore.Qt.NoModifier)
+            app.sendEvent(w, ev)
         settle()
 
     def key(w, k, mod=QtCore.Qt.NoModifier, text=""):

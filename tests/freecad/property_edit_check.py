@@ -49,7 +49,8 @@ try:
                if w.metaObject().className() == "Gui::PropertyEditor::PropertyEditor"]  # fmt: skip
     from freecad.machsurf.gui.precise_edit import property_name
 
-    def row(model, name, parent=QtCore.QModelIndex()):
+    def row(model, name, parent=None):
+        parent = QtCore.QModelIndex() if parent is None else parent
         for r in range(model.rowCount(parent)):
             i = model.index(r, 0, parent)
             if property_name(i) == name:

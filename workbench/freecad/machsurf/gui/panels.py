@@ -18,9 +18,25 @@ EDITABLE = {
     "FlankSettingFeature": ["Radius", "RulePosition", "Setting", "ToolSide"],
     "EnvelopeFeature": ["Tool", "Motion", "Passes", "PassTurn", "Tolerance"],
     "CamOperationFeature": [
-        "Pattern", "StepOver", "Angle", "StepDown", "Lead", "Tilt", "MaxLead", "MaxTilt", "SurfaceTolerance",
-        "ToolSide", "FlankSetting", "ChordalTolerance", "GougeTolerance", "TrimGouges", "AllowGouge", "Clearance",
-        "SimulateScallops", "ScallopLimit", "Tool",
+        "Pattern",
+        "StepOver",
+        "Angle",
+        "StepDown",
+        "Lead",
+        "Tilt",
+        "MaxLead",
+        "MaxTilt",
+        "SurfaceTolerance",
+        "ToolSide",
+        "FlankSetting",
+        "ChordalTolerance",
+        "GougeTolerance",
+        "TrimGouges",
+        "AllowGouge",
+        "Clearance",
+        "SimulateScallops",
+        "ScallopLimit",
+        "Tool",
     ],  # fmt: skip
 }
 
