@@ -83,7 +83,7 @@ def _cone_from_toolbit(tool, shape: str, D: float) -> str:
     return f"cone:D={tip:g},angle={half:g},L={L:.6g}" if L > 0 else f"cone:D={tip:g},angle={half:g}"
 
 
-def _source_faces(obj):
+def _source_faces(obj, between=None):
     """(faces to machine as machsurf Faces, every other face of the source parts, the machined area in mm^2)
     from ``obj.Source``."""
     if not obj.Source:
@@ -100,6 +100,8 @@ def _source_faces(obj):
         for i, f in enumerate(src.Shape.Faces):
             nf = face_to_numpy(f, f"{src.Label}.Face{i + 1}")
             (machined if i in chosen else others).append(nf)
+            if between is not None:
+                between()
             area += f.Area if i in chosen else 0.0
     return machined, others, area
 
@@ -237,7 +239,7 @@ class CamOperationFeature(_Base):
     def compute(self, obj):
         import machsurf_cad as ms
 
-        faces, others, area = _source_faces(obj)
+        faces, others, area = _source_faces(obj, between=self.tick)
         if not faces:
             raise InputError("no face to machine in 'Source'")
         cutter = ms.parse_cutter(self.cutter_text(obj))
@@ -245,13 +247,13 @@ class CamOperationFeature(_Base):
         bar = self.bar  # FreeCAD's progress bar (the GUI's status bar, the console headless); Esc cancels
         tp = self.toolpath(obj, ms, faces, others, cutter, bar)
         bar.stop()
-        pc = ms.check_toolpath(
+        pc = self.core(
+            ms.check_toolpath,
             tp,
             faces + others,
             gouge_tolerance=gtol,
             on_gouge="trim" if obj.TrimGouges or self.tilts_away(obj) else "allow" if obj.AllowGouge else "refuse",
             clearance=value_of(obj.Clearance),
-            progress=bar,
         )
         bar.stop()
         v = pc.check
@@ -296,7 +298,7 @@ class CamOperationFeature(_Base):
         if obj.SimulateScallops:
             # about SIMULATION_SAMPLES nominal samples: a map FreeCAD draws and saves at ease, a few seconds
             res = max(math.sqrt(area / SIMULATION_SAMPLES), 1e-3)
-            sim = ms.simulate(faces, tp, gouge_tolerance=gtol, resolution=res, progress=bar)
+            sim = self.core(ms.simulate, faces, tp, gouge_tolerance=gtol, resolution=res)
             bar.stop()
             maps.simulation_map(obj, sim, gtol)
             obj.MaxScallop = sim.max_scallop
@@ -317,23 +319,21 @@ class CamOperationFeature(_Base):
             chordal_tolerance=value_of(obj.ChordalTolerance),
             clearance=value_of(obj.Clearance),
             gouge_tolerance=value_of(obj.GougeTolerance),
-            progress=bar,
         )
         if pattern == "raster":
-            return ms.raster(faces, cutter, stepover=value_of(obj.StepOver), angle=value_of(obj.Angle),
+            return self.core(ms.raster, faces, cutter, stepover=value_of(obj.StepOver), angle=value_of(obj.Angle),
                              **common)  # fmt: skip
         if pattern == "waterline":
-            return ms.waterline(faces, cutter, stepdown=value_of(obj.StepDown), **common)
+            return self.core(ms.waterline, faces, cutter, stepdown=value_of(obj.StepDown), **common)
         if len(faces) != 1:
             raise InputError(f"the {pattern} pattern machines one face: select one (got {len(faces)})")
         if pattern == "flank":
             spec = cutter.spec()
             if not spec.startswith("flat:"):
                 raise InputError(f"flank milling needs a flat end mill (a cylinder), not {spec}")
-            res = ms.flank(faces[0], "cyl:" + spec[len("flat:"):], setting=str(obj.FlankSetting), whole=True,
-                           side=1 if str(obj.ToolSide) == TOOL_SIDES[0] else -1,
-                           tolerance=value_of(obj.ChordalTolerance), clearance=value_of(obj.Clearance),
-                           progress=bar)  # fmt: skip
+            res = self.core(ms.flank, faces[0], "cyl:" + spec[len("flat:"):], setting=str(obj.FlankSetting),
+                            whole=True, side=1 if str(obj.ToolSide) == TOOL_SIDES[0] else -1,
+                            tolerance=value_of(obj.ChordalTolerance), clearance=value_of(obj.Clearance))  # fmt: skip
             obj.SurfaceError = 0.0
             return res.toolpath
         a = math.radians(value_of(obj.Angle))  # passes along the raster direction: planes normal to it in xy
@@ -345,15 +345,16 @@ class CamOperationFeature(_Base):
             lead = value_of(obj.Lead)
             limits = {"lead": lead, "tilt": value_of(obj.Tilt), "max_lead": max(value_of(obj.MaxLead), lead),
                       "max_tilt": value_of(obj.MaxTilt), "gouge_tolerance": value_of(obj.GougeTolerance)}  # fmt: skip
-            field, tilt_rep = clear_axis_field(faces[0], cutter, strategy, faces + others, **limits)
+            field, tilt_rep = self.core(clear_axis_field, faces[0], cutter, strategy, faces + others, progress=False,
+                                        **limits)  # fmt: skip
             self.tilt_report = tilt_rep
-        m = ms.machining_surface(faces[0], cutter, axes=5, strategy=strategy, lead=value_of(obj.Lead),
-                                 tilt=value_of(obj.Tilt), axis_field=field,
-                                 tolerance=value_of(obj.SurfaceTolerance), progress=bar)  # fmt: skip
+        m = self.core(ms.machining_surface, faces[0], cutter, axes=5, strategy=strategy, lead=value_of(obj.Lead),
+                      tilt=value_of(obj.Tilt), axis_field=field, tolerance=value_of(obj.SurfaceTolerance))  # fmt: skip
         obj.SurfaceError = float(m.s1_fit.max_error)
         sphere = ms.part_sphere(faces + others, value_of(obj.Clearance))  # passes linked over the whole part
-        return ms.tool_paths(m, stepover=value_of(obj.StepOver), chordal_tolerance=value_of(obj.ChordalTolerance),
-                             clearance=value_of(obj.Clearance), safe_sphere=sphere)  # fmt: skip
+        return self.core(ms.tool_paths, m, stepover=value_of(obj.StepOver), progress=False,
+                         chordal_tolerance=value_of(obj.ChordalTolerance), clearance=value_of(obj.Clearance),
+                         safe_sphere=sphere)  # fmt: skip
 
     def tilts_away(self, obj) -> bool:
         return str(obj.Pattern) == "5-axis surface" and (value_of(obj.MaxLead) > 0 or value_of(obj.MaxTilt) > 0)

@@ -165,11 +165,31 @@ class _Base:
     def __setstate__(self, state):
         return None
 
+    def tick(self, message="reading the part"):
+        """Work the GUI thread does itself (reading FreeCAD's shapes): the busy bar stepped and the GUI's
+        events handled between its steps (Esc cancels there too)."""
+        from . import worker
+
+        self.bar(0, None, message)
+        worker.pump()
+        if worker.cancel_requested():
+            raise Cancelled("cancelled by the user")
+
+    def core(self, fn, *args, progress=True, **kwargs):
+        """``fn(*args, **kwargs)``, a machsurf_cad call, off the GUI thread with its progress on FreeCAD's bar
+        (:func:`.worker.run`; ``progress``: whether ``fn`` reports progress)."""
+        from . import worker
+
+        return worker.run(fn, args, kwargs, self.bar, cancelled=Cancelled, progress=progress)
+
     def execute(self, obj):
+        from . import worker
+
         self.bar = Progress()  # compute passes it to machsurf_cad: progress, and Esc cancels
         try:
             try:
-                note = self.compute(obj)
+                with worker.recompute():
+                    note = self.compute(obj)
             finally:
                 self.bar.stop()
             obj.Status = f"warning: {note}" if note else "ok"
@@ -290,7 +310,8 @@ class MachiningSurfaceFeature(_Base):
         axes = int(obj.Axes)
         if axes not in (3, 5):
             raise InputError(f"Axes must be 3 or 5, got {axes}")
-        ms = machining_surface(
+        ms = self.core(
+            machining_surface,
             f,
             tool_text(obj.Tool),
             axes=axes,
@@ -299,7 +320,6 @@ class MachiningSurfaceFeature(_Base):
             tilt=value_of(obj.Tilt) if axes == 5 else 0.0,
             tolerance=value_of(obj.Tolerance),
             loops=str(obj.Loops),
-            progress=self.bar,
         )
         faces = [face_to_part(x) for x in ms.faces()]
         obj.Shape = Part.Compound(faces)
@@ -355,9 +375,11 @@ class EffectiveRadiusFeature(_Base):
 
         fc = source_face(obj)
         f = face_to_numpy(fc, "F")
-        m = reff_maps(
+        m = self.core(
+            reff_maps,
             f,
             tool_text(obj.Tool),
+            progress=False,
             directions=[value_of(obj.Direction)],
             grid=int(obj.Grid),
             scallop=value_of(obj.Scallop) or None,
@@ -424,13 +446,13 @@ class FlankSettingFeature(_Base):
         from machsurf_cad import flank
 
         face = face_to_numpy(source_face(obj), "F")
-        res = flank(
+        res = self.core(
+            flank,
             face,
             value_of(obj.Radius),
             rule=float(obj.RulePosition),
             setting=str(obj.Setting),
             side=1 if str(obj.ToolSide) == TOOL_SIDES[0] else -1,
-            progress=self.bar,
         )
         st, e = res.setting, res.interference
         obj.MaxGouge, obj.MaxUndercut, obj.Gamma = e.max_gouge, e.max_undercut, st.gamma_deg
@@ -476,13 +498,13 @@ class EnvelopeFeature(_Base):
     def compute(self, obj):
         from machsurf_cad import envelope, example
 
-        res = envelope(
+        res = self.core(
+            envelope,
             tool_text(obj.Tool),
             example(str(obj.Motion), "motion"),
             passes=int(obj.Passes),
             theta=value_of(obj.PassTurn),
             tolerance=value_of(obj.Tolerance),
-            progress=self.bar,
         )
         ch = res.chain
         faces = []

@@ -21,9 +21,9 @@ class ViewProvider:
         vobj.Proxy = self
 
     def attach(self, vobj):
-        from . import precise_edit
+        from . import session
 
-        precise_edit.install()  # a document with machsurf features opened in any workbench
+        session.install()  # a document with machsurf features opened in any workbench
         self.Object = vobj.Object
         self.map_root = coin.SoSeparator()
         if _is_path(vobj.Object):  # beside the path's lines, shown and hidden with the path

@@ -4,7 +4,7 @@ import os
 
 import FreeCADGui as Gui
 
-from . import commands, precise_edit
+from . import commands, session
 
 
 class MachsurfWorkbench(Gui.Workbench):
@@ -14,7 +14,7 @@ class MachsurfWorkbench(Gui.Workbench):
 
     def Initialize(self):
         commands.register()
-        precise_edit.install()  # tolerances typed in the property editor keep every digit
+        session.install()  # exact lengths in the property editor; the GUI live while recomputing
         self.appendToolbar("machsurf", commands.NAMES)
         self.appendMenu("machsurf", commands.NAMES)
 
