@@ -15,7 +15,7 @@ from . import precise_edit
 class _Escape(QtCore.QObject):
     """Esc while a machsurf call runs off the GUI thread: cancel it (the key goes no further)."""
 
-    def eventFilter(self, obj, event):  # noqa: N802 - Qt's name
+    def eventFilter(self, obj, event):
         if event.type() == QtCore.QEvent.KeyPress and event.key() == QtCore.Qt.Key_Escape and worker.busy():
             worker.request_cancel()
             return True
@@ -47,8 +47,9 @@ def _warm_imports() -> None:
     from .. import ensure_core
 
     ensure_core()
-    import machsurf_cad.gougecheck  # noqa: F401
-    import machsurf_cad.machining.surfaces  # noqa: F401
-    import machsurf_cad.threeaxis.paths  # noqa: F401
-    import scipy.optimize  # noqa: F401
+    import scipy.optimize
     import scipy.spatial  # noqa: F401
+
+    import machsurf_cad.gougecheck
+    import machsurf_cad.machining.surfaces
+    import machsurf_cad.threeaxis.paths  # noqa: F401
