@@ -383,3 +383,19 @@ def test_recomputes_keep_the_gui_live_and_esc_cancels_them(tmp_path):
     f = r["finished"]
     assert f["status"] == "ok" and f["faces"] == 2 and 0 < f["error"] <= 1e-5
     assert f["max_gap_s"] < 1.0
+
+
+@pytest.mark.slow
+def test_two_operations_posted_by_freecads_posts_are_clean(tmp_path):
+    """Issue 29 item 7: a Job with two machsurf operations posted through FreeCAD's linuxcnc and grbl
+    post-processors; every G0/G1 of the G-code read back (modal coordinates) and checked by the tool-body
+    check against every face of the block: no gouge, no collision, the first and last moves above the part,
+    no rapid across x or y below the part's top, one tool change (the Job's ToolController)."""
+    r = _run([FREECADCMD], tmp_path, "post_check.py")
+    assert all(o["status"] == "ok" and o["verdict"].startswith("clean") for o in r["ops"])
+    for name in ("linuxcnc", "grbl"):
+        p = r["posted"][name]
+        assert p["moves"] > 1000 and p["rapids"] >= 4, name
+        assert p["clean"] and p["collisions"] == 0 and p["gouging_positions"] == 0 and p["max_gouge"] <= 0.01, name
+        assert p["first_move_z_above_part"] and p["last_move_z_above_part"] and p["low_xy_rapids"] == 0, name
+        assert p["m6"] == 1, name
