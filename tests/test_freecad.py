@@ -399,3 +399,22 @@ def test_two_operations_posted_by_freecads_posts_are_clean(tmp_path):
         assert p["clean"] and p["collisions"] == 0 and p["gouging_positions"] == 0 and p["max_gouge"] <= 0.01, name
         assert p["first_move_z_above_part"] and p["last_move_z_above_part"] and p["low_xy_rapids"] == 0, name
         assert p["m6"] == 1, name
+
+
+@pytest.mark.skipif((FREECAD is None or XVFB is None) and not IN_CI, reason="FreeCAD GUI or xvfb-run is not installed")
+def test_five_axis_paths_are_previewed_right(tmp_path):
+    """Issue 29 item 6: FreeCAD 0.20 draws B/C words as rotations (swirls beside the part). A 5-axis operation
+    draws its tips as one polyline and its axes as lines (coloured by the body check's distance) and cuts
+    FreeCAD's own drawing down to the last command; a 3-axis operation keeps FreeCAD's drawing, no preview
+    (the picture: tmp_path/freecad_5axis_preview.png, looked at: white cutting lines on the face, red
+    links and axes above it)."""
+    r = _run([XVFB, "-a", "-s", "-screen 0 1600x1200x24", FREECAD], tmp_path, "preview_check.py")
+    f = r["five"]
+    assert f["status"] == "ok" and f["n_tips"] > f["n_g1"] > 400 and f["tips_match_g1"]
+    assert f["n_line_sets"] == 2 and f["polyline_vertices"] == f["n_tips"] and 300 <= f["axis_lines"] <= 400
+    assert -f["gouge_tolerance"] <= f["min_distance"] <= 0.0 < f["max_distance"]  # touching cuts, clear links
+    start, count, n = f["freecad_shows"]
+    assert count == 1 and start == n - 1
+    t = r["three"]
+    assert t["status"] == "ok" and t["n_tips"] == 0 and t["freecad_shows"] == [0, 0]
+    assert r["red_pixels"] > 100  # the links and axes drawn (red: clear by a millimetre and more)

@@ -38,6 +38,12 @@ from .features import ANGLE, LENGTH, TOOL_SIDES, _add, _Base, attach_view, tool_
 
 PATTERNS = ("raster", "waterline", "5-axis surface", "flank")
 SIMULATION_SAMPLES = 40_000
+PREVIEW = (
+    ("PreviewTips", "App::PropertyVectorList", "5-axis path: tool tips (mm), drawn beside FreeCAD's Path"),
+    ("PreviewAxes", "App::PropertyVectorList", "5-axis path: unit tool axes, drawn as lines from the tips"),
+    ("PreviewDistance", "App::PropertyFloatList", "5-axis path: the body check's distance per position (mm)"),
+)
+
 SAFE_MARK = "machsurf safe moves"
 """A comment before the moves the operation adds around machsurf's path (to and from the clearance
 height); its number says how many G0 follow."""
@@ -193,6 +199,9 @@ class CamOperationFeature(_Base):
         _add(obj, "App::PropertyInteger", "CutPoints", "Result", "CL points (one G1 each)", read_only=True)
         _add(obj, LENGTH, "CutLength", "Result", "Length of the cutting moves", read_only=True)
         _add(obj, "App::PropertyString", "CutterUsed", "Result", "The cutter machsurf machined with", read_only=True)
+        for name, kind, doc in PREVIEW:  # 5-axis paths: what the view draws beside FreeCAD's Path
+            _add(obj, kind, name, "Preview", doc)
+            obj.setEditorMode(name, 2)
         _add(obj, LENGTH, "MaxScallop", "Result", "Largest material left by the path (simulated)", read_only=True)
         _add(obj, LENGTH, "SurfaceError", "Result", "Measured largest error of the guiding surface (5-axis)",
              read_only=True)  # fmt: skip
@@ -290,6 +299,7 @@ class CamOperationFeature(_Base):
             )
         tp = pc.toolpath  # the path as planned, or cut down to its clear stretches (TrimGouges, tilt away)
         obj.Path = Path.Path(self.commands(obj, tp))
+        self.preview(obj, tp, pc.recheck if pc.recheck is not None else v)
         if str(obj.AptFile):
             ms.write_apt(str(obj.AptFile), tp, self.post_options(obj, ms))
         obj.CutPoints = int(tp.n_cut)
@@ -355,6 +365,15 @@ class CamOperationFeature(_Base):
         return self.core(ms.tool_paths, m, stepover=value_of(obj.StepOver), progress=False,
                          chordal_tolerance=value_of(obj.ChordalTolerance), clearance=value_of(obj.Clearance),
                          safe_sphere=sphere)  # fmt: skip
+
+    def preview(self, obj, tp, check) -> None:
+        """A 5-axis path's tips, axes and the body check's distance per position (empty for 3 axes, which
+        FreeCAD draws right): FreeCAD 0.20 draws B and C as rotations, so the view draws these instead."""
+        five = bool(np.any(np.abs(np.asarray(tp.axis)[:, 2] - 1.0) > 1e-12))
+        d = np.asarray(check.cut_distance, float) if five and len(check.cut_distance) == len(tp.tip) else None
+        obj.PreviewTips = [tuple(map(float, p)) for p in tp.tip] if d is not None else []
+        obj.PreviewAxes = [tuple(map(float, a)) for a in tp.axis] if d is not None else []
+        obj.PreviewDistance = [float(x) if np.isfinite(x) else 1e9 for x in d] if d is not None else []
 
     def tilts_away(self, obj) -> bool:
         return str(obj.Pattern) == "5-axis surface" and (value_of(obj.MaxLead) > 0 or value_of(obj.MaxTilt) > 0)

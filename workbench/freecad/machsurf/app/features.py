@@ -219,6 +219,9 @@ class _Base:
                 setattr(obj, name, "")
             elif kind in ("App::PropertyFloat", LENGTH, DISTANCE, ANGLE):
                 setattr(obj, name, 0.0)
+        for name in ("PreviewTips", "PreviewAxes", "PreviewDistance"):  # a 5-axis path's preview
+            if name in obj.PropertiesList:
+                setattr(obj, name, [])
         if hasattr(self, "map"):
             del self.map
         maps.clear_map(obj)

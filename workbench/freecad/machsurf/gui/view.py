@@ -11,7 +11,7 @@ import json
 
 from pivy import coin
 
-from . import colourmap
+from . import colourmap, preview
 
 MAP_MODE = "Map"
 
@@ -28,7 +28,12 @@ class ViewProvider:
         self.map_root = coin.SoSeparator()
         if _is_path(vobj.Object):  # beside the path's lines, shown and hidden with the path
             self.switch = coin.SoSwitch()
-            self.switch.addChild(self.map_root)
+            group = coin.SoGroup()
+            self.preview_root = coin.SoSeparator()  # a 5-axis path drawn right (preview.py)
+            group.addChild(self.map_root)
+            group.addChild(self.preview_root)
+            self.switch.addChild(group)
+            preview.fill(self.preview_root, vobj.Object)
             self.switch.whichChild = 0 if vobj.Visibility else -1
             vobj.RootNode.addChild(self.switch)
         else:
@@ -52,6 +57,9 @@ class ViewProvider:
     def updateData(self, obj, prop):
         if prop in ("Shape", "Report"):
             colour_result(obj)
+        if prop == "PreviewDistance" and hasattr(self, "preview_root"):
+            preview.fill(self.preview_root, obj)
+            preview.hide_rotations(obj)
         if prop in ("MapValues", "MapDiverging") and hasattr(self, "map_root"):
             colourmap.fill(self.map_root, obj)
 
