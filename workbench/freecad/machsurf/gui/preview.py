@@ -1,9 +1,10 @@
 """A 5-axis path drawn right (GUI only): FreeCAD 0.20 draws a path's B and C words as rotations, so a
 5-axis operation shows swirls beside the part. Beside FreeCAD's Path the operation's view draws the tool
 tips as a polyline and the tool axes as lines from the tips (every position up to 400 of them, then evenly
-spaced ones), FreeCAD's own drawing of the path cut down to its last command, each coloured by the body check's distance there on the maps' diverging scale (blue below 0,
-white at 0, red above): blue where the cutting part goes into the part by the gouge tolerance or more,
-white where it touches (the cutting moves), red at a millimetre and more of clearance (links)."""
+spaced ones), and FreeCAD's own drawing of the path is cut down to its last command. Each is coloured by
+the body check's distance there on the maps' diverging scale (blue below 0, white at 0, red above): blue
+where the cutting part goes into the part by the gouge tolerance or more, white where it touches (the
+cutting moves), red at a millimetre and more of clearance (links)."""
 
 import numpy as np
 from pivy import coin
