@@ -49,8 +49,9 @@ try:
         "polyline_vertices": int(lines[0].numVertices.getValues()[0]) if lines else 0,
         "axis_lines": len(lines[1].numVertices.getValues()) if len(lines) > 1 else 0,
         "n_g1": len(cut),
-        "tips_match_g1": bool(all(any(np.allclose([c.Parameters[k] for k in "XYZ"], t, atol=1e-6) for t in tips[:50])
-                                  for c in cut[:5])),  # fmt: skip
+        "tips_match_g1": bool(
+            all(any(np.allclose([c.Parameters[k] for k in "XYZ"], t, atol=1e-6) for t in tips[:50]) for c in cut[:5])
+        ),  # fmt: skip
         "min_distance": float(d.min()),
         "max_distance": float(d.max()),
         "gouge_tolerance": five.GougeTolerance.Value,
