@@ -418,3 +418,20 @@ def test_five_axis_paths_are_previewed_right(tmp_path):
     t = r["three"]
     assert t["status"] == "ok" and t["n_tips"] == 0 and t["freecad_shows"] == [0, 0]
     assert r["red_pixels"] > 100  # the links and axes drawn (red: clear by a millimetre and more)
+
+
+@pytest.mark.slow
+def test_cam_operation_defaults_are_clean_with_freecads_stock_tools(tmp_path):
+    """Issue 29 item 2: the raster at the operation's default settings (chordal tolerance 0.005 mm, below the
+    gouge tolerance 0.01 mm) is clean on the block with FreeCAD's stock 5 mm end mill, 6 mm ball end and
+    6 mm bull nose (whose FlatRadius 1.5 mm is a corner radius of 1.5 mm); the stock chamfer and V-bit map
+    to machsurf's cone (tip diameter, half the included angle)."""
+    r = _run([FREECADCMD], tmp_path, "stock_tools_check.py")
+    assert r["defaults"] == {"chordal": 0.005, "gouge": 0.01}
+    tools = {"5mm_Endmill": "flat:D=5", "6mm_Ball_End": "ball:D=6", "6mm_Bullnose": "bull:D=6,r=1.5"}
+    for name, spec in tools.items():
+        s = r["stock"][name]
+        assert s["status"] == "ok" and s["verdict"].startswith("clean") and s["tool"].startswith(spec), (name, s)
+        assert 0 < s["max_gouge"] <= 0.01 and s["cut_points"] > 1000, name
+    assert r["45degree_chamfer"].startswith("cone:D=5,angle=22.5,L=")
+    assert r["60degree_Vbit"].startswith("cone:D=1,angle=30,L=")

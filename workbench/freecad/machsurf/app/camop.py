@@ -68,19 +68,19 @@ def cutter_from_toolbit(tool) -> str:
         if not 0 < r <= D / 2:
             raise InputError(f"bull-nose ToolBit with D = {D:g} mm and FlatRadius = {flat:g} mm has no corner radius")
         return f"bull:D={D:g},r={r:g}{length}"
-    if shape in ("chamfer", "chamfer.fcstd", "v-bit", "v-bit.fcstd", "vbit"):
+    if shape in ("chamfer", "chamfer.fcstd", "v-bit", "v_bit", "v-bit.fcstd", "vbit"):
         return _cone_from_toolbit(tool, shape, D)
     raise InputError(f"ToolBit shape '{shape}' is not supported (use {', '.join(TOOLBIT_SHAPES)})")
 
 
 def _cone_from_toolbit(tool, shape: str, D: float) -> str:
-    """A chamfer mill or V-bit as machsurf's cone: its flat tip (``FlatRadius``, a V-bit's ``TipDiameter``) is
+    """A chamfer mill or V-bit as machsurf's cone: its flat tip (``TipDiameter``, else twice ``FlatRadius``) is
     the cone's D, half its ``CuttingEdgeAngle`` the taper, the cutting edge up to the ToolBit's diameter
     its length. A pointed tip (no flat) is refused: machsurf's cone has a flat tip."""
     if not hasattr(tool, "CuttingEdgeAngle"):
         raise InputError(f"{shape} ToolBit without a CuttingEdgeAngle")
     half = value_of(tool.CuttingEdgeAngle) / 2.0
-    tip = 2 * value_of(tool.FlatRadius) if hasattr(tool, "FlatRadius") else value_of(getattr(tool, "TipDiameter", 0.0))
+    tip = value_of(tool.TipDiameter) if hasattr(tool, "TipDiameter") else 2 * value_of(getattr(tool, "FlatRadius", 0.0))
     if not tip > 0:
         raise InputError(f"{shape} ToolBit with a pointed tip is not supported (machsurf's cone needs a flat tip)")
     if not 0 < half < 89:
