@@ -10,7 +10,8 @@ that disagrees with the controller is refused by name. Patterns:
 - ``raster``, ``waterline``: machsurf's exact 3-axis drop-cutter on the selected faces, avoiding the rest;
 - ``5-axis surface``: the guiding/orientation surfaces of one face (lead, tilt) and the tool path on them,
   its passes linked over a sphere around the whole part (no rapid through it);
-- ``flank``: the flank milling path of a cylindrical cutter (the end mill) along one ruled face.
+- ``flank``: the flank milling path of a cylindrical cutter (the end mill) along one ruled face, lifted
+  clear of the part's other faces and linked clear of them.
 
 Every path is checked against every face of the part (``Verdict``); one that gouges beyond
 ``GougeTolerance`` is not written unless ``AllowGouge`` is set. The moves are ``G0``/``G1`` commands at
@@ -341,9 +342,12 @@ class CamOperationFeature(_Base):
             spec = cutter.spec()
             if not spec.startswith("flat:"):
                 raise InputError(f"flank milling needs a flat end mill (a cylinder), not {spec}")
+            # the part's other faces: each rule's cylinder lifted clear of them, the segments linked clear of them
+            beside = {"check_faces": others, "gouge_tolerance": value_of(obj.GougeTolerance)} if others else {}
             res = self.core(ms.flank, faces[0], "cyl:" + spec[len("flat:"):], setting=str(obj.FlankSetting),
                             whole=True, side=1 if str(obj.ToolSide) == TOOL_SIDES[0] else -1,
-                            tolerance=value_of(obj.ChordalTolerance), clearance=value_of(obj.Clearance))  # fmt: skip
+                            tolerance=value_of(obj.ChordalTolerance), clearance=value_of(obj.Clearance),
+                            **beside)  # fmt: skip
             obj.SurfaceError = 0.0
             return res.toolpath
         a = math.radians(value_of(obj.Angle))  # passes along the raster direction: planes normal to it in xy
