@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import warnings
 from collections import OrderedDict
 from dataclasses import dataclass, replace
@@ -36,7 +37,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .cam.toolpath import Move, ToolPath
-from .chunking import check_chunks, split_map
+from .chunking import check_chunks, split_map, threaded_split_map
 from .errors import InputError
 from .geometry.bspline import BSplineSurface
 from .geometry.face import Face
@@ -523,15 +524,16 @@ def _sample_part(faces: list[Face], h: float, max_samples: int) -> _Samples:
     return _Samples(P, F, SU, SV, dus, dvs)
 
 
-def _coarse_pass(c, tree, P, h, gouge_tolerance, T, A, chunks, map_chunks, progress):
-    """The sampled pass (:func:`_coarse`) over the placements in chunks; per sample the deepest depth."""
+def _coarse_pass(c, tree, P, h, gouge_tolerance, T, A, chunks, map_chunks, progress, threaded_from=4096):
+    """The sampled pass (:func:`_coarse`) over the placements in chunks; per sample the deepest depth. From
+    ``threaded_from`` placements in one chunk it runs in a thread per core: same result, each placement's
+    figures being its own."""
     one = check_chunks(chunks) == 1
-    parts = split_map(
-        functools.partial(_coarse, c, tree, P, h, gouge_tolerance, progress=progress if one else None),
-        [T, A],
-        chunks,
-        map_chunks,
-    )
+    work = functools.partial(_coarse, c, tree, P, h, gouge_tolerance)
+    if one and map_chunks is None and T.shape[0] >= threaded_from and (os.cpu_count() or 1) > 1:
+        parts = threaded_split_map(work, [T, A], progress, "tool placements")
+    else:
+        parts = split_map(functools.partial(work, progress=progress if one else None), [T, A], chunks, map_chunks)
     cut_d, hold_d, seed, d_idx, d_val, hold_seed = (np.concatenate([q[k] for q in parts]) for k in range(6))
     depth = np.zeros(P.shape[0])
     np.maximum.at(depth, d_idx, d_val)

@@ -403,3 +403,30 @@ def test_the_same_check_twice_is_answered_once_and_a_changed_input_is_checked_ag
     assert c.time_s != a.time_s and not np.array_equal(c.cut_distance, a.cut_distance)
     d = ms.verify([dome], tp, gouge_tolerance=0.03)
     assert d.clean and not a.clean
+
+
+def test_the_threaded_sampled_pass_gives_the_single_pass_figures():
+    """From 4096 placements the sampled pass runs in a thread per core: per placement the same distances,
+    seeds and sample depths as in one piece (bit for bit)."""
+    import functools
+
+    from machsurf_cad import gougecheck as g
+    from machsurf_cad.examples import example
+
+    face = ms.Face(example("bezier5", "surface"), name="bezier5")
+    smp = g._sample_part([face], 1.0, 10**7)
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(smp.P)
+    rng = np.random.default_rng(2)
+    lo, hi = smp.P.min(axis=0), smp.P.max(axis=0)
+    T = rng.uniform(lo, hi, (5000, 3)) - [0, 0, 2.0]
+    A = rng.normal([0, 0, 1], 0.2, (5000, 3))
+    A /= np.linalg.norm(A, axis=1, keepdims=True)
+    c = ms.parse_cutter("bull:D=10,r=2")
+    args = (c, tree, smp.P, 1.0, 0.01, T, A, 1, None, None)
+    one = g._coarse_pass(*args, threaded_from=10**9)
+    many = g._coarse_pass(*args)
+    for a, b in zip(one, many):
+        np.testing.assert_array_equal(a, b)
+    assert np.isfinite(one[0]).sum() > 1000 and (one[4] > 0).any()  # placements near the face, some inside it
