@@ -408,7 +408,6 @@ def test_the_same_check_twice_is_answered_once_and_a_changed_input_is_checked_ag
 def test_the_threaded_sampled_pass_gives_the_single_pass_figures():
     """From 4096 placements the sampled pass runs in a thread per core: per placement the same distances,
     seeds and sample depths as in one piece (bit for bit)."""
-    import functools
 
     from machsurf_cad import gougecheck as g
     from machsurf_cad.examples import example
