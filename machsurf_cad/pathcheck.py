@@ -18,7 +18,7 @@ from . import checks
 from .cam.toolpath import Move, ToolPath
 from .checks import positive
 from .errors import InputError
-from .gougecheck import VerifyResult, clear_stretches, verify
+from .gougecheck import CLEAR, VerifyResult, verify
 from .results import Progress, Result
 from .typing import MapChunks, PartLike, ToolLike
 
@@ -241,3 +241,41 @@ def machined_area_fraction(face, planned: ToolPath, kept, *, step: float = 1.0, 
     P, _, wt = _samples(face if isinstance(face, Face) else Face(face), samples)
     _, near = cKDTree(pts).query(P)
     return float(wt[ok[near]].sum() / wt.sum()) if wt.sum() > 0 else float("nan")
+
+
+def clear_stretches(toolpath: ToolPath, result: VerifyResult) -> list[np.ndarray]:
+    """Within each pass, the index runs of consecutive cutting positions whose motion in was clear (at
+    least two)."""
+    cutting = (toolpath.move == Move.CUT) | (toolpath.move == Move.APPROACH)
+    ok = cutting & (result.status == CLEAR)
+    runs: list[np.ndarray] = []
+    for p in np.unique(toolpath.pass_index):
+        idx = np.nonzero(cutting & (toolpath.pass_index == p))[0]
+        good = ok[idx]
+        # split where a position is not clear or the cutting positions are not consecutive
+        breaks = np.nonzero(~good[:-1] | ~good[1:] | (np.diff(idx) != 1))[0]
+        for seg in np.split(np.arange(idx.size), breaks + 1):
+            seg = seg[good[seg]]
+            if seg.size >= 2 and np.all(np.diff(idx[seg]) == 1):
+                runs.append(idx[seg])
+    return runs
+
+
+def clear_runs(toolpath: ToolPath, result: VerifyResult, *, clearance: float = 5.0) -> ToolPath | None:
+    """The tool path cut down to its clear stretches (:func:`clear_stretches`), each relinked as its own
+    pass (approach and retract ``clearance`` mm along the axis, straight rapids between).
+    ``None`` when nothing clear is left. Check the result again: its new linking moves are not checked here
+    (:func:`machsurf_cad.check_toolpath` links the stretches by checked links instead)."""
+    runs = clear_stretches(toolpath, result)
+    if not runs:
+        return None
+    return ToolPath.from_passes(
+        [toolpath.tip[r] for r in runs],
+        [toolpath.axis[r] for r in runs],
+        cc=None if toolpath.cc is None else [toolpath.cc[r] for r in runs],
+        extras=[{k: v[r] for k, v in toolpath.extras.items()} for r in runs] if toolpath.extras else None,
+        clearance=clearance,
+        cutter=toolpath.cutter,
+        name=toolpath.name,
+        info=dict(toolpath.info, trimmed_to_clear_runs=len(runs)),
+    )

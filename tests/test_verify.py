@@ -291,7 +291,7 @@ def test_a_tool_buried_in_the_material_is_a_gouge():
 
 def test_trim_gouges_keeps_the_clear_stretches_and_rechecks_them(tmp_path):
 
-    from machsurf_cad.gougecheck import clear_runs
+    from machsurf_cad.pathcheck import clear_runs
 
     face = ms.Face(ms.example("bezier5"), name="bezier5")
     res = ms.machining_surface(face, "bull:D=28,r=4", axes=5, lead=5, tolerance=1e-3)
