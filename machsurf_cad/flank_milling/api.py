@@ -322,14 +322,6 @@ LEAD_MM = 0.5
 along the tool axis without touching it."""
 
 
-def _away(s: Setting) -> np.ndarray:
-    """From the rule contact towards the axis, across it: the side the tool leaves the face by."""
-    m2 = np.asarray(s.contacts.get("M2", s.frame.p0 + 0.5 * (s.frame.p1 - s.frame.p0)), float)
-    w = s.q - m2
-    w = w - (w @ s.a) * s.a
-    return w / np.linalg.norm(w)
-
-
 def _face_of(surface, surf: RuledSurface):
     """The flank face as a :class:`Face` (the one given, or the ruled surface's B-spline)."""
     from ..geometry.face import Face
@@ -344,18 +336,18 @@ def _linked(path: FlankPath, cutter, part, clearance: float, gouge_tolerance: fl
     (:func:`~machsurf_cad.linking.link_runs`): out along the tool axis, over the clearance surface where a
     direct link would cross the part."""
     from ..linking import link_runs
+    from .path import leave_direction
 
-    cc = np.array([s.contacts.get("M2", [np.nan] * 3) for s in path.settings], float).reshape(-1, 3)
-    away = np.array([_away(s) for s in path.settings])
+    cc = path.contact_points
+    away = np.array([leave_direction(s) for s in path.settings])
     runs = []
     for sl in path.segment_slices():  # each segment entered and left sideways, LEAD_MM off the face
         t, a, c, w = path.tip[sl], path.axis[sl], cc[sl], away[sl]
         runs.append((np.concatenate([t[:1] + LEAD_MM * w[:1], t, t[-1:] + LEAD_MM * w[-1:]]),
                      np.concatenate([a[:1], a, a[-1:]]), np.concatenate([np.full((1, 3), np.nan), c,
                                                                          np.full((1, 3), np.nan)])))  # fmt: skip
-    tp = link_runs(runs, part, cutter, clearance=clearance, gouge_tolerance=gouge_tolerance,
-                   name=f"flank_{path.kind}", info={"setting": path.kind, "n_rules": len(path.settings)})  # fmt: skip
-    return tp
+    return link_runs(runs, part, cutter, clearance=clearance, gouge_tolerance=gouge_tolerance,
+                     name=f"flank_{path.kind}", info={"setting": path.kind, "n_rules": len(path.settings)})  # fmt: skip
 
 
 def _segment_envelopes(path, envelope_tolerance: float):

@@ -18,7 +18,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..errors import InputError
 from ..results import Result
@@ -103,7 +102,7 @@ def clear_flank(
     -------
     ClearedFlank
     """
-    from ..gougecheck import _sample_part
+    from ..gougecheck import _sampled
 
     if not (gouge_tolerance >= 0 and np.isfinite(gouge_tolerance)):
         raise InputError(f"gouge tolerance must be >= 0 mm, got {gouge_tolerance}")
@@ -123,17 +122,17 @@ def clear_flank(
     for i, st in enumerate(path.settings):
         t_end = sorted(float((p - path.tip[i]) @ path.axis[i]) for p in (st.frame.p0, st.frame.p1))
         span[i] = t_end
-        limit[i] = min(t_end[0] + (1 - min_contact) * (t_end[1] - t_end[0]), t_end[1])
+        limit[i] = t_end[0] + (1 - min_contact) * (t_end[1] - t_end[0])
     if faces:
-        P = _sample_part(faces, h, 20_000_000).P
-        body = _Body(P, cKDTree(P), R, float(gouge_tolerance), float(clearance) + h)
+        smp, tree = _sampled(faces, "", h, 20_000_000)
+        body = _Body(smp.P, tree, R, float(gouge_tolerance), float(clearance) + h)
         for i in range(n):
             need, d = body.need(path.tip[i], path.axis[i], span[i, 1], limit[i])
             if need > limit[i]:
                 kept[i], depth[i] = False, d
             else:
                 lift[i] = max(need, 0.0)
-        _clear_moves(path, body, kept, lift, limit, span, depth, h)
+        _clear_moves(path, body, kept, lift, limit, span, h)
     lift[~kept] = np.nan
     frac = np.where(kept, np.clip((span[:, 1] - np.maximum(np.nan_to_num(lift), span[:, 0]))
                                   / np.maximum(span[:, 1] - span[:, 0], 1e-12), 0.0, 1.0), 0.0)  # fmt: skip
@@ -167,7 +166,7 @@ class _Body:
         return need, float((R - rho[blocking]).max()) if blocking.any() else 0.0
 
 
-def _clear_moves(path: FlankPath, body: _Body, kept, lift, limit, span, depth, h: float, rounds: int = 8) -> None:
+def _clear_moves(path: FlankPath, body: _Body, kept, lift, limit, span, h: float, rounds: int = 8) -> None:
     """The motion between neighbouring kept rules (tip and axis interpolated, every ``h`` mm) cleared too:
     where a position between two rules has a sample inside, both rules are lifted by as much (rules lifted
     past their limit are left out, and their neighbours then checked)."""
@@ -188,8 +187,7 @@ def _clear_moves(path: FlankPath, body: _Body, kept, lift, limit, span, depth, h
                 if need > 1e-6:
                     for r in (i, j):
                         lift[r] += need + 1e-6
-                        if lift[r] > limit[r]:
-                            kept[r], depth[r] = False, max(depth[r], 0.0)
+                        kept[r] = lift[r] <= limit[r]
                     changed = True
                     break
         if not changed:

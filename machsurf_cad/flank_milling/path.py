@@ -76,6 +76,11 @@ class FlankPath(Result):
             )  # fmt: skip
         return tuple(out)
 
+    @property
+    def contact_points(self) -> np.ndarray:
+        """Per rule the contact M2 of its setting (mm; NaN where the setting has none)."""
+        return np.array([s.contacts.get("M2", [np.nan] * 3) for s in self.settings], float).reshape(-1, 3)
+
     def toolpath(self, cutter=None, *, clearance: float = 5.0) -> ToolPath:
         """The settings as 5-axis passes of the one :class:`~machsurf_cad.cam.ToolPath` type, one pass per
         continuous segment (retract and approach between them): tips on the axis below the C0 end
@@ -86,20 +91,14 @@ class FlankPath(Result):
         from ..cutters import FlatEndMill
 
         c = cutter if cutter is not None else FlatEndMill(2 * self.R, self.length)
-        cc = np.array([s.contacts.get("M2", [np.nan] * 3) for s in self.settings], float).reshape(-1, 3)
+        cc = self.contact_points
         extras = {
             "u": self.u,
             "gamma_deg": np.array([s.gamma_deg for s in self.settings]),
             "h0_mm": np.array([s.h0 for s in self.settings]),
         }
         slices = self.segment_slices()
-
-        def away(s):  # from the rule contact towards the axis: the side the tool leaves by
-            m2 = np.asarray(s.contacts.get("M2", s.frame.p0 + 0.5 * (s.frame.p1 - s.frame.p0)), float)
-            w = s.q - m2
-            w = w - (w @ s.a) * s.a
-            return w / np.linalg.norm(w)
-
+        away = leave_direction
         return ToolPath.from_passes(
             [self.tip[sl] for sl in slices],
             [self.axis[sl] for sl in slices],
@@ -139,6 +138,15 @@ class FlankPath(Result):
                 [float(self.fallback_u.min()), float(self.fallback_u.max())] if self.fallback_u.size else None
             ),
         }
+
+
+def leave_direction(s: Setting) -> np.ndarray:
+    """From the rule contact (M2, else the rule's middle) towards the axis, across it: the side a flank tool
+    leaves the face by (unit)."""
+    m2 = np.asarray(s.contacts.get("M2", s.frame.p0 + 0.5 * (s.frame.p1 - s.frame.p0)), float)
+    w = s.q - m2
+    w = w - (w @ s.a) * s.a
+    return w / np.linalg.norm(w)
 
 
 @renamed(R="radius", kind="setting")

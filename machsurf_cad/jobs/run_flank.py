@@ -43,31 +43,18 @@ def _write_rule_errors(path, profiles: dict) -> str:
     return path.name
 
 
-def _indices(text: str, n: int) -> list[int]:
-    """``--check-faces 3,7``: face indices, each checked to exist."""
-    from ..errors import InputError
-
-    try:
-        idx = [int(x) for x in str(text).split(",") if x.strip()]
-    except ValueError:
-        raise InputError(f"--check-faces takes rest | none | face indices such as 3,7; got {text!r}") from None
-    bad = [i for i in idx if not 0 <= i < n]
-    if bad:
-        raise InputError(f"--check-faces: the part has faces 0..{n - 1}; no face {bad[0]}")
-    return idx
-
-
 def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
     from ..flank_milling import flank
 
     surf, desc = _ruled_input(spec)
     check = None
-    if spec.part and spec.whole and spec.check_faces != "none":
+    if spec.part and spec.whole:
+        from ..threeaxis.select import select_faces
         from .inputs import part_faces
 
         faces = part_faces(spec.part)
-        chosen = range(len(faces)) if spec.check_faces in ("rest", "all") else _indices(spec.check_faces, len(faces))
-        check = [faces[i] for i in chosen if i != spec.face]
+        text = "all" if str(spec.check_faces).strip().lower() == "rest" else spec.check_faces
+        check = [faces[i] for i in select_faces(faces, text, what="--check-faces") if i != spec.face] or None
     res = flank(
         surf,
         spec.tool,

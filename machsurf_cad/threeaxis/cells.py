@@ -121,13 +121,14 @@ def fine_cells(fs: FaceSet, factor: int = 4) -> FineCells:
         DIST.append(dist + cov)
     own = np.concatenate(OWN)
     order = np.argsort(own, kind="stable")
-    xyz, rise, cov = (np.concatenate(a)[order] for a in (XYZ, RISE, COV))
+    own = own[order]
+    xyz, rise, cov, dist = (np.concatenate(a)[order] for a in (XYZ, RISE, COV, DIST))
     start = np.zeros(n_pool + 1, np.int64)
     np.cumsum(np.bincount(own, minlength=n_pool), out=start[1:])
     radius = np.zeros(n_pool)
-    np.maximum.at(radius, own, np.concatenate(DIST))
+    np.maximum.at(radius, own, dist)
     top = np.full(n_pool, -np.inf)
-    np.maximum.at(top, own, np.concatenate(XYZ)[:, 2] + np.concatenate(RISE))
+    np.maximum.at(top, own, xyz[:, 2] + rise)
     contained = bool(np.all(radius <= fs.cover * (1 + 1e-9)))
     cells = FineCells(start, np.ascontiguousarray(xyz), rise, cov, radius, top, factor, contained)
     cache[factor] = cells

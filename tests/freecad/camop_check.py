@@ -5,30 +5,21 @@ the Job's ToolController, its Path against the CSV machsurf writes for the same 
 import csv
 import json
 import os
+import sys
 import traceback
 import types
 
 out_path = os.environ["MACHSURF_FC_OUT"]
-
-
-def _split(commands):
-    """(machsurf's own moves, the safe moves the operation adds, marked by a comment with their count)."""
-    own, safe, skip = [], [], 0
-    for c in commands:
-        if c.Name.startswith("(machsurf safe moves"):
-            skip = int(c.Name.split()[3].rstrip(":"))
-        elif c.Name in ("G0", "G1"):
-            (safe if skip else own).append(c)
-            skip = max(skip - 1, 0)
-    return own, safe
+sys.path.insert(0, os.path.join(os.environ["MACHSURF_ROOT"], "tests", "freecad"))
+from fcscript import split_moves
 
 
 def path_moves(commands):
-    return _split(commands)[0]
+    return split_moves(commands)[0]
 
 
 def safe_moves(commands):
-    return _split(commands)[1]
+    return split_moves(commands)[1]
 
 
 root = os.environ["MACHSURF_ROOT"]

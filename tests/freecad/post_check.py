@@ -3,14 +3,13 @@ the Job's ToolController), posted through FreeCAD's own linuxcnc and grbl post-p
 file is read back move by move (G0 rapid, G1 cut, modal coordinates) and the moves are checked by
 machsurf's tool-body check against every face of the block. Writes the figures to MACHSURF_FC_OUT."""
 
-import json
+import importlib
 import os
 import re
-import traceback
+import sys
 
-out_path = os.environ["MACHSURF_FC_OUT"]
-root = os.environ["MACHSURF_ROOT"]
-result = {"ok": False}
+sys.path.insert(0, os.path.join(os.environ["MACHSURF_ROOT"], "tests", "freecad"))
+import fcscript
 
 
 def moves(gcode: str):
@@ -33,10 +32,9 @@ def moves(gcode: str):
     return out
 
 
-try:
+def main(result):
     import FreeCAD
     import numpy as np
-    import Part
     from freecad.machsurf import features
     from freecad.machsurf.app.camop import find_job
     from freecad.machsurf.convert import face_to_numpy
@@ -44,13 +42,8 @@ try:
     import machsurf_cad as ms
 
     doc = FreeCAD.newDocument("post")
-    part = doc.addObject("Part::Feature", "Block")
-    part.Shape = Part.read(os.path.join(root, "example_parts", "freeform_block.step"))
-    top = max(
-        (i for i, f in enumerate(part.Shape.Faces) if isinstance(f.Surface, Part.BSplineSurface)),
-        key=lambda i: part.Shape.Faces[i].Area,
-    )
-    src = (part, [f"Face{top + 1}"])
+    part, top = fcscript.block(doc)
+    src = (part, [top])
     op1 = features.make("CamOperation", doc, src, Pattern="raster", StepOver=6.0, Angle=0.0)
     op2 = features.make("CamOperation", doc, src, Pattern="raster", StepOver=6.0, Angle=90.0)
     doc.recompute()
@@ -59,12 +52,11 @@ try:
     faces = [face_to_numpy(f, f"Face{i + 1}") for i, f in enumerate(part.Shape.Faces)]
     cutter = ms.parse_cutter(op1.CutterUsed)
     objects = [job.Tools.Group[0], op1, op2]
+    zmax = max(f.BoundBox.ZMax for f in part.Shape.Faces)
     posted = {}
     for name in ("linuxcnc", "grbl"):
-        import importlib
-
         post = importlib.import_module(f"PathScripts.post.{name}_post")
-        gfile = os.path.join(os.path.dirname(out_path), f"two_ops_{name}.ngc")
+        gfile = fcscript.out_file(f"two_ops_{name}.ngc")
         post.export(objects, gfile, "--no-show-editor")  # grbl writes the file and returns nothing
         with open(gfile) as fh:
             gcode = fh.read()
@@ -74,7 +66,7 @@ try:
         move = np.where(rapid, ms.Move.RAPID, ms.Move.CUT)
         tp = ms.ToolPath(tips, np.tile([0.0, 0.0, 1.0], (len(tips), 1)), move, np.zeros(len(tips), int), cutter=cutter)
         v = ms.verify(faces, tp, cutter, gouge_tolerance=0.01)
-        zmax = max(f.BoundBox.ZMax for f in part.Shape.Faces)
+        rep = v.report()
         # a rapid that moves in x or y runs at a height above the whole part, or is a link the check found clear
         xy = np.hypot(*(np.diff(tips[:, :2], axis=0).T)) > 1e-9
         low_xy_rapids = int(np.count_nonzero(rapid[1:] & xy & (np.minimum(tips[1:, 2], tips[:-1, 2]) < zmax)))
@@ -85,17 +77,13 @@ try:
             "m6": len(re.findall(r"\bM0?6\b", gcode)),
             "clean": bool(v.clean),
             "max_gouge": float(v.max_gouge),
-            "collisions": int(v.report()["n_collisions"]),
-            "gouging_positions": int(v.report()["n_gouging_positions"]),
+            "collisions": int(rep["n_collisions"]),
+            "gouging_positions": int(rep["n_gouging_positions"]),
             "low_xy_rapids": low_xy_rapids,
             "first_move_z_above_part": bool(tips[0, 2] > zmax),
             "last_move_z_above_part": bool(tips[-1, 2] > zmax),
         }
     result["posted"] = posted
-    result["ok"] = True
-except Exception:
-    result["error"] = traceback.format_exc()
-finally:
-    with open(out_path, "w") as fh:
-        json.dump(result, fh, indent=1, default=str)
-    os._exit(0)
+
+
+fcscript.run(main)

@@ -409,7 +409,9 @@ class CamOperationFeature(_Base):
         b, c = rotary_angles(tp.axis) if five else (None, None)
         cmds = [Path.Command(f"({obj.Label}: machsurf {obj.Pattern}, {obj.CutterUsed})")]
         if self.tool_controller(obj) is None:  # no controller posts the change: this operation does
-            opts = self.post_options(obj, _core())
+            import machsurf_cad
+
+            opts = self.post_options(obj, machsurf_cad)
             cmds += [Path.Command(f"(machsurf tool change: no ToolController, T{opts.tool_number} = {obj.CutterUsed})"),
                      Path.Command("M6", {"T": opts.tool_number}), Path.Command("M3", {"S": opts.spindle})]  # fmt: skip
         if five:
@@ -451,12 +453,6 @@ class CamOperationFeature(_Base):
                 except (TypeError, ValueError):
                     pass
         return top + offset
-
-
-def _core():
-    import machsurf_cad
-
-    return machsurf_cad
 
 
 def rotary_angles(axis):

@@ -212,16 +212,16 @@ class _Base:
 
             obj.Path = Path.Path()
         for name in obj.PropertiesList:
-            if obj.getGroupOfProperty(name) != "Result" or name == "Status":
+            group = obj.getGroupOfProperty(name)
+            if group == "Preview":  # a 5-axis path's preview (lists)
+                setattr(obj, name, [])
+            if group != "Result" or name == "Status":
                 continue
             kind = obj.getTypeIdOfProperty(name)
             if kind == "App::PropertyString":
                 setattr(obj, name, "")
             elif kind in ("App::PropertyFloat", LENGTH, DISTANCE, ANGLE):
                 setattr(obj, name, 0.0)
-        for name in ("PreviewTips", "PreviewAxes", "PreviewDistance"):  # a 5-axis path's preview
-            if name in obj.PropertiesList:
-                setattr(obj, name, [])
         if hasattr(self, "map"):
             del self.map
         maps.clear_map(obj)

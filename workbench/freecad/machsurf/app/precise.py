@@ -23,9 +23,7 @@ def set_precise(obj, name: str, text: str, before: float):
     except Exception:
         q = None
     why = None
-    if q is None:
-        why = f"{name}: {text!r} is not a length (e.g. 0.5 um, 0.0005 mm)"
-    elif q.Unit != FreeCAD.Units.Unit() and q.Unit != FreeCAD.Units.Length:
+    if q is None or q.Unit not in (FreeCAD.Units.Unit(), FreeCAD.Units.Length):
         why = f"{name}: {text!r} is not a length (e.g. 0.5 um, 0.0005 mm)"
     elif obj.getTypeIdOfProperty(name) == "App::PropertyLength" and q.Value < 0:
         why = f"{name} must be >= 0 mm, got {text!r}: not stored, kept {before:g} mm"
