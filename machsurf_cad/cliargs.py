@@ -273,7 +273,10 @@ def _whole_part_group(m) -> None:
         "--faces", default=None, help="faces to machine: all | top (seen along the axis) | 0,3,5 (instead of --face)"
     )
     t.add_argument(
-        "--check-faces", default="rest", help="faces the tool must not cut into: rest (default) | all | none | 1,2"
+        "--check-faces",
+        default="rest",
+        help="faces the tool must not cut into: rest (default; with --face: the faces of the solid it bounds) | all "
+        "(every solid of the file) | none | 1,2 (with --faces)",
     )
     t.add_argument("--pattern", choices=["raster", "waterline"], default="raster", help="tool-path pattern")
     t.add_argument("--angle", type=_finite, default=0.0, help="raster direction in the plane, degrees (default 0)")
@@ -355,7 +358,7 @@ def _flank_parser(sub) -> None:
         "--check-faces",
         default="rest",
         help="--whole on a STEP part: faces the cylinder is lifted clear of (rules it cannot clear are left out): "
-        "rest (default) | none | 1,2",
+        "rest (default: the solid the face bounds) | all | none | 1,2",
     )
     f.add_argument("--no-render", dest="render", action="store_false", help="numbers and files, no pictures")
     _gouge(f, "--tolerance")

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import machsurf_cad as ms
+from conftest import needs_kernel
 from machsurf_cad import BallEndMill, builders
 from machsurf_cad.cam.toolpath import Move, ToolPath
 
@@ -142,3 +143,42 @@ def test_bad_input():
                                  cutter=BallEndMill(6)), part)  # fmt: skip
     with pytest.raises(ms.InputError):
         ms.trim_to_reach(tp, part, tool="ball:D=6", clearance=-1)
+
+
+@needs_kernel
+def test_a_face_of_an_assembly_is_machined_in_its_own_body(tmp_path):
+    """A STEP of two solids: a plate and a lid 1 mm over it (another part of the assembly, like the pump's
+    face 731 and the shaft's body). The plate's top face is machined checked against its own solid by
+    default - every position kept, clean by the brute force - and against the lid too with --check-faces all,
+    where the lid leaves the ball no room: nothing is written."""
+    import json
+
+    import cadquery as cq
+    from helpers import run
+
+    from machsurf_cad.occ import read_step_faces
+
+    plate = cq.Workplane().box(40, 40, 5, centered=(True, True, False)).val()
+    lid = cq.Workplane().workplane(offset=6).box(40, 40, 2, centered=(True, True, False)).val()
+    step = tmp_path / "assembly.step"
+    cq.exporters.export(cq.Compound.makeCompound([plate, lid]), str(step))
+    faces = read_step_faces(step)
+    assert [f.body for f in faces] == [0] * 6 + [1] * 6
+    top = next(
+        f.index for f in faces if f.body == 0 and np.allclose(np.ptp(f.surface.poles[..., 2]), 0)
+        and abs(f.surface.poles[0, 0, 2] - 5) < 1e-9
+    )  # fmt: skip
+    args = ["machining-surface", step, "--face", top, "--axes", "3", "--tool", "ball:D=6", "--toolpath"]
+    r = run(*args, "--stepover", 4, "-o", tmp_path / "own")
+    assert r.returncode == 0, r.stderr
+    assert "the 6 faces of body 0" in r.stdout
+    rep = json.loads((tmp_path / "own" / "report.json").read_text())
+    assert rep["verify"]["clean"] and rep["toolpath"]["reach_positions_trimmed"] == 0
+    tp = ms.read_csv(tmp_path / "own" / "toolpath.csv")
+    cut = tp.tip[tp.move == ms.Move.CUT]
+    assert np.allclose(cut[:, 2], 5.0, atol=1e-6) and np.abs(cut[:, :2]).max() <= 20 + 1e-6
+    assert _brute_force(tp, [f.surface for f in faces if f.body == 0]).min() > -0.01
+    r = run(*args, "--stepover", 4, "--check-faces", "all", "-o", tmp_path / "all")
+    assert r.returncode == 1 and "reaches none" in r.stderr, r.stderr
+    r = run(*args, "--check-faces", "0,1", "-o", tmp_path / "bad")
+    assert r.returncode == 1 and "rest (the solid it bounds) or all" in r.stderr

@@ -37,6 +37,9 @@ class Face:
         Parameter box ``(u0, u1, v0, v1)`` of the trimmed face.
     area : float
         Face area in mm^2 (as computed by the kernel), NaN if unknown.
+    body : int
+        The solid the face bounds in its source file (0-based, in file order), -1 if none or unknown. A STEP
+        assembly holds several: the part a face is machined in is its body.
     """
 
     surface: BSplineSurface
@@ -47,6 +50,7 @@ class Face:
     source_type: str = "BSplineSurface"
     uv_bounds: tuple = field(default=())
     area: float = float("nan")
+    body: int = -1
 
     def __post_init__(self):
         from .bspline import BSplineSurface as _Surface

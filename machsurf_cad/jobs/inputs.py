@@ -43,6 +43,13 @@ def part_faces(part: str, faces: str = "all"):
     return read_step_faces(part, idx)
 
 
+def body_faces(faces, index: int):
+    """The faces of the body (solid) that face ``index`` bounds: a STEP assembly's other bodies are other parts.
+    All of them when the face bounds no solid or the file holds one."""
+    body = next((f.body for f in faces if f.index == index), -1)
+    return [f for f in faces if f.body == body] if body >= 0 else list(faces)
+
+
 def read_toolpath_file(path: Path):
     """A tool path from our CSV or an APT CLDATA file, by its suffix."""
     from ..cam import read_apt, read_csv
@@ -74,4 +81,4 @@ def toolpath_and_cutter(toolpath: str, tool: str | None, say: Say):
     return path, tp, cutter
 
 
-__all__ = ["part_faces", "read_toolpath_file", "toolpath_and_cutter", "shank"]
+__all__ = ["body_faces", "part_faces", "read_toolpath_file", "toolpath_and_cutter", "shank"]

@@ -50,11 +50,14 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
     check = None
     if spec.part and spec.whole:
         from ..threeaxis.select import select_faces
-        from .inputs import part_faces
+        from .inputs import body_faces, part_faces
 
         faces = part_faces(spec.part)
-        text = "all" if str(spec.check_faces).strip().lower() == "rest" else spec.check_faces
-        check = [faces[i] for i in select_faces(faces, text, what="--check-faces") if i != spec.face] or None
+        if str(spec.check_faces).strip().lower() == "rest":  # the solid the face bounds (a file may hold several)
+            check = [f for f in body_faces(faces, spec.face) if f.index != spec.face] or None
+        else:
+            check = [faces[i] for i in select_faces(faces, spec.check_faces, what="--check-faces") if i != spec.face]
+            check = check or None
     res = flank(
         surf,
         spec.tool,

@@ -16,8 +16,10 @@ def run_info(spec: InfoJob, out, say: Say, progress=None) -> JobOutcome:
     t0 = time.perf_counter()
     summaries = step_face_summaries(spec.part)  # no NURBS conversion: a 250-face part in about a second
     rows = []
-    say(f"{spec.part}: {len(summaries)} face(s)")
-    say(f"{'idx':>3}  {'name':<16} {'type':<18} {'deg':>5} {'poles':>9} {'trim':>4} {'area mm2':>11}  uv bounds")
+    n_bodies = len({r["body"] for r in summaries if r["body"] >= 0})
+    say(f"{spec.part}: {len(summaries)} face(s)" + (f" in {n_bodies} bodies (solids)" if n_bodies > 1 else ""))
+    btxt = f"{'body':>4} " if n_bodies > 1 else ""
+    say(f"{'idx':>3}  {btxt}{'name':<16} {'type':<18} {'deg':>5} {'poles':>9} {'trim':>4} {'area mm2':>11}  uv bounds")
     for r in summaries:
         deg, poles = r["degrees"], r["poles"]
         b = r["uv_bounds"]
@@ -36,18 +38,20 @@ def run_info(spec: InfoJob, out, say: Say, progress=None) -> JobOutcome:
                 "uv_bounds": b,
                 "area_mm2": r["area_mm2"],
                 "reversed": r["reversed"],
+                "body": r["body"],
             }
         )
         dtxt = f"{deg[0]:>2},{deg[1]:<2}" if deg else f"{'-':>5}"
         ptxt = f"{poles[0]:>4}x{poles[1]:<4}" if poles else f"{'-':>9}"
         say(
-            f"{r['index']:>3}  {r['name'][:16]:<16} {r['source_type'][:18]:<18} {dtxt} {ptxt} "
+            f"{r['index']:>3}  " + (f"{r['body']:>4} " if n_bodies > 1 else "") + f"{r['name'][:16]:<16} {r['source_type'][:18]:<18} {dtxt} {ptxt} "
             f"{'yes' if r['trimmed'] else 'no':>4} {r['area_mm2']:>11.2f}  "
             f"[{b[0]:.4g}, {b[1]:.4g}] x [{b[2]:.4g}, {b[3]:.4g}]"
         )
     report = {
         "part": str(spec.part),
         "n_faces": len(summaries),
+        "n_bodies": n_bodies,
         "faces": rows,
         "time_s": {"total_s": time.perf_counter() - t0},
     }

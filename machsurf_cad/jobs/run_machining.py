@@ -28,11 +28,18 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
     faces_of_part: list = []
 
     def part():
-        """Every face of the part the face came from (an example is its own part), read once."""
+        """Every face of the part the face came from, read once: its body (solid) in a file of several unless
+        ``--check-faces all``; an example is its own part."""
         if not faces_of_part:
-            from .inputs import part_faces
+            from .inputs import body_faces, part_faces
 
-            faces_of_part.extend(part_faces(spec.part) if spec.part else [face])
+            every = part_faces(spec.part) if spec.part else [face]
+            faces_of_part.extend(every if spec.check_faces == "all" else body_faces(every, face.index))
+            if len(faces_of_part) < len(every):
+                say(
+                    f"part: the {len(faces_of_part)} faces of body {face.body} (the solid face {face.index} bounds) "
+                    f"of the file's {len(every)}; --check-faces all checks every body"
+                )
         return faces_of_part
 
     if spec.toolpath:

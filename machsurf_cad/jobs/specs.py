@@ -230,12 +230,17 @@ class MachiningSurfaceJob(_Post, JobSpec):
                     ("--pattern", self.pattern, "raster"), ("--angle", self.angle, 0.0),
                     ("--direction", self.direction, "zigzag"), ("--stepdown", self.stepdown, None),
                     ("--grid-step", self.grid_step, None), ("--cl-surface", self.cl_surface, False),
-                    ("--check-faces", self.check_faces, "rest"), ("--shank", self.shank, None),
+                    ("--shank", self.shank, None),
                     ("--holder", self.holder, None),
                 ) if value != default
             ]  # fmt: skip
             if given:
                 raise InputError(f"{given[0]} applies to the whole-part 3-axis engine: add --faces (e.g. --faces top)")
+            if self.check_faces not in ("rest", "all"):
+                raise InputError(
+                    "--check-faces of one face is rest (the solid it bounds) or all (every solid of the file); "
+                    f"face lists need --faces, got {self.check_faces!r}"
+                )
 
     @property
     def stepover_or_default(self) -> float:

@@ -17,9 +17,10 @@ from OCP.Interface import Interface_Static
 from OCP.STEPConstruct import STEPConstruct
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader, STEPControl_Writer
 from OCP.TCollection import TCollection_HAsciiString
-from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED, TopAbs_SHELL, TopAbs_WIRE
-from OCP.TopExp import TopExp_Explorer
+from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED, TopAbs_SHELL, TopAbs_SOLID, TopAbs_WIRE
+from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS, TopoDS_Compound
+from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from ..errors import InputError
 from ..geometry.face import Face
@@ -70,7 +71,7 @@ def iter_faces(shape):
         exp.Next()
 
 
-def face_record(face, index: int, name: str) -> Face:
+def face_record(face, index: int, name: str, body: int = -1) -> Face:
     """Convert one ``TopoDS_Face`` to a numpy :class:`Face` (NURBS-converted, trimming kept)."""
     surf = BRep_Tool.Surface_s(face)
     source_type = _SURFACE_TYPES.get(int(GeomAdaptor_Surface(surf).GetType()), "OtherSurface")
@@ -110,6 +111,7 @@ def face_record(face, index: int, name: str) -> Face:
         source_type,
         (u0, u1, v0, v1),
         float(props.Mass()),
+        body,
     )
 
 
@@ -133,17 +135,30 @@ def _iter(shape, kind):
         exp.Next()
 
 
+def _bodies(shape) -> list:
+    """The face maps of the shape's solids, in file order."""
+    maps = []
+    for solid in _iter(shape, TopAbs_SOLID):
+        m = TopTools_IndexedMapOfShape()
+        TopExp.MapShapes_s(solid, TopAbs_FACE, m)
+        maps.append(m)
+    return maps
+
+
 def _named_faces(path):
-    """``[(TopoDS_Face, name)]`` of a STEP file, in file order (names from the faces' entities)."""
+    """``[(TopoDS_Face, name, body)]`` of a STEP file, in file order (names from the faces' entities; body:
+    the index of the solid the face bounds, -1 if none)."""
     shape, reader = read_step_shape(path)
     tr = reader.WS().TransferReader()
+    bodies = _bodies(shape)
     out = []
     for i, f in enumerate(iter_faces(shape)):
         ent = tr.EntityFromShapeResult(f, -1)
         name = ""
         if ent is not None and hasattr(ent, "Name") and ent.Name() is not None:
             name = ent.Name().ToCString()
-        out.append((f, name or f"face_{i}"))
+        body = next((k for k, m in enumerate(bodies) if m.Contains(f)), -1)
+        out.append((f, name or f"face_{i}", body))
     if not out:
         raise InputError(f"STEP file {path} holds no faces")
     return out
@@ -169,13 +184,13 @@ def read_step_faces(path, indices=None) -> list[Face]:
     out = []
     for i in indices:
         if not 0 <= int(i) < len(named):
-            names = ", ".join(f"{k} {n}" for k, (_, n) in enumerate(named[:8])) + (", ..." if len(named) > 8 else "")
+            names = ", ".join(f"{k} {n}" for k, (_, n, _) in enumerate(named[:8])) + (", ..." if len(named) > 8 else "")
             raise InputError(
                 f"face index {i} out of range: {path} has {len(named)} face(s) (0..{len(named) - 1}: {names}); "
                 "`machsurf info` lists them"
             )
-        f, name = named[int(i)]
-        out.append(face_record(f, int(i), name))
+        f, name, body = named[int(i)]
+        out.append(face_record(f, int(i), name, body))
     return out
 
 
@@ -190,7 +205,7 @@ def step_face_summaries(path) -> list[dict]:
     from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface
 
     rows = []
-    for i, (f, name) in enumerate(_named_faces(path)):
+    for i, (f, name, body) in enumerate(_named_faces(path)):
         surf = BRep_Tool.Surface_s(f)
         kind = _SURFACE_TYPES.get(int(GeomAdaptor_Surface(surf).GetType()), "OtherSurface")
         deg = poles = None
@@ -218,6 +233,7 @@ def step_face_summaries(path) -> list[dict]:
                 "uv_bounds": [u0, u1, v0, v1],
                 "area_mm2": float(props.Mass()),
                 "reversed": f.Orientation() == TopAbs_REVERSED,
+                "body": body,
             }
         )
     return rows
