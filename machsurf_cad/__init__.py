@@ -85,7 +85,7 @@ if TYPE_CHECKING:  # the names below, imported on first use by __getattr__ (``im
         PlanesFeed,
         machining_surface,
     )
-    from .machining.toolpath import part_plane, part_sphere, tool_paths
+    from .machining.toolpath import part_cylinder, part_plane, part_sphere, tool_paths
     from .measure import DeviationResult, deviation, project_points
     from .pathcheck import PathCheck, check_toolpath
     from .results import Progress
@@ -170,6 +170,7 @@ __all__ = [
     "tool_paths",
     "part_sphere",
     "part_plane",
+    "part_cylinder",
     "reff",
     "reff_maps",
     "effective_radius",

@@ -59,8 +59,9 @@ def spec_of_args(args):
     """The job spec of the parsed arguments (options and spec fields share their names)."""
     cls = SPECS[args.command]
     kw = {f.name: getattr(args, f.name) for f in fields(cls) if hasattr(args, f.name)}
-    if "axis" in kw:
-        kw["axis"] = _axis(kw["axis"])
+    for name in ("axis", "clearance_axis"):
+        if name in kw:
+            kw[name] = _axis(kw[name])
     return cls(**kw)
 
 
@@ -223,6 +224,11 @@ def _machining_surface_parser(sub) -> None:
                    help="5 axes, tilt away: largest tilt either side the axis may take to clear the part, degrees; "
                    "what no orientation clears is cut out of the path")  # fmt: skip
     m.add_argument("--axis", default=None, help="fixed axis x,y,z for 3 axes / 3+2 (default 0,0,1)")
+    m.add_argument("--clearance-surface", choices=["auto", "plane", "sphere", "cylinder"], default="auto",
+                   help="--toolpath: what links between passes travel on (default auto: a plane above the part for "
+                   "a fixed axis, else a cylinder about a long part, else a sphere)")  # fmt: skip
+    m.add_argument("--clearance-axis", default=None,
+                   help="--clearance-surface cylinder: its axis x,y,z (default the part's longest side)")  # fmt: skip
     m.add_argument("--tip", action="store_true", help="3 axes: S1 at the tool tip instead of the torus plane")
     m.add_argument("--tolerance", type=_finite, default=1e-3, help="fit tolerance, max-norm mm (default 0.001)")
     m.add_argument("--degree", type=int, default=3, help="fit degree in u and v (default 3)")

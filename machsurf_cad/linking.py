@@ -7,7 +7,8 @@ clear (all candidates of all gaps are checked in one :func:`~machsurf_cad.verify
    along its axis, approach - the short link that stays down on the part; then the same with a 1 mm lift
    (in a channel a full retract would leave);
 2. **over the clearance surface**: out along the axis to the plane above the part (a fixed axis) or to the
-   sphere around it (the axis turning), over it, and back in along the next run's axis.
+   sphere or cylinder around it (the axis turning; :mod:`machsurf_cad.cam.clearance`), over it, and back in
+   along the next run's axis.
 
 A run that no clear link enters at its start is tried reversed, entered at its end (the same moves
 backwards; reported in ``runs_reversed``); a run still left out is visited later, between two runs whose
@@ -22,20 +23,51 @@ from __future__ import annotations
 
 import numpy as np
 
-from .cam.toolpath import Move, ToolPath, _exit_point, _over_sphere
+from .cam.clearance import exit_cylinder, exit_sphere, on_cylinder, over_cylinder, over_sphere
+from .cam.toolpath import Move, ToolPath
 from .errors import InputError
 from .gougecheck import CLEAR, verify
 
 
-def clearance_surface(faces, axes: np.ndarray, clearance: float):
-    """``("plane", (height, axis))`` above the part along a fixed axis (:func:`~machsurf_cad.part_plane`),
-    else ``("sphere", (centre, radius))`` around it (:func:`~machsurf_cad.part_sphere`)."""
-    from .machining.toolpath import part_plane, part_sphere
+def surface_for(faces, fixed_axis, clearance: float, kind: str = "auto", axis=None):
+    """What links travel on: ``("plane", (height, axis))`` above the part along a fixed axis
+    (:func:`~machsurf_cad.part_plane`), ``("sphere", (centre, radius))`` around it
+    (:func:`~machsurf_cad.part_sphere`) or ``("cylinder", (point, axis, radius, half_length))``
+    (:func:`~machsurf_cad.part_cylinder`, about ``axis``). ``fixed_axis`` is the tool axis of a 3-axis or
+    3+2 path, None when it turns. ``auto``: the plane for a fixed axis, else a cylinder when ``axis`` is
+    given or the part is at least twice as long as it is wide (a blade, a shaft), else the sphere."""
+    from .machining.toolpath import part_cylinder, part_plane, part_sphere
 
-    a = axes[0]
-    if np.abs(axes - a).max() <= 1e-9:
+    if kind not in ("auto", "plane", "sphere", "cylinder"):
+        raise InputError(f"a clearance surface is auto, plane, sphere or cylinder, got {kind!r}")
+    if kind == "plane" and fixed_axis is None:
+        raise InputError("a clearance plane needs a fixed tool axis (3 axes, 3+2): use sphere or cylinder")
+    if kind == "auto":
+        kind = "plane" if fixed_axis is not None else "cylinder" if axis is not None or _elongated(faces) else "sphere"
+    if kind == "plane":
+        a = np.asarray(fixed_axis, float) / np.linalg.norm(fixed_axis)
         return "plane", (part_plane(faces, a, clearance), a)
+    if kind == "cylinder":
+        return "cylinder", part_cylinder(faces, axis, clearance)
     return "sphere", part_sphere(faces, clearance)
+
+
+def _elongated(faces, ratio: float = 2.0) -> bool:
+    """Whether the poles' bounding box is at least ``ratio`` times longer than it is wide."""
+    from .geometry.face import Face
+
+    pts = np.concatenate([np.asarray((f.surface if isinstance(f, Face) else f).poles, float).reshape(-1, 3)
+                          for f in faces])  # fmt: skip
+    e = np.sort(np.ptp(pts, axis=0))
+    return bool(e[2] >= ratio * e[1])
+
+
+def _exits(q, a, surface) -> np.ndarray:
+    """The way out from ``q`` along ``a`` to a sphere or cylinder: (k, 3), ending on it."""
+    kind, geo = surface
+    if kind == "cylinder":
+        return exit_cylinder(q, a, geo)
+    return exit_sphere(q, a, np.asarray(geo[0], float), geo[1])[None, :]
 
 
 def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndarray, np.ndarray, list, str]]:
@@ -56,14 +88,15 @@ def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndar
         pts = [q for q in (up0, up1) if q is not None]
         lifted = [q + max(geo[0] - float(q @ a), 0.0) * a for q in pts]
         tips = np.array([pts[0], lifted[0], *lifted[1:], *pts[1:]] if up0 is not None else [lifted[0], pts[0]])
+        axes = np.tile(a, (len(tips), 1))
+    elif up0 is None or up1 is None:  # the path's start or end: along the axis to the surface
+        q, a = (up1, a1) if up0 is None else (up0, a0)
+        ex = _exits(q, a, surface)
+        tips = np.vstack([ex[::-1], q]) if up0 is None else np.vstack([q, ex])
+        axes = np.tile(a, (len(tips), 1))
     else:
-        if up0 is None or up1 is None:  # the path's start or end: along the axis to the sphere
-            q = up1 if up0 is None else up0
-            out_ = _exit_point(q, a1 if up0 is None else a0, np.asarray(geo[0], float), geo[1])
-            tips = np.array([out_, q]) if up0 is None else np.array([q, out_])
-        else:
-            tips, _ = _over_sphere(up0, a0, up1, a1, geo)
-    axes = _link_axes(tips, a0, a1, kind, geo)
+        over = over_cylinder if kind == "cylinder" else over_sphere
+        tips, axes = over(up0, a0, up1, a1, geo)
     if p0 is not None:  # leave along the axis at the plunge feed, then rapid
         moves = [Move.RETRACT] + [Move.RAPID] * (len(tips) - 1)
     else:
@@ -74,39 +107,29 @@ def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndar
     return out
 
 
-def _link_axes(tips, a0, a1, kind, geo):
-    """Axes along a link over the clearance surface: the fixed axis in a plane, radial over a sphere (the
-    ends keep their pass's axis)."""
-    if kind == "plane":
-        return np.tile(a0 if a0 is not None else a1, (len(tips), 1))
-    r = tips - geo[0]
-    axes = r / np.linalg.norm(r, axis=1, keepdims=True)
-    if a0 is not None:
-        axes[0] = a0
-    if a1 is not None:
-        axes[-1] = a1
-    return axes
-
-
 def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: float = 0.01,
-              link_clearance: float = 0.01, name: str = "toolpath", info=None) -> ToolPath:  # fmt: skip
+              link_clearance: float = 0.01, name: str = "toolpath", info=None, clearance_surface: str = "auto",
+              clearance_axis=None) -> ToolPath:  # fmt: skip
     """Join ``runs`` (each ``(tips, axes)`` of consecutive cutting positions, optionally with their contact
     points and their indices in the planned path as third and fourth items) by links the tool-body check
-    finds clear (module docstring).
+    finds clear (module docstring). ``clearance_surface`` (``auto``, ``plane``, ``sphere`` or ``cylinder``,
+    about ``clearance_axis``) is what links travel on (:func:`surface_for`).
 
     Returns
     -------
     ToolPath
         ``extras["planned_index"]`` (given the indices; -1 on links); ``info`` adds ``links_direct``,
         ``links_over_surface``, ``runs_left_out``, ``gaps_not_linked`` (where: the two ends, mm) and
-        ``clearance_surface`` (``plane`` or ``sphere``).
+        ``clearance_surface`` (``plane``, ``sphere`` or ``cylinder``).
     """
     runs = [r for r in runs if len(r[0]) >= 1]
     if not runs:
         raise InputError("no run of cutting positions to link")
     faces = list(part)
     n = len(runs)
-    surface = clearance_surface(faces, np.concatenate([np.asarray(r[1]) for r in runs]), clearance)
+    axes = np.concatenate([np.asarray(r[1]) for r in runs])
+    fixed = axes[0] if np.abs(axes - axes[0]).max() <= 1e-9 else None
+    surface = surface_for(faces, fixed, clearance, clearance_surface, clearance_axis)
     ends = [(np.asarray(t[0], float), np.asarray(a[0], float), np.asarray(t[-1], float), np.asarray(a[-1], float))
             for t, a, *_ in runs]  # fmt: skip
 
@@ -225,6 +248,8 @@ def _on_surface(tips: np.ndarray, surface) -> np.ndarray:
     kind, geo = surface
     if kind == "plane":
         return tips @ geo[1] >= geo[0] - 1e-9
+    if kind == "cylinder":
+        return on_cylinder(tips, geo)
     return np.linalg.norm(tips - geo[0], axis=1) >= geo[1] - 1e-9
 
 
@@ -311,4 +336,4 @@ def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_lin
                     {"planned_index": np.concatenate(X)} if has_idx else {}, info)  # fmt: skip
 
 
-__all__ = ["clearance_surface", "link_runs"]
+__all__ = ["link_runs", "surface_for"]

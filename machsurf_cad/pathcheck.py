@@ -9,6 +9,7 @@ verdict says which of these happened.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -115,7 +116,7 @@ def densified(toolpath: ToolPath, step: float) -> ToolPath:
                     np.asarray(toolpath.feed)[src], toolpath.cutter, toolpath.name, extras, toolpath.info)  # fmt: skip
 
 
-def _relinked(toolpath, res, part, tool, gouge_tolerance, clearance, clear) -> ToolPath | None:
+def _relinked(toolpath, res, part, tool, gouge_tolerance, clearance, clear, surface=("auto", None)) -> ToolPath | None:
     """The clear stretches of ``toolpath`` joined by links checked clear (:func:`~machsurf_cad.linking.link_runs`)."""
     from .gougecheck import _faces
     from .linking import link_runs
@@ -134,6 +135,8 @@ def _relinked(toolpath, res, part, tool, gouge_tolerance, clearance, clear) -> T
             link_clearance=clear,
             name=toolpath.name,
             info=dict(toolpath.info, trimmed_to_clear_runs=len(runs)),
+            clearance_surface=surface[0],
+            clearance_axis=surface[1],
         )
     except InputError:  # no run can be reached and left
         return None
@@ -153,6 +156,8 @@ def check_toolpath(
     chunks: int = 1,
     map_chunks: MapChunks = None,
     progress: Progress | None = None,
+    clearance_surface: str = "auto",
+    clearance_axis: Sequence[float] | None = None,
 ) -> PathCheck:
     """Verify ``toolpath`` against every face of ``part`` and decide what may be written.
 
@@ -166,11 +171,14 @@ def check_toolpath(
         Deepest the cutting part may go into the part, mm.
     on_gouge : {"refuse", "trim", "allow"}
         A gouging path is refused (``toolpath`` None), cut to its clear stretches joined by links the
-        tool-body check finds clear (:mod:`machsurf_cad.linking`: direct where clear, else over a plane or
-        sphere around the part; a stretch no clear link reaches is left out) and checked again, or kept
+        tool-body check finds clear (:mod:`machsurf_cad.linking`: direct where clear, else over a plane,
+        sphere or cylinder around the part; a stretch no clear link reaches is left out) and checked again, or kept
         with its gouges listed.
     clearance : float
         Approach and retract of the relinked stretches, mm.
+    clearance_surface : {"auto", "plane", "sphere", "cylinder"}
+        What the relinked stretches' links travel on (:func:`machsurf_cad.linking.surface_for`); a cylinder
+        about ``clearance_axis`` (x, y, z; default the part's longest side).
     tool, step, angle_step, spacing, chunks, map_chunks, progress
         As :func:`machsurf_cad.verify`.
 
@@ -205,7 +213,8 @@ def check_toolpath(
         res_d = (
             res if dense is toolpath else verify(part, dense, tool, gouge_tolerance=gouge_tolerance, clearance=clear)
         )
-        cut = _relinked(dense, res_d, part, tool, gouge_tolerance, clearance, clear)
+        cut = _relinked(dense, res_d, part, tool, gouge_tolerance, clearance, clear,
+                        (clearance_surface, clearance_axis))  # fmt: skip
         if cut is not None:
             again = verify(part, cut, tool, gouge_tolerance=gouge_tolerance, clearance=clear)
             if again.clean:

@@ -405,3 +405,26 @@ def test_lead_auto_reports_its_range_and_the_global_check_still_decides(tmp_path
         "machining-surface", "--example", "bezier5", "--tool", "bull:D=28,r=4", "--lead", "soon", "-o", tmp_path / "c"
     )
     assert r.returncode == 1 and "lead must be degrees or auto" in r.stderr
+
+
+def test_links_over_a_chosen_clearance_cylinder(tmp_path):
+    """--clearance-surface cylinder --clearance-axis: the report names the cylinder (radius = the poles'
+    farthest distance from the axis + clearance), the path is clean; options that cannot hold are one line."""
+    base = ["machining-surface", "--example", "hypar", "--tool", "ball:D=10", "--axes", "5", "--toolpath"]
+    out = tmp_path / "cyl"
+    r = run(*base, "--stepover", 10, "--clearance-surface", "cylinder", "--clearance-axis", "0,0,1", "-o", out)
+    assert r.returncode == 0, r.stderr
+    rep = json.loads((out / "report.json").read_text())
+    cs, poles = rep["clearance_surface"], np.asarray(ms.example("hypar").poles).reshape(-1, 3)
+    c = 0.5 * (poles.min(axis=0) + poles.max(axis=0))
+    assert cs["kind"] == "cylinder" and cs["axis"] == [0.0, 0.0, 1.0]
+    assert cs["radius_mm"] == pytest.approx(np.hypot(*(poles[:, :2] - c[:2]).T).max() + 5.0, abs=1e-9)
+    assert rep["verify"]["clean"] and rep["toolpath"]["link_length_mm"] > 0
+    for extra, msg in (
+        (["--clearance-surface", "plane"], "needs a fixed tool axis"),
+        (["--clearance-surface", "sphere", "--clearance-axis", "0,0,1"], "axis of a clearance cylinder"),
+        (["--clearance-surface", "cylinder", "--clearance-axis", "0,0,0"], "non-zero x,y,z"),
+    ):
+        r = run(*base, *extra, "-o", tmp_path / "bad")
+        assert r.returncode == 1 and msg in r.stderr and r.stderr.count("\n") == 1, r.stderr
+        assert not (tmp_path / "bad").exists()

@@ -147,3 +147,74 @@ def test_a_run_reached_only_from_another_is_visited_later():
     order = [int(x) for x in dict.fromkeys(tp.tip[cut][:, 0].tolist())]
     assert order == [10, -10, 30]
     assert _through_bridge(tp, xs=(-20.0, 0.0)) == 0.0
+
+
+def _capsule_clearance(tp, pts, R, step=0.25):
+    """Least distance (mm) of ``pts`` to a ball-ended tool of radius ``R`` with an endless shank over every
+    rapid move of ``tp``, tip and axis interpolated every ``step`` mm or 1 deg (closed form)."""
+    worst = np.inf
+    for i in np.flatnonzero(tp.move[1:] == Move.RAPID) + 1:
+        t0, t1, a0, a1 = tp.tip[i - 1], tp.tip[i], tp.axis[i - 1], tp.axis[i]
+        turn = np.degrees(np.arccos(np.clip(a0 @ a1, -1, 1)))
+        n = int(max(np.linalg.norm(t1 - t0) / step, turn, 1)) + 1
+        for w in np.linspace(0, 1, n):
+            a = (1 - w) * a0 + w * a1
+            a /= np.linalg.norm(a)
+            c = (1 - w) * t0 + w * t1 + R * a
+            q = pts - c
+            s = q @ a
+            d = np.where(s <= 0, np.linalg.norm(q, axis=1), np.linalg.norm(q - s[:, None] * a, axis=1)) - R
+            worst = min(worst, float(d.min()))
+    return worst
+
+
+def test_links_over_a_cylinder_around_a_long_part():
+    """A bar 100 x 10 mm along x: passes on its top, under it and at its end with the axis along the bar.
+    The cylinder around it has the closed-form radius 5 + clearance and half length 50 + clearance; links
+    over it clear the bar (closed form, every move interpolated), are far shorter than over the sphere, and
+    the axis along the bar leaves beyond the end."""
+    from machsurf_cad.cam.clearance import exit_cylinder
+
+    bar = builders.plane_patch((0, -5, 0), (100, 0, 0), (0, 10, 0), name="bar")
+    point, axis, radius, half = ms.part_cylinder([bar], clearance=5.0)
+    assert np.allclose(point, [50, 0, 0]) and np.allclose(axis, [1, 0, 0])
+    assert radius == pytest.approx(10.0) and half == pytest.approx(55.0)
+    x = np.linspace(10, 90, 9)
+    top = np.column_stack([x, np.zeros(9), np.zeros(9)])
+    passes = [(top, np.tile([0.0, 0, 1], (9, 1))), (top[::-1], np.tile([0.0, 0, -1], (9, 1))),
+              (np.array([[100.0, -3, 0], [100, 3, 0]]), np.tile([1.0, 0, 0], (2, 1)))]  # fmt: skip
+    tips, axes = zip(*passes)
+    cyl = ms.ToolPath.from_passes(tips, axes, safe_cylinder=(point, axis, radius, half))
+    sph = ms.ToolPath.from_passes(tips, axes, safe_sphere=ms.part_sphere([bar], 5.0))
+    u, v = np.meshgrid(np.linspace(0, 1, 401), np.linspace(0, 1, 41), indexing="ij")
+    pts = bar.evaluate(u.ravel(), v.ravel())
+    assert _capsule_clearance(cyl, pts, 3.0) > 1.9  # clearance 5 less the ball's radius 3 at the pass ends
+    assert cyl.link_length() < 0.6 * sph.link_length()
+    ups = np.array([t[k] + 5.0 * a[k] for t, a in passes for k in (0, -1)])  # clearance off the passes' ends
+    rapid = cyl.move == Move.RAPID
+    rapid &= np.linalg.norm(cyl.tip[:, None, :] - ups[None], axis=2).min(axis=1) > 1e-9
+    q = cyl.tip[rapid] - point
+    rho = np.linalg.norm(q - np.outer(q @ axis, axis), axis=1)
+    assert np.all((rho >= radius - 1e-9) | (np.abs(q @ axis) >= half - 1e-9))  # on the cylinder or past an end
+    # an axis along the bar: out beyond the end's plane first, then out to the radius
+    way = exit_cylinder(np.array([105.0, 0, 0]), np.array([1.0, 0, 0]), (point, axis, radius, half))
+    assert np.allclose(way, [[105, 0, 0], [105, 10, 0]]) or np.allclose(way[0], [105, 0, 0])
+    way = exit_cylinder(np.array([90.0, 1, 0]), np.array([1.0, 0, 0]), (point, axis, radius, half))
+    assert np.allclose(way, [[105, 1, 0], [105, 10, 0]])
+
+
+def test_clearance_surface_choice_and_bad_input():
+    bar = builders.plane_patch((0, -5, 0), (100, 0, 0), (0, 10, 0), name="bar")
+    plate = builders.plane_patch((0, 0, 0), (100, 0, 0), (0, 80, 0), name="plate")
+    from machsurf_cad.linking import surface_for
+
+    assert surface_for([bar], None, 5.0)[0] == "cylinder"
+    assert surface_for([plate], None, 5.0)[0] == "sphere"
+    assert surface_for([plate], (0, 0, 1), 5.0)[0] == "plane"
+    assert surface_for([plate], None, 5.0, "cylinder", (0, 0, 1))[1][2] == pytest.approx(np.hypot(50, 40) + 5)
+    with pytest.raises(ms.InputError, match="fixed tool axis"):
+        surface_for([plate], None, 5.0, "plane")
+    with pytest.raises(ms.InputError, match="auto, plane, sphere or cylinder"):
+        surface_for([plate], None, 5.0, "cone")
+    with pytest.raises(ms.InputError, match="non-zero"):
+        ms.part_cylinder([plate], (0, 0, 0))

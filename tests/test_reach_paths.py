@@ -11,9 +11,9 @@ import math
 
 import numpy as np
 import pytest
+from conftest import needs_kernel
 
 import machsurf_cad as ms
-from conftest import needs_kernel
 from machsurf_cad import BallEndMill, builders
 from machsurf_cad.cam.toolpath import Move, ToolPath
 

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..results import Result, readonly
+from .clearance import in_plane, over_cylinder, over_sphere
 
 
 class Move(IntEnum):
@@ -36,51 +37,6 @@ class Move(IntEnum):
 
 
 _AXIS_UNIT_TOL = 1e-9
-
-
-def _exit_point(p, d, centre, radius):
-    """Where the ray from ``p`` along unit ``d`` leaves the sphere (``p`` itself when outside already)."""
-    w = p - centre
-    b = float(w @ d)
-    c = float(w @ w) - radius * radius
-    if c >= 0 and b >= 0:
-        return p
-    lam = -b + np.sqrt(max(b * b - c, 0.0))
-    return p + max(lam, 0.0) * d
-
-
-def _in_plane(p0, p1, a, height: float):
-    """Rapid positions from ``p0`` (None at the path's start) up the fixed axis ``a`` to the plane
-    ``x . a = height``, across it, and down towards ``p1`` (not included): (tips, axes)."""
-    pts = [] if p0 is None else [np.asarray(p0, float)]
-    pts.append(np.asarray(p1, float))
-    up = [p + max(height - float(p @ a), 0.0) * a for p in pts]
-    tips = np.array(up)
-    return tips, np.repeat(np.asarray(a, float)[None, :], len(tips), axis=0)
-
-
-def _over_sphere(p0, a0, p1, a1, sphere, step_deg: float = 5.0):
-    """Rapid positions from ``p0`` (axis ``a0``) out along the axis to the sphere, over it along the great
-    circle (axes radial, outward), back in along ``a1`` to ``p1``'s exit point: (tips, axes) without ``p1``."""
-    centre = np.asarray(sphere[0], float)
-    radius = float(sphere[1]) / np.cos(np.radians(step_deg / 2))  # the chords' sag kept outside
-    q0 = _exit_point(np.asarray(p0, float), np.asarray(a0, float), centre, radius)
-    q1 = _exit_point(np.asarray(p1, float), np.asarray(a1, float), centre, radius)
-    u0, u1 = (q0 - centre) / np.linalg.norm(q0 - centre), (q1 - centre) / np.linalg.norm(q1 - centre)
-    ang = float(np.arccos(np.clip(u0 @ u1, -1.0, 1.0)))
-    n = max(1, int(np.ceil(np.degrees(ang) / step_deg)))
-    if ang < 1e-9:
-        dirs = np.repeat(u0[None, :], n + 1, axis=0)
-    else:
-        ortho = u1 - (u0 @ u1) * u0
-        if np.linalg.norm(ortho) < 1e-12:  # opposite points: any great circle
-            ortho = np.cross(u0, [1.0, 0.0, 0.0] if abs(u0[0]) < 0.9 else [0.0, 1.0, 0.0])
-        ortho /= np.linalg.norm(ortho)
-        th = np.linspace(0.0, ang, n + 1)
-        dirs = np.cos(th)[:, None] * u0 + np.sin(th)[:, None] * ortho
-    tips = np.vstack([q0, centre + radius * dirs, q1])
-    axes = np.vstack([a0, dirs, a1])
-    return tips, axes
 
 
 @dataclass(frozen=True, eq=False)
@@ -177,6 +133,7 @@ class ToolPath(Result):
         linking: Sequence | None = None,
         safe_sphere: tuple | None = None,
         safe_plane: float | None = None,
+        safe_cylinder: tuple | None = None,
     ) -> ToolPath:
         """Cutting passes linked the safe way: rapid to ``clearance`` mm above each pass start along
         its tool axis, approach along the axis, cut, retract ``clearance`` mm along the axis.
@@ -202,6 +159,10 @@ class ToolPath(Result):
             and may still cross other parts of it (a propeller's next blade), which the tool-body
             check finds. Without it a rapid runs straight from one pass's retract point to the next
             one's approach point.
+        safe_cylinder : (point, axis, radius, half_length), optional
+            The same over a cylinder around the part (:func:`~machsurf_cad.part_cylinder`): helical steps of
+            at most 5 deg, the axis at right angles to the cylinder's and pointing out of it; an axis that
+            would leave through an end goes out beyond it first (:mod:`machsurf_cad.cam.clearance`).
         safe_plane : float, optional
             For a fixed tool axis (3 axes, 3+2): the height along the axis of a plane above the whole part
             (mm, :func:`~machsurf_cad.machining.toolpath.part_plane`). The path starts on it, and between
@@ -239,9 +200,11 @@ class ToolPath(Result):
             d0, d1 = d0 / np.linalg.norm(d0), d1 / np.linalg.norm(d1)
             link_t = None
             if safe_plane is not None and (not T or abs(float(A[-1][-1] @ d0) - 1.0) < 1e-9):
-                link_t, link_a = _in_plane(T[-1][-1] if T else None, t[0] + clearance * d0, d0, safe_plane)
+                link_t, link_a = in_plane(T[-1][-1] if T else None, t[0] + clearance * d0, d0, safe_plane)
             elif safe_sphere is not None and T:  # from the last pass's retract over the sphere to this one
-                link_t, link_a = _over_sphere(T[-1][-1], A[-1][-1], t[0] + clearance * d0, d0, safe_sphere)
+                link_t, link_a = over_sphere(T[-1][-1], A[-1][-1], t[0] + clearance * d0, d0, safe_sphere)
+            elif safe_cylinder is not None and T:
+                link_t, link_a = over_cylinder(T[-1][-1], A[-1][-1], t[0] + clearance * d0, d0, safe_cylinder)
             if link_t is not None and len(link_t):
                 T.append(link_t)
                 A.append(link_a)
@@ -291,7 +254,8 @@ class ToolPath(Result):
             {k: np.concatenate(v) for k, v in X.items()},
             dict(info or {}, clearance_mm=float(clearance))
             | ({} if safe_sphere is None else {"safe_sphere_radius_mm": float(safe_sphere[1])})
-            | ({} if safe_plane is None else {"safe_plane_height_mm": float(safe_plane)}),
+            | ({} if safe_plane is None else {"safe_plane_height_mm": float(safe_plane)})
+            | ({} if safe_cylinder is None else {"safe_cylinder_radius_mm": float(safe_cylinder[2])}),
         )
 
     # ------------------------------------------------------------------ views
@@ -344,6 +308,11 @@ class ToolPath(Result):
         seg = np.linalg.norm(np.diff(self.tip, axis=0), axis=1)
         return float(seg[self.move[1:] == Move.CUT].sum())
 
+    def link_length(self) -> float:
+        """Length of the tip's moves that do not cut (rapids, approaches, retracts), mm."""
+        seg = np.linalg.norm(np.diff(self.tip, axis=0), axis=1)
+        return float(seg[self.move[1:] != Move.CUT].sum())
+
     def report(self) -> dict:
         lo, hi = (self.tip.min(axis=0), self.tip.max(axis=0)) if self.n_positions else (np.zeros(3), np.zeros(3))
         return {
@@ -352,6 +321,7 @@ class ToolPath(Result):
             "n_passes": self.n_passes,
             "n_cut": self.n_cut,
             "cut_length_mm": self.cut_length(),
+            "link_length_mm": self.link_length(),
             "multiaxis": self.is_multiaxis,
             "tip_bbox_mm": [lo.tolist(), hi.tolist()],
             "tool": None if self.cutter is None else self.cutter.spec(),

@@ -44,7 +44,9 @@ def run_info(spec: InfoJob, out, say: Say, progress=None) -> JobOutcome:
         dtxt = f"{deg[0]:>2},{deg[1]:<2}" if deg else f"{'-':>5}"
         ptxt = f"{poles[0]:>4}x{poles[1]:<4}" if poles else f"{'-':>9}"
         say(
-            f"{r['index']:>3}  " + (f"{r['body']:>4} " if n_bodies > 1 else "") + f"{r['name'][:16]:<16} {r['source_type'][:18]:<18} {dtxt} {ptxt} "
+            f"{r['index']:>3}  "
+            + (f"{r['body']:>4} " if n_bodies > 1 else "")
+            + f"{r['name'][:16]:<16} {r['source_type'][:18]:<18} {dtxt} {ptxt} "
             f"{'yes' if r['trimmed'] else 'no':>4} {r['area_mm2']:>11.2f}  "
             f"[{b[0]:.4g}, {b[1]:.4g}] x [{b[2]:.4g}, {b[3]:.4g}]"
         )

@@ -137,15 +137,16 @@ def _write_surfaces(st: Staging, spec: MachiningSurfaceJob, ms, rep: dict, cutte
 
 def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: dict, part) -> int:
     """``--toolpath``: passes by step-over or iso-scallop, checked against the part, written; the exit code."""
-    from ..machining.toolpath import part_plane, part_sphere, tool_paths
+    from ..linking import surface_for
+    from ..machining.toolpath import tool_paths
     from .run_verify import write_checked_toolpath
 
-    # links over a clearance surface around the whole part: a sphere in 5 axes, a plane along a fixed axis
-    link: dict[str, object]
-    if spec.axes == 5:
-        link = {"safe_sphere": part_sphere(part(), spec.clearance)}
-    else:
-        link = {"safe_plane": part_plane(part(), spec.axis or (0.0, 0.0, 1.0), spec.clearance)}
+    # links over a clearance surface around the whole part: a plane along a fixed axis, a sphere or cylinder
+    surface = (spec.clearance_surface, spec.clearance_axis)
+    fixed = None if spec.axes == 5 else (spec.axis or (0.0, 0.0, 1.0))
+    kind, geo = surface_for(part(), fixed, spec.clearance, *surface)
+    link = {f"safe_{kind}": geo[0] if kind == "plane" else geo}
+    rep["clearance_surface"] = _surface_report(kind, geo)
     if spec.scallop is not None:
         tp = tool_paths(
             ms, scallop=spec.scallop, chordal_tolerance=spec.chordal_tolerance, clearance=spec.clearance,
@@ -170,6 +171,12 @@ def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: d
     if spec.axes == 3 and len(part()) > 1:  # the part's other faces may stand in the way: cut out, not refused
         tp = _trimmed_to_reach(say, spec, ms, tp, part())
     rep["toolpath"] = tp.report()
+    cs = rep["clearance_surface"]
+    say(
+        f"links between passes over a {kind} "
+        + (f"{cs['height_mm']:.4g} mm along the axis" if kind == "plane" else f"of radius {cs['radius_mm']:.4g} mm")
+        + (f" about ({', '.join(f'{x:.3g}' for x in cs['axis'])})" if kind == "cylinder" else "")
+    )
     say(
         f"tool path: {tp.n_passes} passes, {tp.n_cut} cutting positions ({tp.n_positions} with approach and "
         f"retract), chordal error {tp.info['chordal_error_measured_mm']:.3g} mm (tol "
@@ -185,7 +192,8 @@ def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: d
         from ..pathcheck import check_toolpath, machined_area_fraction
 
         check = check_toolpath(tp, part(), gouge_tolerance=spec.gouge_tolerance, on_gouge="trim",
-                               clearance=spec.clearance)  # fmt: skip
+                               clearance=spec.clearance, clearance_surface=kind,
+                               clearance_axis=spec.clearance_axis)  # fmt: skip
         if check.verdict == "trimmed" and check.toolpath is not None:
             pi = np.asarray(check.toolpath.extras.get("planned_index", []), int)
             planned = check.trimmed_from if check.trimmed_from is not None else tp
@@ -196,6 +204,16 @@ def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: d
         st, say, tp, part(), spec, tolerance=spec.gouge_tolerance, render=True, check=check
     )
     return code
+
+
+def _surface_report(kind: str, geo) -> dict:
+    """The clearance surface's kind and size (mm)."""
+    if kind == "plane":
+        return {"kind": kind, "height_mm": float(geo[0]), "axis": [float(x) for x in geo[1]]}
+    if kind == "sphere":
+        return {"kind": kind, "centre_mm": [float(x) for x in geo[0]], "radius_mm": float(geo[1])}
+    return {"kind": kind, "point_mm": [float(x) for x in geo[0]], "axis": [float(x) for x in geo[1]],
+            "radius_mm": float(geo[2]), "half_length_mm": float(geo[3])}  # fmt: skip
 
 
 def _trimmed_to_reach(say: Say, spec: MachiningSurfaceJob, ms, tp, faces):

@@ -133,6 +133,11 @@ class MachiningSurfaceJob(_Post, JobSpec):
     stl_deflection: float | None = None
     """STL chordal deflection, mm (default 0.01, larger on faces that would need over 2 million triangles)."""
     toolpath: bool = False
+    clearance_surface: str = "auto"
+    """What links travel on: auto (plane for a fixed axis, cylinder about a long part, else sphere), plane,
+    sphere, cylinder."""
+    clearance_axis: tuple | None = None
+    """The clearance cylinder's axis (default the part's longest side)."""
     stepover: float | None = None
     """Distance between passes, mm (default 2; not with ``scallop``)."""
     chordal_tolerance: float = 0.005
@@ -177,6 +182,15 @@ class MachiningSurfaceJob(_Post, JobSpec):
             raise InputError(f"max_poles must be an integer >= 16, got {self.max_poles!r}")
         if self.axis is not None and len(self.axis) != 3:
             raise InputError("axis must be x,y,z")
+        _choice("clearance_surface", self.clearance_surface, ("auto", "plane", "sphere", "cylinder"))
+        if self.clearance_axis is not None and self.clearance_surface not in ("auto", "cylinder"):
+            raise InputError("--clearance-axis is the axis of a clearance cylinder: use --clearance-surface cylinder")
+        if self.clearance_axis is not None and not (
+            len(self.clearance_axis) == 3 and 0 < sum(x * x for x in self.clearance_axis) < float("inf")
+        ):
+            raise InputError(f"--clearance-axis must be a non-zero x,y,z, got {self.clearance_axis!r}")
+        if self.clearance_surface == "plane" and self.axes == 5:
+            raise InputError("a clearance plane needs a fixed tool axis (--axes 3): use sphere or cylinder")
         self._check_tilt_away()
         self._check_post()
 
@@ -213,6 +227,8 @@ class MachiningSurfaceJob(_Post, JobSpec):
                     ("--gouge-tolerance", self.gouge_tolerance, 0.01),
                     ("--allow-gouge", self.allow_gouge, False), ("--trim-gouges", self.trim_gouges, False),
                     ("--clearance", self.clearance, 5.0), ("--feed", self.feed, 1000.0),
+                    ("--clearance-surface", self.clearance_surface, "auto"),
+                    ("--clearance-axis", self.clearance_axis, None),
                     ("--plunge-feed", self.plunge_feed, 300.0), ("--spindle", self.spindle, 10000.0),
                     ("--tool-number", self.tool_number, 1), ("--simulate", self.simulate, False),
                     ("--simulate-resolution", self.simulate_resolution, None),
@@ -309,6 +325,15 @@ class Mill3Job(_Post, JobSpec):
             raise InputError(f"max_poles must be an integer >= 16, got {self.max_poles!r}")
         if self.axis is not None and len(self.axis) != 3:
             raise InputError("axis must be x,y,z")
+        _choice("clearance_surface", self.clearance_surface, ("auto", "plane", "sphere", "cylinder"))
+        if self.clearance_axis is not None and self.clearance_surface not in ("auto", "cylinder"):
+            raise InputError("--clearance-axis is the axis of a clearance cylinder: use --clearance-surface cylinder")
+        if self.clearance_axis is not None and not (
+            len(self.clearance_axis) == 3 and 0 < sum(x * x for x in self.clearance_axis) < float("inf")
+        ):
+            raise InputError(f"--clearance-axis must be a non-zero x,y,z, got {self.clearance_axis!r}")
+        if self.clearance_surface == "plane" and self.axes == 5:
+            raise InputError("a clearance plane needs a fixed tool axis (--axes 3): use sphere or cylinder")
         if not (self.toolpath or self.cl_surface):
             raise InputError("nothing to do: give a tool path (the default) or --cl-surface")
         self._check_post()

@@ -207,6 +207,7 @@ def iso_scallop_paths(
     max_passes: int = 5000,
     safe_sphere: tuple | None = None,
     safe_plane: float | None = None,
+    safe_cylinder: tuple | None = None,
 ) -> ToolPath:
     """Passes spaced on the surface so that the predicted scallop between neighbours is ``scallop`` mm.
 
@@ -224,7 +225,7 @@ def iso_scallop_paths(
         Each pass runs on straight beyond its ends by this much (mm; default the tool radius), so that a
         pass meeting the face's edge at an angle still cuts the edge to the scallop height. The
         path-writing commands check these moves against the whole part like any other.
-    safe_sphere, safe_plane : optional
+    safe_sphere, safe_plane, safe_cylinder : optional
         Link the passes over a sphere (5 axes) or in a plane (fixed axis) around the whole part
         (:meth:`~machsurf_cad.cam.ToolPath.from_passes`).
 
@@ -295,7 +296,7 @@ def iso_scallop_paths(
     }
     return ToolPath.from_passes(
         tips, axes, cc=ccs, extras=extras, clearance=clearance, cutter=ms.cutter, name="iso_scallop", info=info,
-        safe_sphere=safe_sphere, safe_plane=safe_plane,
+        safe_sphere=safe_sphere, safe_plane=safe_plane, safe_cylinder=safe_cylinder,
     )  # fmt: skip
 
 

@@ -43,6 +43,7 @@ def tool_paths(
     max_passes: int = 5000,
     safe_sphere: tuple | None = None,
     safe_plane: float | None = None,
+    safe_cylinder: tuple | None = None,
 ) -> ToolPath:
     """Tool paths on S1: plane sections (``PlanesFeed``) or iso-parametric lines (``IsoFeed``).
 
@@ -72,6 +73,8 @@ def tool_paths(
     safe_plane : float, optional
         3 axes and 3+2: the height along the fixed axis of a plane above the whole part (:func:`part_plane`):
         the path starts and ends on it and passes are linked in it.
+    safe_cylinder : (point, axis, radius, half_length), optional
+        A cylinder around the whole part (:func:`part_cylinder`): passes are linked over it.
 
     Returns
     -------
@@ -109,7 +112,7 @@ def tool_paths(
         return iso_scallop_paths(
             surface, scallop=scallop, chordal_tolerance=chordal_tolerance, strategy=strategy, zigzag=zigzag,
             clearance=clearance, overrun=overrun, max_passes=max_passes, safe_sphere=safe_sphere,
-            safe_plane=safe_plane,
+            safe_plane=safe_plane, safe_cylinder=safe_cylinder,
         )  # fmt: skip
     if overrun is not None:
         raise InputError("overrun applies to iso-scallop passes: give scallop")
@@ -150,6 +153,7 @@ def tool_paths(
         info=info,
         safe_sphere=safe_sphere,
         safe_plane=safe_plane,
+        safe_cylinder=safe_cylinder,
     )
 
 
@@ -238,6 +242,42 @@ def part_sphere(faces: Iterable[FaceLike], clearance: float = 5.0) -> tuple:
     pts = np.concatenate(poles)
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     return 0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + float(clearance)
+
+
+def part_cylinder(faces: Iterable[FaceLike], axis: Sequence[float] | None = None, clearance: float = 5.0) -> tuple:
+    """``(point, axis, radius, half_length)`` of a cylinder around every face (their poles: a B-spline with
+    positive weights lies in its poles' convex hull) with ``clearance`` mm to spare, about ``axis`` through
+    the poles' bounding box centre (default: the box's longest side): the cylinder 5-axis passes are linked
+    over (``tool_paths(..., safe_cylinder=...)``), tighter than a sphere around a long part.
+
+    Examples
+    --------
+    >>> from machsurf_cad import builders
+    >>> bar = builders.plane_patch((0, -1, 0), (100, 0, 0), (0, 2, 0))
+    >>> point, axis, radius, half_length = part_cylinder([bar], clearance=5.0)
+    >>> axis.tolist(), round(radius, 9), round(half_length, 9)
+    ([1.0, 0.0, 0.0], 6.0, 55.0)
+    """
+    from ..geometry.face import Face
+
+    poles = [np.asarray((f.surface if isinstance(f, Face) else f).poles, float).reshape(-1, 3) for f in faces]
+    if not poles:
+        raise InputError("a cylinder around the part needs at least one face")
+    pts = np.concatenate(poles)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    if axis is None:
+        w = np.eye(3)[int(np.argmax(hi - lo))]
+    else:
+        w = np.asarray(axis, float)
+        if w.shape != (3,) or not np.all(np.isfinite(w)) or np.linalg.norm(w) < 1e-12:
+            raise InputError(f"a cylinder's axis must be a non-zero x,y,z, got {axis!r}")
+        w = w / np.linalg.norm(w)
+    c = 0.5 * (lo + hi)
+    q = pts - c
+    s = q @ w
+    rho = np.linalg.norm(q - s[:, None] * w, axis=1)
+    c = c + 0.5 * (s.min() + s.max()) * w
+    return c, w, float(rho.max()) + float(clearance), 0.5 * float(s.max() - s.min()) + float(clearance)
 
 
 def part_plane(faces: Iterable[FaceLike], axis: Sequence[float] = (0.0, 0.0, 1.0), clearance: float = 5.0) -> float:
