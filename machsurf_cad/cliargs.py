@@ -223,6 +223,9 @@ def _machining_surface_parser(sub) -> None:
     m.add_argument("--max-tilt", type=_finite, default=None,
                    help="5 axes, tilt away: largest tilt either side the axis may take to clear the part, degrees; "
                    "what no orientation clears is cut out of the path")  # fmt: skip
+    m.add_argument("--max-axis-angle", type=_finite, default=None,
+                   help="the machine's rotary limit: largest angle of the tool axis from +Z, degrees (a head's B "
+                   "or a table's A range); positions past it are cut out, links kept within it")  # fmt: skip
     m.add_argument("--axis", default=None, help="fixed axis x,y,z for 3 axes / 3+2 (default 0,0,1)")
     m.add_argument("--clearance-surface", choices=["auto", "plane", "sphere", "cylinder"], default="auto",
                    help="--toolpath: what links between passes travel on (default auto: a plane above the part for "

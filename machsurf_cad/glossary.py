@@ -87,6 +87,8 @@ TERMS: dict[str, Term] = {
     "lead_check_faces": Term("", "lead auto: faces the tool body is checked against"),
     "max_lead": Term(_DEG, "tilt away: largest lead the axis may take to clear the part"),
     "max_tilt": Term(_DEG, "tilt away: largest tilt either side the axis may take to clear the part"),
+    "max_axis_angle": Term(_DEG, "the machine's rotary limit: largest angle of the tool axis from the machine axis"),
+    "machine_axis": Term("", "the machine's reference axis (spindle at zero tilt), x, y, z; +Z by default"),
     "tip": Term("", "3 axes: the guiding surface at the tool tip instead of the torus plane"),
     "stepover": Term(_MM, "distance between adjacent passes"),
     "scallop": Term(_MM, "cusp height left between adjacent passes"),

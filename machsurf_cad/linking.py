@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .cam.clearance import exit_cylinder, exit_sphere, on_cylinder, over_cylinder, over_sphere
+from .cam.clearance import beyond, exit_cylinder, exit_sphere, on_cylinder, over_cylinder, over_sphere
 from .cam.toolpath import Move, ToolPath
 from .errors import InputError
 from .gougecheck import CLEAR, verify
@@ -64,7 +64,7 @@ def _elongated(faces, ratio: float = 2.0) -> bool:
 
 def _exits(q, a, surface) -> np.ndarray:
     """The way out from ``q`` along ``a`` to a sphere or cylinder: (k, 3), ending on it."""
-    kind, geo = surface
+    kind, geo = surface[:2]
     if kind == "cylinder":
         return exit_cylinder(q, a, geo)
     return exit_sphere(q, a, np.asarray(geo[0], float), geo[1])[None, :]
@@ -73,8 +73,9 @@ def _exits(q, a, surface) -> np.ndarray:
 def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndarray, np.ndarray, list, str]]:
     """The links from position ``p0`` (axis ``a0``; None at the path's start) to ``p1`` (axis ``a1``; None at
     its end), in order of preference: (tips, axes, moves, kind) without ``p0``, with ``p1``; the direct link
-    also with a 1 mm lift (a narrow channel that a full retract would leave)."""
-    kind, geo = surface
+    also with a 1 mm lift (a narrow channel that a full retract would leave). ``surface``: (kind, geometry,
+    rotary limit)."""
+    kind, geo = surface[:2]
     out = []
     up0 = None if p0 is None else p0 + clearance * a0
     up1 = None if p1 is None else p1 + clearance * a1
@@ -96,7 +97,7 @@ def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndar
         axes = np.tile(a, (len(tips), 1))
     else:
         over = over_cylinder if kind == "cylinder" else over_sphere
-        tips, axes = over(up0, a0, up1, a1, geo)
+        tips, axes = over(up0, a0, up1, a1, geo, limit=surface[2])
     if p0 is not None:  # leave along the axis at the plunge feed, then rapid
         moves = [Move.RETRACT] + [Move.RAPID] * (len(tips) - 1)
     else:
@@ -109,11 +110,13 @@ def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndar
 
 def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: float = 0.01,
               link_clearance: float = 0.01, name: str = "toolpath", info=None, clearance_surface: str = "auto",
-              clearance_axis=None) -> ToolPath:  # fmt: skip
+              clearance_axis=None, axis_limit=None) -> ToolPath:  # fmt: skip
     """Join ``runs`` (each ``(tips, axes)`` of consecutive cutting positions, optionally with their contact
     points and their indices in the planned path as third and fourth items) by links the tool-body check
     finds clear (module docstring). ``clearance_surface`` (``auto``, ``plane``, ``sphere`` or ``cylinder``,
-    about ``clearance_axis``) is what links travel on (:func:`surface_for`).
+    about ``clearance_axis``) is what links travel on (:func:`surface_for`); ``axis_limit`` =
+    ``(machine_axis, max_axis_angle)`` is a rotary limit no link's axis passes
+    (:func:`~machsurf_cad.cam.clearance.beyond`).
 
     Returns
     -------
@@ -129,7 +132,7 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
     n = len(runs)
     axes = np.concatenate([np.asarray(r[1]) for r in runs])
     fixed = axes[0] if np.abs(axes - axes[0]).max() <= 1e-9 else None
-    surface = surface_for(faces, fixed, clearance, clearance_surface, clearance_axis)
+    surface = (*surface_for(faces, fixed, clearance, clearance_surface, clearance_axis), axis_limit)
     ends = [(np.asarray(t[0], float), np.asarray(a[0], float), np.asarray(t[-1], float), np.asarray(a[-1], float))
             for t, a, *_ in runs]  # fmt: skip
 
@@ -245,7 +248,7 @@ def _walk(n, first_clear, exit_, entry):
 def _on_surface(tips: np.ndarray, surface) -> np.ndarray:
     """Which link positions lie on the clearance surface (a move between two of them cannot meet the part:
     the whole tool is above the plane, or outside the sphere pointing out of it)."""
-    kind, geo = surface
+    kind, geo = surface[:2]
     if kind == "plane":
         return tips @ geo[1] >= geo[0] - 1e-9
     if kind == "cylinder":
@@ -256,8 +259,10 @@ def _on_surface(tips: np.ndarray, surface) -> np.ndarray:
 def _clear(todo, c, starts, faces, cutter, gouge_tolerance, link_clearance, surface) -> dict:
     """Whether candidate ``c`` of each gap in ``todo`` (gap -> its candidate) is clear: all in one tool-body
     check, each from its own start, moves on the clearance surface left out. Placements every 2 mm keep
-    ``link_clearance`` plus what a motion of 2 mm can hide (``2^2 / (8 R)``)."""
+    ``link_clearance`` plus what a motion of 2 mm can hide (``2^2 / (8 R)``). A candidate turning the axis
+    past the rotary limit is not clear."""
     T: list = []
+    over_limit: set[int] = set()
     A: list = []
     M: list = []
     P: list = []
@@ -267,6 +272,8 @@ def _clear(todo, c, starts, faces, cutter, gouge_tolerance, link_clearance, surf
         start = starts[key] if starts[key][0] is not None else (tips[0], axes[0])
         X, Y = np.vstack([start[0], tips]), np.vstack([start[1], axes])
         mv = np.concatenate([[Move.RAPID], np.asarray(moves, np.int8)])
+        if beyond(axes, surface[2]).any():
+            over_limit.add(len(keys))
         on = _on_surface(X, surface)
         check = ~(on[:-1] & on[1:])  # move k: X[k] -> X[k + 1]
         for seg in np.split(np.arange(check.size), np.nonzero(np.diff(check.astype(int)))[0] + 1):
@@ -284,7 +291,7 @@ def _clear(todo, c, starts, faces, cutter, gouge_tolerance, link_clearance, surf
     hidden = step**2 / (8.0 * max(cutter.radius, 1e-3))
     res = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance, clearance=link_clearance + hidden, step=step)
     bad = (np.asarray(res.status) != CLEAR) & ~np.concatenate(first)
-    bad_keys = set(np.unique(tp.pass_index[bad]).tolist())
+    bad_keys = set(np.unique(tp.pass_index[bad]).tolist()) | over_limit
     return {key: k not in bad_keys for k, key in enumerate(keys)}
 
 

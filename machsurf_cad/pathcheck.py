@@ -16,6 +16,7 @@ from typing import Literal
 import numpy as np
 
 from . import checks
+from .cam.clearance import beyond
 from .cam.toolpath import Move, ToolPath
 from .checks import positive
 from .errors import InputError
@@ -49,13 +50,15 @@ class PathCheck(Result):
     trimmed_from: ToolPath | None = None
     """The planned path with points inserted along its long cutting moves, which the trimmed path's
     ``extras["planned_index"]`` refers to."""
+    beyond_axis_limit: int = 0
+    """Positions of the planned path whose axis lies past the machine's rotary limit (``max_axis_angle``)."""
 
     @property
     def written(self) -> bool:
         return self.toolpath is not None
 
     def report(self) -> dict:
-        rep = dict(self.check.report(), verdict=self.verdict)
+        rep = dict(self.check.report(), verdict=self.verdict, n_positions_beyond_axis_limit=self.beyond_axis_limit)
         if self.recheck is not None and self.toolpath is not None:
             rep["trimmed"] = {
                 "n_cut_kept": self.toolpath.n_cut,
@@ -116,12 +119,12 @@ def densified(toolpath: ToolPath, step: float) -> ToolPath:
                     np.asarray(toolpath.feed)[src], toolpath.cutter, toolpath.name, extras, toolpath.info)  # fmt: skip
 
 
-def _relinked(toolpath, res, part, tool, gouge_tolerance, clearance, clear, surface=("auto", None)) -> ToolPath | None:
+def _relinked(toolpath, res, part, tool, gouge_tolerance, clearance, clear, surface=("auto", None, None)):
     """The clear stretches of ``toolpath`` joined by links checked clear (:func:`~machsurf_cad.linking.link_runs`)."""
     from .gougecheck import _faces
     from .linking import link_runs
 
-    runs = clear_stretches(toolpath, res)
+    runs = clear_stretches(toolpath, res, ~beyond(toolpath.axis, surface[2]))
     if not runs:
         return None
     cc = toolpath.cc
@@ -137,6 +140,7 @@ def _relinked(toolpath, res, part, tool, gouge_tolerance, clearance, clear, surf
             info=dict(toolpath.info, trimmed_to_clear_runs=len(runs)),
             clearance_surface=surface[0],
             clearance_axis=surface[1],
+            axis_limit=surface[2],
         )
     except InputError:  # no run can be reached and left
         return None
@@ -158,6 +162,8 @@ def check_toolpath(
     progress: Progress | None = None,
     clearance_surface: str = "auto",
     clearance_axis: Sequence[float] | None = None,
+    max_axis_angle: float | None = None,
+    machine_axis: Sequence[float] = (0.0, 0.0, 1.0),
 ) -> PathCheck:
     """Verify ``toolpath`` against every face of ``part`` and decide what may be written.
 
@@ -179,6 +185,10 @@ def check_toolpath(
     clearance_surface : {"auto", "plane", "sphere", "cylinder"}
         What the relinked stretches' links travel on (:func:`machsurf_cad.linking.surface_for`); a cylinder
         about ``clearance_axis`` (x, y, z; default the part's longest side).
+    max_axis_angle : float, optional
+        The machine's rotary limit, degrees: the largest angle of the tool axis from ``machine_axis`` (a
+        head's B or a table's A range, the other rotary axis turning freely). Positions past it are cut out
+        like gouges (``trim``) or refuse the path, and links are routed within it.
     tool, step, angle_step, spacing, chunks, map_chunks, progress
         As :func:`machsurf_cad.verify`.
 
@@ -203,9 +213,15 @@ def check_toolpath(
         map_chunks=map_chunks,
         clearance=clear,
     )
-    if res.clean:
+    limit = None
+    if max_axis_angle is not None:
+        if not (np.isfinite(max_axis_angle) and 0.0 < max_axis_angle <= 180.0):
+            raise InputError(f"max_axis_angle must be within 0..180 deg, got {max_axis_angle!r}")
+        limit = (np.asarray(machine_axis, float), float(max_axis_angle))
+    n_out = int(beyond(toolpath.axis, limit).sum())
+    if res.clean and not n_out:
         return PathCheck(toolpath, toolpath, res, None, "clean", float(clearance))
-    if on_gouge == "allow":
+    if on_gouge == "allow" and not n_out:
         return PathCheck(toolpath, toolpath, res, None, "gouges allowed", float(clearance))
     if on_gouge == "trim":
         cutter = checks.tool(tool if tool is not None else toolpath.cutter)
@@ -214,12 +230,12 @@ def check_toolpath(
             res if dense is toolpath else verify(part, dense, tool, gouge_tolerance=gouge_tolerance, clearance=clear)
         )
         cut = _relinked(dense, res_d, part, tool, gouge_tolerance, clearance, clear,
-                        (clearance_surface, clearance_axis))  # fmt: skip
-        if cut is not None:
+                        (clearance_surface, clearance_axis, limit))  # fmt: skip
+        if cut is not None and not beyond(cut.axis, limit).any():
             again = verify(part, cut, tool, gouge_tolerance=gouge_tolerance, clearance=clear)
             if again.clean:
-                return PathCheck(toolpath, cut, res, again, "trimmed", float(clearance), dense)
-    return PathCheck(toolpath, None, res, None, "refused", float(clearance))
+                return PathCheck(toolpath, cut, res, again, "trimmed", float(clearance), dense, n_out)
+    return PathCheck(toolpath, None, res, None, "refused", float(clearance), None, n_out)
 
 
 def machined_area_fraction(face, planned: ToolPath, kept, *, step: float = 1.0, samples: int = 80) -> float:
@@ -252,11 +268,11 @@ def machined_area_fraction(face, planned: ToolPath, kept, *, step: float = 1.0, 
     return float(wt[ok[near]].sum() / wt.sum()) if wt.sum() > 0 else float("nan")
 
 
-def clear_stretches(toolpath: ToolPath, result: VerifyResult) -> list[np.ndarray]:
+def clear_stretches(toolpath: ToolPath, result: VerifyResult, usable=None) -> list[np.ndarray]:
     """Within each pass, the index runs of consecutive cutting positions whose motion in was clear (at
-    least two)."""
+    least two), among the ``usable`` ones when given (a mask: those within the machine's rotary limit)."""
     cutting = (toolpath.move == Move.CUT) | (toolpath.move == Move.APPROACH)
-    ok = cutting & (result.status == CLEAR)
+    ok = cutting & (result.status == CLEAR) & (True if usable is None else np.asarray(usable, bool))
     runs: list[np.ndarray] = []
     for p in np.unique(toolpath.pass_index):
         idx = np.nonzero(cutting & (toolpath.pass_index == p))[0]

@@ -428,3 +428,22 @@ def test_links_over_a_chosen_clearance_cylinder(tmp_path):
         r = run(*base, *extra, "-o", tmp_path / "bad")
         assert r.returncode == 1 and msg in r.stderr and r.stderr.count("\n") == 1, r.stderr
         assert not (tmp_path / "bad").exists()
+
+
+def test_rotary_limit_cuts_out_what_the_machine_cannot_reach(tmp_path):
+    """--max-axis-angle 80 on the hypar (its normals lean up to 90 deg from +Z): the positions past 80 deg are
+    cut out and said, every written axis is within 80 deg of +Z, the rest is clean; bad limits are one line."""
+    base = ["machining-surface", "--example", "hypar", "--tool", "ball:D=10", "--axes", "5"]
+    out = tmp_path / "lim"
+    r = run(*base, "--toolpath", "--stepover", 10, "--max-axis-angle", 80, "-o", out)
+    assert r.returncode == 0, r.stderr
+    rep = json.loads((out / "report.json").read_text())
+    tp = ms.read_csv(out / "toolpath.csv")
+    planned = rep["toolpath"]["n_positions"]
+    assert 0 < rep["verify"]["n_positions_beyond_axis_limit"] < planned and rep["verify"]["verdict"] == "trimmed"
+    assert np.degrees(np.arccos(np.clip(tp.axis[:, 2], -1, 1))).max() <= 80.0 + 1e-9
+    assert rep["verify"]["trimmed"]["recheck"]["clean"] and 0.1 < rep["machined_area_fraction"] < 0.9
+    for extra, msg in ((["--toolpath", "--max-axis-angle", 0], "0..180"), (["--toolpath", "--max-axis-angle", 200],
+                       "0..180"), (["--max-axis-angle", 80], "add --toolpath")):  # fmt: skip
+        r = run(*base, *extra, "-o", tmp_path / "bad")
+        assert r.returncode == 1 and msg in r.stderr and r.stderr.count("\n") == 1, r.stderr

@@ -115,3 +115,38 @@ def test_limits_are_checked():
     ):
         with pytest.raises(ms.InputError):
             clear_axis_field(floor, TOOL, "planes:x", part, lead=10.0, **kw)
+
+
+def _half_pipe():
+    """Half a cylinder of radius 20 about the x axis, 40 long, convex upwards: its normal turns from +y
+    through +z to -y (angle from +Z = |90 - phi| at phi around the pipe)."""
+    c = builders.cylinder_patch(radius=20.0, height=40.0, angle_deg=180.0, name="pipe")
+    pipe = c.with_poles(np.asarray(c.poles)[..., [2, 0, 1]], c.weights)  # (x, y, z) -> (z, x, y): a rotation
+    n = pipe.normals(np.array([0.5]), np.array([0.5]))[0]
+    return ms.Face(pipe, name="pipe", reversed=bool(n[2] < 0))
+
+
+@pytest.mark.parametrize("tilt_away", [False, True])
+def test_a_rotary_limit_cuts_out_what_the_machine_cannot_tilt_to(tilt_away):
+    """--max-axis-angle 45 on a half pipe with the axis along the normal: the positions whose normal is more
+    than 45 deg from +Z are cut out, half of the pipe by the closed form (phi within 45..135 of 0..180);
+    turning the axis away within lead +-30 deg leaves 15..165, 83 %. Every written axis, links included,
+    is within the limit."""
+    pipe = _half_pipe()
+    field = None
+    if tilt_away:
+        field, rep = clear_axis_field(pipe, TOOL, "planes:x", [pipe], lead=0.0, max_lead=30.0, max_tilt=0.0,
+                                      grid=19, max_axis_angle=45.0)  # fmt: skip
+        assert rep["max_axis_angle_deg"] == 45.0 and rep["lattice_points_tilted"] > 0
+    surf = ms.machining_surface(pipe, TOOL, axes=5, strategy="planes:x", axis_field=field)
+    tp = ms.tool_paths(surf, stepover=4.0, chordal_tolerance=0.005, safe_sphere=ms.part_sphere([pipe], 5.0))
+    pc = ms.check_toolpath(tp, [pipe], on_gouge="trim", max_axis_angle=45.0)
+    assert pc.beyond_axis_limit > 0 and pc.verdict == "trimmed" and pc.recheck.clean
+    out = pc.toolpath
+    assert np.degrees(np.arccos(np.clip(out.axis[:, 2], -1, 1))).max() <= 45.0 + 1e-9
+    kept = out.extras["planned_index"]
+    frac = machined_area_fraction(pipe, pc.trimmed_from or tp, kept[kept >= 0], step=0.5)
+    assert frac == pytest.approx(150 / 180 if tilt_away else 0.5, abs=0.04)
+    assert ms.check_toolpath(tp, [pipe], on_gouge="refuse", max_axis_angle=45.0).verdict == "refused"
+    with pytest.raises(ms.InputError, match="0..180"):
+        ms.check_toolpath(tp, [pipe], max_axis_angle=0.0)

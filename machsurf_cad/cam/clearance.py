@@ -34,25 +34,44 @@ def in_plane(p0, p1, a, height: float):
     return tips, np.repeat(np.asarray(a, float)[None, :], len(tips), axis=0)
 
 
-def over_sphere(p0, a0, p1, a1, sphere, step_deg: float = 5.0):
+def _arc(u0, u1, step_deg: float) -> np.ndarray:
+    """Unit directions from ``u0`` to ``u1`` along the short great circle, at most ``step_deg`` apart."""
+    ang = float(np.arccos(np.clip(u0 @ u1, -1.0, 1.0)))
+    n = max(1, int(np.ceil(np.degrees(ang) / step_deg)))
+    if ang < 1e-9:
+        return np.repeat(u0[None, :], n + 1, axis=0)
+    ortho = u1 - (u0 @ u1) * u0
+    if np.linalg.norm(ortho) < 1e-12:  # opposite points: any great circle
+        ortho = np.cross(u0, [1.0, 0.0, 0.0] if abs(u0[0]) < 0.9 else [0.0, 1.0, 0.0])
+    ortho /= np.linalg.norm(ortho)
+    th = np.linspace(0.0, ang, n + 1)
+    return np.cos(th)[:, None] * u0 + np.sin(th)[:, None] * ortho
+
+
+def beyond(axes, limit) -> np.ndarray:
+    """Which ``axes`` lie more than ``limit = (machine_axis, degrees)`` from the machine's axis (all False
+    without a limit): orientations a machine whose tilting axis stops there cannot take."""
+    axes = np.atleast_2d(np.asarray(axes, float))
+    if limit is None:
+        return np.zeros(len(axes), bool)
+    m = np.asarray(limit[0], float) / np.linalg.norm(limit[0])
+    return axes @ m < np.cos(np.radians(float(limit[1]))) - 1e-12
+
+
+def over_sphere(p0, a0, p1, a1, sphere, step_deg: float = 5.0, limit=None):
     """Rapid positions from ``p0`` (axis ``a0``) out along the axis to the sphere, over it along the great
-    circle (axes radial, outward), back in along ``a1`` to ``p1``'s exit point: (tips, axes) without ``p1``."""
+    circle (axes radial, outward), back in along ``a1`` to ``p1``'s exit point: (tips, axes) without ``p1``.
+    With a rotary ``limit`` (:func:`beyond`) a great circle that would turn the axis past it goes over the
+    sphere's pole on the machine's axis instead (the angle to the pole then only falls and rises)."""
     centre = np.asarray(sphere[0], float)
     radius = float(sphere[1]) / np.cos(np.radians(step_deg / 2))  # the chords' sag kept outside
     q0 = exit_sphere(np.asarray(p0, float), np.asarray(a0, float), centre, radius)
     q1 = exit_sphere(np.asarray(p1, float), np.asarray(a1, float), centre, radius)
     u0, u1 = (q0 - centre) / np.linalg.norm(q0 - centre), (q1 - centre) / np.linalg.norm(q1 - centre)
-    ang = float(np.arccos(np.clip(u0 @ u1, -1.0, 1.0)))
-    n = max(1, int(np.ceil(np.degrees(ang) / step_deg)))
-    if ang < 1e-9:
-        dirs = np.repeat(u0[None, :], n + 1, axis=0)
-    else:
-        ortho = u1 - (u0 @ u1) * u0
-        if np.linalg.norm(ortho) < 1e-12:  # opposite points: any great circle
-            ortho = np.cross(u0, [1.0, 0.0, 0.0] if abs(u0[0]) < 0.9 else [0.0, 1.0, 0.0])
-        ortho /= np.linalg.norm(ortho)
-        th = np.linspace(0.0, ang, n + 1)
-        dirs = np.cos(th)[:, None] * u0 + np.sin(th)[:, None] * ortho
+    dirs = _arc(u0, u1, step_deg)
+    if beyond(dirs, limit).any():
+        m = np.asarray(limit[0], float) / np.linalg.norm(limit[0])
+        dirs = np.vstack([_arc(u0, m, step_deg), _arc(m, u1, step_deg)[1:]])
     tips = np.vstack([q0, centre + radius * dirs, q1])
     axes = np.vstack([a0, dirs, a1])
     return tips, axes
@@ -92,10 +111,21 @@ def exit_cylinder(p, d, cyl, radius: float | None = None) -> np.ndarray:
     return np.vstack([e, e + (rc - min(nr, rc)) * r / nr])
 
 
-def over_cylinder(p0, a0, p1, a1, cyl, step_deg: float = 5.0):
+def _turn(r0, r1, w, step_deg: float) -> np.ndarray:
+    """Unit directions at right angles to ``w`` from ``r0`` to ``r1`` the short way round it, at most
+    ``step_deg`` apart."""
+    ang = float(np.arctan2(np.cross(r0, r1) @ w, r0 @ r1))
+    n = max(1, int(np.ceil(abs(np.degrees(ang)) / step_deg)))
+    th = np.linspace(0.0, ang, n + 1)[:, None]
+    return np.cos(th) * r0 + np.sin(th) * np.cross(w, r0)
+
+
+def over_cylinder(p0, a0, p1, a1, cyl, step_deg: float = 5.0, limit=None):
     """Rapid positions from ``p0`` (axis ``a0``) out along the axis to the cylinder, over it along a helix
     (turning at most ``step_deg`` per step, axes at right angles to the cylinder's axis, outward), back in
-    along ``a1`` to ``p1``'s exit point: (tips, axes) without ``p1``."""
+    along ``a1`` to ``p1``'s exit point: (tips, axes) without ``p1``. With a rotary ``limit``
+    (:func:`beyond`) a helix that would turn the axis past it goes round over the side nearest the machine's
+    axis instead."""
     c, w, rc, _ = _cylinder(cyl)
     radius = rc / np.cos(np.radians(step_deg / 2))  # the chords' sag kept outside
     q0 = exit_cylinder(p0, a0, cyl, radius)
@@ -104,11 +134,14 @@ def over_cylinder(p0, a0, p1, a1, cyl, step_deg: float = 5.0):
     s0, s1 = float(e0 @ w), float(e1 @ w)
     r0, r1 = e0 - s0 * w, e1 - s1 * w
     r0, r1 = r0 / np.linalg.norm(r0), r1 / np.linalg.norm(r1)
-    ang = float(np.arctan2(np.cross(r0, r1) @ w, r0 @ r1))  # signed, the short way round
-    n = max(1, int(np.ceil(abs(np.degrees(ang)) / step_deg)))
-    th = np.linspace(0.0, ang, n + 1)[:, None]
-    dirs = np.cos(th) * r0 + np.sin(th) * np.cross(w, r0)
-    along = np.linspace(s0, s1, n + 1)[:, None] * w
+    dirs = _turn(r0, r1, w, step_deg)
+    if beyond(dirs, limit).any():
+        m = np.asarray(limit[0], float)
+        m = m - (m @ w) * w
+        if np.linalg.norm(m) > 1e-9:
+            m /= np.linalg.norm(m)
+            dirs = np.vstack([_turn(r0, m, w, step_deg), _turn(m, r1, w, step_deg)[1:]])
+    along = np.linspace(s0, s1, len(dirs))[:, None] * w
     tips = np.vstack([q0, c + along + radius * dirs, q1[::-1]])
     axes = np.vstack([np.tile(a0, (len(q0), 1)), dirs, np.tile(a1, (len(q1), 1))])
     return tips, axes

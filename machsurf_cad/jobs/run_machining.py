@@ -188,12 +188,17 @@ def _write_toolpath(st: Staging, say: Say, spec: MachiningSurfaceJob, ms, rep: d
             f"gouge tolerance {spec.gouge_tolerance:g} mm: chords on convex regions may be refused as gouges"
         )
     check = None
-    if spec.trim_gouges or spec.tilt_away:  # cut out what no tool reaches; the share of the face kept
+    if spec.trim_gouges or spec.tilt_away or spec.max_axis_angle is not None:  # cut out what no tool reaches
         from ..pathcheck import check_toolpath, machined_area_fraction
 
         check = check_toolpath(tp, part(), gouge_tolerance=spec.gouge_tolerance, on_gouge="trim",
-                               clearance=spec.clearance, clearance_surface=kind,
-                               clearance_axis=spec.clearance_axis)  # fmt: skip
+                               clearance=spec.clearance, clearance_surface=kind, clearance_axis=spec.clearance_axis,
+                               max_axis_angle=spec.max_axis_angle)  # fmt: skip
+        if check.beyond_axis_limit:
+            say(
+                f"rotary limit {spec.max_axis_angle:g} deg from +Z: {check.beyond_axis_limit} of the planned "
+                f"{tp.n_positions} positions lie past it (cut out, links kept within it)"
+            )
         if check.verdict == "trimmed" and check.toolpath is not None:
             pi = np.asarray(check.toolpath.extras.get("planned_index", []), int)
             planned = check.trimmed_from if check.trimmed_from is not None else tp
@@ -251,6 +256,7 @@ def _tilt_away(say: Say, spec: MachiningSurfaceJob, face, cutter, part):
         max_lead=lead if spec.max_lead is None else spec.max_lead,
         max_tilt=spec.max_tilt or 0.0,
         gouge_tolerance=spec.gouge_tolerance,
+        max_axis_angle=spec.max_axis_angle,
     )
     say(
         f"tilt away within lead {lead:g}..{rep['max_lead_deg']:g} deg, tilt +-{rep['max_tilt_deg']:g} deg on all "

@@ -135,6 +135,11 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
         )
     elif pc.verdict == "gouges allowed":
         say("tool path written with its gouges and collisions (--allow-gouge): see verify.worst in the report")
+    elif pc.verdict == "refused" and pc.beyond_axis_limit:
+        say(
+            f"tool path NOT written: {pc.beyond_axis_limit} of its {tp.n_positions} positions lie past the rotary "
+            "limit, and no stretch within it and clear of the part can be linked"
+        )
     elif pc.verdict == "refused":
         say(
             "tool path NOT written: no clear stretch is left, or no clear link reaches or leaves any of them "

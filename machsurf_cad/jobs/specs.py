@@ -125,6 +125,9 @@ class MachiningSurfaceJob(_Post, JobSpec):
     """Tilt away (5 axes): largest lead, degrees (with ``max_tilt``; :mod:`machsurf_cad.machining.avoid`)."""
     max_tilt: float | None = None
     """Tilt away (5 axes): largest tilt either side, degrees; what no orientation clears is cut out."""
+    max_axis_angle: float | None = None
+    """The machine's rotary limit: largest angle of the tool axis from +Z, degrees (a head's B or a table's A
+    range, C turning freely); positions past it are cut out, links kept within it."""
     tip: bool = False
     tolerance: float = 1e-3
     degree: int = 3
@@ -199,6 +202,11 @@ class MachiningSurfaceJob(_Post, JobSpec):
         return self.max_lead is not None or self.max_tilt is not None
 
     def _check_tilt_away(self) -> None:
+        x = self.max_axis_angle
+        if x is not None and not (isinstance(x, (int, float)) and 0.0 < x <= 180.0):
+            raise InputError(f"--max-axis-angle must be within 0..180 degrees (from +Z), got {x!r}")
+        if x is not None and not self.toolpath:
+            raise InputError("--max-axis-angle applies to a tool path: add --toolpath")
         for name in ("max_lead", "max_tilt"):
             x = getattr(self, name)
             if x is not None and not (isinstance(x, (int, float)) and 0.0 <= x <= 90.0):
@@ -325,15 +333,6 @@ class Mill3Job(_Post, JobSpec):
             raise InputError(f"max_poles must be an integer >= 16, got {self.max_poles!r}")
         if self.axis is not None and len(self.axis) != 3:
             raise InputError("axis must be x,y,z")
-        _choice("clearance_surface", self.clearance_surface, ("auto", "plane", "sphere", "cylinder"))
-        if self.clearance_axis is not None and self.clearance_surface not in ("auto", "cylinder"):
-            raise InputError("--clearance-axis is the axis of a clearance cylinder: use --clearance-surface cylinder")
-        if self.clearance_axis is not None and not (
-            len(self.clearance_axis) == 3 and 0 < sum(x * x for x in self.clearance_axis) < float("inf")
-        ):
-            raise InputError(f"--clearance-axis must be a non-zero x,y,z, got {self.clearance_axis!r}")
-        if self.clearance_surface == "plane" and self.axes == 5:
-            raise InputError("a clearance plane needs a fixed tool axis (--axes 3): use sphere or cylinder")
         if not (self.toolpath or self.cl_surface):
             raise InputError("nothing to do: give a tool path (the default) or --cl-surface")
         self._check_post()

@@ -84,6 +84,8 @@ def clear_axis_field(
     step: float = 5.0,
     max_turn: float = 2.0,
     max_candidates: int = 60,
+    max_axis_angle: float | None = None,
+    machine_axis=(0.0, 0.0, 1.0),
 ) -> tuple[AxisField, dict]:
     """The tilt-away axis field of ``cutter`` on ``face`` (module docstring) and its report.
 
@@ -113,7 +115,17 @@ def clear_axis_field(
     max_turn : float
         Largest change of the axis's angle from the normal per mm across the face (deg/mm), and at most
         half of ``1 / D`` radian per mm: the rebuilt orientation surface, ``D`` up the axis, folds at that.
+    max_axis_angle : float, optional
+        The machine's rotary limit, degrees: an orientation more than this from ``machine_axis`` is not
+        clear (:func:`~machsurf_cad.cam.clearance.beyond`).
     """
+    from ..cam.clearance import beyond
+
+    limit = None
+    if max_axis_angle is not None:
+        if not (np.isfinite(max_axis_angle) and 0.0 < max_axis_angle <= 180.0):
+            raise InputError(f"max_axis_angle must be within 0..180 deg, got {max_axis_angle!r}")
+        limit = (np.asarray(machine_axis, float), float(max_axis_angle))
     for name, x in (("max_lead", max_lead), ("max_tilt", max_tilt)):
         if not (np.isfinite(x) and 0.0 <= x <= 90.0):
             raise InputError(f"{name} must be within 0..90 deg, got {x!r}")
@@ -141,7 +153,7 @@ def clear_axis_field(
         placed = [_placements(face, cutter, feed, lt, tl + tilt, us, vs) for lt, tl in batch]
         T = np.concatenate([t[todo[:, 0], todo[:, 1]] for t, _ in placed])
         A = np.concatenate([a[todo[:, 0], todo[:, 1]] for _, a in placed])
-        ok = _clear(check_faces, cutter, T, A, gouge_tolerance).reshape(len(batch), -1)
+        ok = (_clear(check_faces, cutter, T, A, gouge_tolerance) & ~beyond(A, limit)).reshape(len(batch), -1)
         first = np.where(ok.any(axis=0), ok.argmax(axis=0), -1)
         for m, (i, j) in enumerate(todo):
             if first[m] >= 0:
@@ -153,9 +165,9 @@ def clear_axis_field(
     max_turn = min(max_turn, 0.5 * np.degrees(1.0 / cutter.D))  # S2 is D up the axis: 1 / D rad/mm folds it
     smooth, not_clear = _smoothed(
         face, cutter, feed, raw, nominal_axes, choice, inside, check_faces, gouge_tolerance, us, vs,
-        (max_turn, lead_min, max_lead),
+        (max_turn, lead_min, max_lead, limit),
     )  # fmt: skip
-    turn = _turn_max(smooth, face.surface.derivatives_grid(us, vs, 0).point, inside)
+    turn = _turn_max(smooth, face.surface.derivatives_grid(us, vs, 0).point, inside & (choice >= 0))
     change = _angle_deg(smooth, nominal_axes)[inside]
     tilted = inside & (choice > 0)
     nowhere = inside & (choice < 0)
@@ -166,6 +178,7 @@ def clear_axis_field(
         "angle_step_deg": float(step),
         "max_lead_deg": float(max_lead),
         "max_tilt_deg": float(max_tilt),
+        "max_axis_angle_deg": None if limit is None else limit[1],
         "max_turn_deg_per_mm": float(max_turn),
         "lattice_points": int(inside.sum()),
         "lattice_points_tilted": int(tilted.sum()),
@@ -187,10 +200,11 @@ def _smoothed(face, cutter, feed, raw, nominal, choice, inside, check_faces, gou
     normal x feed) each tilted lattice point moved the nominal lean by a vector; its length is raised to the
     smallest field that changes by at most ``rate`` degrees per mm (so it tapers off around the tilted
     points instead of jumping) and its direction is that of the nearest tilted point, blurred; the lean is kept
-    within ``lead_min`` and ``max_lead`` of the normal (``limits = (rate, lead_min, max_lead)``). The
-    field is blurred further where it still turns faster than ``rate`` (tilted regions leaning different
-    ways meeting). The smoothed placements of the lattice points that had a clear orientation are checked
-    again."""
+    within ``lead_min`` and ``max_lead`` of the normal (``limits = (rate, lead_min, max_lead, rotary limit)``).
+    The field is blurred further where it still turns faster than ``rate``, or than the nominal axes where the
+    face is curved tighter (tilted regions leaning different ways meeting); the points no orientation clears,
+    cut out of the path, do not count. The smoothed placements of the lattice points that had a clear
+    orientation are checked again."""
     from scipy.ndimage import distance_transform_edt, gaussian_filter
 
     from .autolead import lipschitz_envelope
@@ -216,6 +230,8 @@ def _smoothed(face, cutter, feed, raw, nominal, choice, inside, check_faces, gou
         direction = np.stack([gaussian_filter(direction[..., k], 2.0, mode="nearest") for k in range(2)], -1)
         direction /= np.maximum(np.linalg.norm(direction, axis=-1, keepdims=True), 1e-12)
         w = w_nom + env[..., None] * direction
+    kept = inside & (choice >= 0)  # the points no orientation clears are cut out: their turn does not count
+    bound = max(rate, _turn_max(nominal, frame.point, kept))  # a face curved tighter turns the nominal faster
     for _ in range(40):  # where tilted regions leaning different ways meet: blurred until the turn is in bound
         m = np.linalg.norm(w, axis=-1)
         scale = np.clip(m, lo, hi) / np.maximum(m, 1e-300)
@@ -223,12 +239,15 @@ def _smoothed(face, cutter, feed, raw, nominal, choice, inside, check_faces, gou
         h = np.sqrt(np.maximum(1.0 - (w**2).sum(-1), 0.0))[..., None]
         smooth = h * n + w[..., :1] * f + w[..., 1:] * g
         smooth /= np.linalg.norm(smooth, axis=-1, keepdims=True)
-        if _turn_max(smooth, frame.point, inside) <= rate * (1 + 1e-6) or not tilted.any():
+        if _turn_max(smooth, frame.point, kept) <= bound * (1 + 1e-6) or not tilted.any():
             break
         w = np.stack([gaussian_filter(w[..., k], 1.0, mode="nearest") for k in range(2)], -1)
     idx = np.argwhere(inside & (choice >= 0))
     tips, axes = MachiningMaps(face, cutter, 5, _GridAxes(smooth, feed), cutter.D, False).tool_placements(us, vs)
-    ok = _clear(check_faces, cutter, tips[idx[:, 0], idx[:, 1]], axes[idx[:, 0], idx[:, 1]], gouge_tolerance)
+    from ..cam.clearance import beyond
+
+    A = axes[idx[:, 0], idx[:, 1]]
+    ok = _clear(check_faces, cutter, tips[idx[:, 0], idx[:, 1]], A, gouge_tolerance) & ~beyond(A, limits[3])
     return smooth, int((~ok).sum())
 
 
