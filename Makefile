@@ -61,11 +61,17 @@ np124:
 
 # the FreeCAD add-on, linked into the current user's Mod folder (FreeCAD 0.20+ on Linux)
 FC_MOD ?= $(HOME)/.local/share/FreeCAD/Mod
+FC_NUMBA ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/machsurf_cad/freecad-numba
 workbench-install:
 	mkdir -p $(FC_MOD)
 	rm -f $(FC_MOD)/machsurf  # the link of versions before 0.3.0
 	ln -sfn $(CURDIR) $(FC_MOD)/machsurf_cad
 	@echo "linked $(FC_MOD)/machsurf_cad -> $(CURDIR) (package.xml: workbench/); restart FreeCAD, pick machsurf"
+	@# the drop-cutter kernel compiled once for FreeCAD's Python when it has numba (Debian: python3-numba),
+	@# into the cache the add-on reads; without numba the add-on runs the numpy path
+	-command -v freecadcmd >/dev/null 2>&1 && NUMBA_CACHE_DIR=$(FC_NUMBA) freecadcmd -c "import sys; \
+	sys.path.insert(0, '$(CURDIR)'); import runpy; runpy.run_module('machsurf_cad.threeaxis.compiled', \
+	run_name='__main__')" < /dev/null
 
 workbench-uninstall:
 	rm -f $(FC_MOD)/machsurf_cad $(FC_MOD)/machsurf

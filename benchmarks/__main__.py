@@ -17,6 +17,7 @@ from . import (
     bench_envelope,
     bench_eval,
     bench_flank,
+    bench_freecad,
     bench_offset,
     bench_reff,
     bench_simulate,
@@ -46,6 +47,11 @@ def main(argv=None) -> int:
         (bench_step.step_rows, None),
         (bench_simulate.simulate_rows, "* brute force on a random subset of the finest samples, scaled to all samples"),
         (bench_batch.batch_rows, None),
+        (
+            bench_freecad.freecad_rows,
+            "* FreeCAD: the CAM operation's raster in FreeCADCmd (kernel cached), "
+            "reference = the same raster and check through the API here; max diff = |max gouge there - here|",
+        ),
         (
             bench_avoid.avoid_rows,
             "* avoidance: time per position in the report (ms_per_position); reference = the "

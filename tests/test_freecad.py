@@ -9,6 +9,7 @@ import json
 import os
 import shutil
 import subprocess
+from pathlib import Path
 
 import pytest
 from conftest import HAS_OCP, ROOT
@@ -22,6 +23,36 @@ IN_CI = os.environ.get("CI", "").lower() == "true"  # CI installs FreeCAD and xv
 pytestmark = pytest.mark.skipif(
     FREECADCMD is None and not IN_CI, reason="FreeCAD is not installed (apt-get install freecad)"
 )
+
+
+# numba's kernel for FreeCAD's Python (Debian's python3-numba, when installed): one cache for every test, each of
+# which has its own $HOME (the add-on keeps the cache under $HOME), compiled once before the first test
+NUMBA_CACHE = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "machsurf_cad" / "freecad-numba"
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _kernel_compiled_once(tmp_path_factory):
+    """The drop-cutter kernel compiled (or loaded) in FreeCAD's Python before any test times a recompute; the
+    two test workers take turns (a lock), the second loads what the first compiled."""
+    if FREECADCMD is None:
+        return
+    import fcntl
+
+    NUMBA_CACHE.mkdir(parents=True, exist_ok=True)
+    script = tmp_path_factory.mktemp("numba") / "warm.py"
+    script.write_text(
+        "import os, sys\n"
+        f"sys.path.insert(0, {str(ROOT)!r})\n"
+        "from machsurf_cad.threeaxis import compiled\n"
+        "compiled.available() and compiled.build_error()\n"
+        "os._exit(0)\n"
+    )
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(NUMBA_CACHE))
+    env.pop("PYTHONPATH", None)
+    with open(NUMBA_CACHE / ".lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        subprocess.run([FREECADCMD, str(script)], env=env, timeout=900, stdin=subprocess.DEVNULL,
+                       capture_output=True)  # fmt: skip
 
 
 def _home(tmp_path):
@@ -42,6 +73,7 @@ def _run(cmd, tmp_path, script, timeout=600, **extra_env):
         MACHSURF_FC_OUT=str(out),
         MACHSURF_ROOT=str(ROOT),
         QTWEBENGINE_DISABLE_SANDBOX="1",
+        NUMBA_CACHE_DIR=str(NUMBA_CACHE),
         **extra_env,
     )
     env.pop("PYTHONPATH", None)  # FreeCAD's Python must not pick up the venv's packages

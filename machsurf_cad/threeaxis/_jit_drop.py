@@ -368,7 +368,7 @@ def _group_cells(g, which, low, cx, cy, idx, rr, gk, PR, SM, K, CB):
     return out
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def drop_batch(C, S, E, T, PR, SM, G, K, kinks, height, kind, face, point):
     """Heights of the query points ``C`` (n, 2) into the output arrays, in parallel."""
     for q in prange(C.shape[0]):

@@ -19,17 +19,14 @@ def _numba_cache():
 
 
 def ensure_core():
-    """Make ``machsurf_cad`` importable: installed, or the repository this add-on is linked from."""
-    try:
-        import machsurf_cad
-
-        return
-    except ImportError:
-        pass
+    """Make ``machsurf_cad`` importable: the repository this add-on lives in, by its real path (FreeCAD reaches
+    it through the Mod folder's link: numba keys its cache by the sources' path, and a path through another
+    link would compile the kernel again), else the installed package."""
     here = Path(__file__).resolve()
     for parent in here.parents:
         if (parent / "machsurf_cad" / "__init__.py").is_file():
-            sys.path.insert(0, str(parent))
+            if "machsurf_cad" not in sys.modules and str(parent) not in sys.path[:1]:
+                sys.path.insert(0, str(parent))
             break
     import machsurf_cad  # noqa: F401  (raises a clear ImportError if not found)
 
