@@ -611,6 +611,29 @@ def test_the_example_blocks_hole_edge_contact_equals_the_brute_force():
     assert v.clean and v.max_gouge < 0.0051  # at most the chordal tolerance's dip between positions
 
 
+@needs_kernel
+@pytest.mark.parametrize("engine", ["numpy", "compiled"])
+def test_a_second_maximum_on_one_edge_is_found(engine):
+    """FreeCAD's stock 45-degree chamfer (a flat bottom D5 under a widening cone) over the block's hole,
+    slightly wider than the hole: the bottom's rim meets the hole's circle on two sides, the higher side only
+    in a sliver 0.1 um deep between the edge's samples, both in the disc's centre sector (one seed group).
+    The search missed it by 0.0126 mm, and the raster gouged 0.025 mm; the edge's other samples whose bound
+    beats the best height are now searched too: equal to the brute force, and the raster is clean."""
+    from machsurf_cad.occ import read_step_faces
+
+    faces = read_step_faces(ROOT / "example_parts" / "freeform_block.step")
+    cone = ms.parse_cutter("cone:D=5,angle=22.5,L=8.85")
+    xy = np.array([[66.36234, 55.1777], [66.36526, 55.1777], [66.37306, 55.1777]])
+    res = drop_cutter(faces, cone, xy, engine=engine)
+    bf = _brute_force(faces, cone, xy)
+    assert np.all(res.kind == Contact.EDGE)
+    assert np.all(res.height >= bf - 1e-9) and np.abs(res.height - bf).max() < 1e-6
+    tp = ms.raster([faces[0]], cone, check_faces=faces[1:], stepover=1.7, extent=(60, 72, 50, 62),
+                   chordal_tolerance=0.005)  # fmt: skip
+    v = ms.verify(faces, tp)
+    assert v.clean and v.max_gouge < 0.0051
+
+
 def test_edge_search_is_newton_exact_along_the_curve():
     """The edge search against a dense 1-D search on the same curve (both exact on the surface): a
     circle-like trimming loop on a paraboloid patch, the ball touching it from outside."""

@@ -167,7 +167,7 @@ def _candidates(cx, cy, idx, rr, PR, SM, K):
             ek[k] = (emap[e] * 5 + sector) * 2 + (1 if feas[k] else 0)
             ec = ecov[j - n_int]
             if rho - ec <= R:
-                e_ub[k] = z + ec - prof_floor(PR, rho - ec)
+                e_ub[k] = z + SM[17][j - n_int] - prof_floor(PR, rho - ec)
     return val, zz, negr, ub, rim_ub, e_ub, feas, is_e, gk, ek, nl, ne
 
 
@@ -240,6 +240,7 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
     CB = (np.full(m, math.nan), np.full(m, math.nan))
     _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, (is_seed, rseed, eseed), bounds, gk, ek, f1, r1, CB)
     low = _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, is_seed, feas, is_e, ub, gk, ng, CB)
+    _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed, is_e, ek, n_eg)
     for kk in range(kinks.shape[0]):
         rk, hk = kinks[kk, 0], kinks[kk, 1]
         near_k = np.empty(m, np.bool_)
@@ -321,6 +322,33 @@ def _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, tried0, feas,
                 tried[s] = True
                 _solve(FACE, idx[s], cx, cy, S, E, T, PR, SM, K, W, best, bp, K[0], K[3])
     return low
+
+
+@njit(cache=True)
+def _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed, is_e, ek, n_eg):
+    """``_more_edge_rounds``: the untried edge sample of highest bound per group, away from the best contact,
+    while a bound beats the best height."""
+    xyz, n_int, ecov = SM[0], SM[3], SM[10]
+    m = idx.shape[0]
+    tried = eseed.copy()
+    for _ in range(4):
+        low = best[1] if best[4] > 0 else -math.inf
+        sel = np.zeros(m, np.bool_)
+        any_ = False
+        for k in range(m):
+            if tried[k] or not is_e[k] or not (e_ub[k] > low + 1e-7):
+                continue
+            j = idx[k]
+            near = best[4] > 0 and norm3(xyz[j, 0] - bp[0], xyz[j, 1] - bp[1], xyz[j, 2] - bp[2]) <= 2 * ecov[j - n_int]
+            if not near:
+                sel[k] = True
+                any_ = True
+        if not any_:
+            break
+        for s in _group_best(n_eg, ek, e_ub, sel, idx):
+            if s >= 0:
+                tried[s] = True
+                _solve(EDGE, idx[s], cx, cy, S, E, T, PR, SM, K, W, best, bp, K[0], K[3])
 
 
 @njit(cache=True)

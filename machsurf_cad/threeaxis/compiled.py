@@ -198,7 +198,8 @@ def _pool(fs: FaceSet):
     puv = np.ascontiguousarray(np.concatenate([fs.sample_uv, fs.edge_uv]))
     return (xyz, pf, puv, n_int, fs.edge_id.astype(np.int64), fs.edge_t.astype(float), fs.edge_dt.astype(float),
             fs.cover.astype(float), fs.rise.astype(float), fs.min_tilt.astype(float),
-            fs.edge_cover.astype(float), c.start, c.xyz, c.rise, c.cover, c.radius, c.top)  # fmt: skip
+            fs.edge_cover.astype(float), c.start, c.xyz, c.rise, c.cover, c.radius, c.top,
+            fs.edge_rise.astype(float))  # fmt: skip
 
 
 def _grid(xyz: np.ndarray, reach: float):

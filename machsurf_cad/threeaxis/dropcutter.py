@@ -362,7 +362,8 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     n_int = fs.sample_xyz.shape[0]
     e_cov = fs.edge_cover[np.maximum(sj - n_int, 0)]
     e_reach = rho - e_cov
-    e_ub = np.where(e_reach <= prof.R, xyz[:, 2] + e_cov - prof.floor(e_reach), -np.inf)
+    e_rise = fs.edge_rise[np.maximum(sj - n_int, 0)]
+    e_ub = np.where(e_reach <= prof.R, xyz[:, 2] + e_rise - prof.floor(e_reach), -np.inf)
     eb_keys, eb = group_max(ekey, e_ub, ed)
     # phase 1: each query's best face seed and best rim seed
     f1 = pick(f_seed, qi, val)
@@ -388,6 +389,7 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     _solve(fs, prof, C, cand, qi[r2], sj[r2], "rim")
     _solve(fs, prof, C, cand, qi[e2], sj[e2], "edge")
     low = _more_face_rounds(fs, prof, C, cand, m, (qi, sj, xyz, feasible, is_edge), f_seed, ub, fkey, fid_all, cover)
+    _more_edge_rounds(fs, prof, C, cand, m, (qi, sj, xyz), ed, e2, e_ub, e_cov, ekey)
     _kink_solves(fs, prof, C, cand, (qi, sj, rho, xyz), fkey, cover, low)
     return cand.best(m)
 
@@ -415,6 +417,28 @@ def _more_face_rounds(fs, prof, C, cand, m, pairs, f_seed, ub, fkey, fid_all, co
         tried[p3] = True
         _solve(fs, prof, C, cand, qi[p3], sj[p3], "face")
     return low
+
+
+def _more_edge_rounds(fs, prof, C, cand, m, pairs, ed, e2, e_ub, e_cov, ekey) -> None:
+    """Further rounds of edge searches: an edge seed is the best sample of its group, and an edge can have
+    another local maximum in the same group (a hole's circle under a flat bottom wider than the hole: the
+    bottom's rim reaches the circle on two sides, the higher side only in a sliver between samples): the
+    untried edge sample of highest bound per group, away from the best contact, until no bound beats it."""
+    qi, sj, xyz = pairs
+    tried = np.zeros(qi.size, bool)
+    tried[e2] = True
+    pool = ed[np.isfinite(e_ub[ed])]
+    for _ in range(_EXTRA_ROUNDS):
+        h_b, _, _, p_b = cand.best(m)
+        low = np.nan_to_num(h_b, nan=-np.inf)
+        p = pool[~tried[pool] & (e_ub[pool] > low[qi[pool]] + _BOUND_MARGIN_MM)]
+        near = np.linalg.norm(xyz[p] - p_b[qi[p]], axis=1) <= 2 * e_cov[p]  # NaN (nothing found yet): far
+        p = p[~near]
+        if p.size == 0:
+            break
+        p = p[_best_per(ekey[p], e_ub[p], sj[p])]
+        tried[p] = True
+        _solve(fs, prof, C, cand, qi[p], sj[p], "edge")
 
 
 def _kink_solves(fs, prof, C, cand, pairs, fkey, cover, low) -> None:

@@ -64,6 +64,24 @@ def _length_3d(s: BSplineSurface, c: BSplineCurve) -> float:
     return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
 
 
+def _edge_rise(c: BSplineCurve, t, de, half: float) -> np.ndarray:
+    """Per edge sample: how much z can rise along the edge within ``half`` of it (mm): its tangent's slope
+    there plus the tangent's largest turn per mm between samples (1.5 times, as the faces' bound), over an arc
+    a tenth longer than the chord; never more than ``half`` (``|dz| <= |dP|``)."""
+    duv = c.derivatives(t, 1)[:, 1, :]
+    tan = de.su * duv[:, :1] + de.sv * duv[:, 1:2]
+    ln = np.linalg.norm(tan, axis=1)
+    with np.errstate(all="ignore"):
+        u = tan / ln[:, None]
+        tz = np.abs(u[:, 2])
+        seg = np.linalg.norm(np.diff(de.point, axis=0), axis=1)
+        turn = np.arccos(np.clip(np.einsum("ij,ij->i", u[1:], u[:-1]), -1, 1)) / seg
+    if not (np.all(np.isfinite(tz)) and np.all(np.isfinite(turn))):
+        return np.full(len(t), half)  # a degenerate tangent somewhere: the chord's bound
+    kappa = 1.5 * float(turn.max(initial=0.0))
+    return np.minimum(half, 1.1 * half * (tz + kappa * half))
+
+
 def _closed(P) -> tuple[bool, bool]:
     """Whether the face's parameter box closes on itself along u and along v (a full revolution: a
     cylinder, torus or revolved face whose seam is inside the face), from its sample grid."""
@@ -120,6 +138,8 @@ class FaceSet:
     edge_cover : ndarray
         Per edge sample: half the largest distance between neighbouring samples of its edge (every
         point of the edge lies within it of a sample; z rises by at most as much along it).
+    edge_rise : ndarray
+        Per edge sample: how much z can rise along the edge within its ``edge_cover`` (mm; at most that).
     cover, rise : ndarray
         Per sample (face samples, then edge samples): a radius (mm) within which of some sample every
         face point lies, and a bound on how much higher z gets within it (mm), from the sample's slope
@@ -150,6 +170,7 @@ class FaceSet:
     bounds: np.ndarray = field(repr=False)
     edge_cover: np.ndarray = field(repr=False)
     min_tilt: np.ndarray = field(repr=False)
+    edge_rise: np.ndarray = field(repr=False)
 
     @cached_property
     def atlas(self) -> SurfaceAtlas:
@@ -190,7 +211,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
     P, UV, F = [], [], []
     edges: list[BSplineCurve] = []
     EF, EP, ET, EI, EDT, EUV = [], [], [], [], [], []
-    COV, RISE, ECOV, ERISE, CLOSED, EALONG, FLAT, EFLAT = [], [], [], [], [], [], [], []
+    COV, RISE, ECOV, ERISE, CLOSED, EALONG, FLAT, EFLAT, EZ = [], [], [], [], [], [], [], [], []
     total = 0
     for i, f in enumerate(faces):
         if isinstance(f, BSplineSurface):
@@ -236,6 +257,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
             EFLAT.append(np.maximum(e_slope - kappa * delta, 0.0))
             half = 0.5 * float(np.linalg.norm(np.diff(de.point, axis=0), axis=1).max())
             EALONG.append(np.full(n, half))
+            EZ.append(_edge_rise(c, t, de, half))
             ET.append(t)
             EUV.append(uv)
             EI.append(np.full(n, len(edges)))
@@ -269,4 +291,5 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         np.array([f.uv_bounds for f in out_faces], float),
         np.concatenate(EALONG),
         np.concatenate(FLAT + EFLAT),
+        np.concatenate(EZ),
     )
