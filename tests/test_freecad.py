@@ -316,6 +316,27 @@ def test_gui_command_on_a_selected_face(tmp_path):
     assert img.shape[:2] == (900, 1200) and len(np.unique(img.reshape(-1, 3), axis=0)) > 100
 
 
+def test_a_cam_programmers_steps_with_clicks_and_keys(tmp_path):
+    """The face picked, the CAM operation's toolbar button clicked (a Job and its tool made, the raster computed
+    and checked clean), the task panel opened from the tree, a step-over typed and OK clicked: recomputed with
+    fewer positions, clean. Each step captured as the screen shows it (docs/freecad_step_*.png)."""
+    r = _run([XVFB, "-a", "-s", "-screen 0 1600x1200x24", FREECAD], tmp_path, "steps_check.py")
+    assert r["selected"] == [["Face1"]] and r["ops_made"] == 1
+    first, second = r["first"], r["second"]
+    assert first["status"] == "ok" and first["verdict"].startswith("clean") and first["in_job"]
+    assert first["tool"] == "flat:D=5" and first["stepover"] == 2.0 and 0 < first["max_gouge"] <= 0.01
+    assert r["panel_open"]
+    assert second["status"] == "ok" and second["verdict"].startswith("clean") and second["stepover"] == 3.0
+    assert 0 < second["cut_points"] < first["cut_points"]
+    import numpy as np
+    from PIL import Image
+
+    assert len(r["shots"]) == 4
+    for png in r["shots"]:  # the whole window: tree, property view and the 3D view's shading
+        img = np.asarray(Image.open(png).convert("RGB"))
+        assert img.shape[0] > 1000 and img.shape[1] > 1400 and len(np.unique(img.reshape(-1, 3), axis=0)) > 500
+
+
 @pytest.mark.skipif(not HAS_OCP, reason="cadquery-ocp is needed to write the STEP files")
 def test_freecad_imports_every_multi_face_step_we_write(tmp_path):
     """FreeCAD 0.20 crashed (SIGSEGV) on our multi-face STEP files (OCCT's assembly structure): each file
