@@ -56,9 +56,12 @@ def main(result):
     Gui.Selection.addSelection(doc.Name, part.Name, top)
     result["selected"] = [list(s.SubElementNames) for s in Gui.Selection.getSelectionEx()]
     shot("face_picked")
+
     # 2: the CAM operation's toolbar button clicked
-    button = next(b for b in mw.findChildren(QtWidgets.QToolButton)
-                  if b.defaultAction() is not None and b.defaultAction().text() == "CAM operation" and b.isVisible())  # fmt: skip
+    def is_cam(b):
+        return b.defaultAction() is not None and b.defaultAction().text() == "CAM operation" and b.isVisible()
+
+    button = next(b for b in mw.findChildren(QtWidgets.QToolButton) if is_cam(b))
     fcscript.click(button)
     ops = [o for o in doc.Objects if o.Name.startswith("CamOperation")]
     result["ops_made"] = len(ops)

@@ -31,6 +31,7 @@ from .. import ensure_core
 ensure_core()
 
 from machsurf_cad.errors import InputError
+from machsurf_cad.linking import surface_for
 from machsurf_cad.results import strict_json
 
 from ..convert import face_to_numpy
@@ -365,10 +366,11 @@ class CamOperationFeature(_Base):
         m = self.core(ms.machining_surface, faces[0], cutter, axes=5, strategy=strategy, lead=value_of(obj.Lead),
                       tilt=value_of(obj.Tilt), axis_field=field, tolerance=value_of(obj.SurfaceTolerance))  # fmt: skip
         obj.SurfaceError = float(m.s1_fit.max_error)
-        sphere = ms.part_sphere(faces + others, value_of(obj.Clearance))  # passes linked over the whole part
+        # passes linked over the whole part: a cylinder about a long part, else a sphere
+        kind, geo = surface_for(faces + others, None, value_of(obj.Clearance))
         return self.core(ms.tool_paths, m, stepover=value_of(obj.StepOver), progress=False,
                          chordal_tolerance=value_of(obj.ChordalTolerance), clearance=value_of(obj.Clearance),
-                         safe_sphere=sphere)  # fmt: skip
+                         **{f"safe_{kind}": geo})  # fmt: skip
 
     def preview(self, obj, tp, check) -> None:
         """A 5-axis path's tips, axes and the body check's distance per position (empty for 3 axes, which
