@@ -284,8 +284,8 @@ def _whole_part_group(m) -> None:
     t.add_argument(
         "--check-faces",
         default="rest",
-        help="faces the tool must not cut into: rest (default; with --face: the faces of the solid it bounds) | all "
-        "(every solid of the file) | none | 1,2 (with --faces)",
+        help="faces the tool must not cut into: rest (default: every other face of the file) | body (with --face: "
+        "only the solid it bounds, the file's other solids being other parts) | all | none | 1,2 (with --faces)",
     )
     t.add_argument("--pattern", choices=["raster", "waterline"], default="raster", help="tool-path pattern")
     t.add_argument("--angle", type=_finite, default=0.0, help="raster direction in the plane, degrees (default 0)")
@@ -326,7 +326,9 @@ def _flank_parser(sub) -> None:
     f = sub.add_parser("flank", help="flank milling settings of a cylindrical cutter on a ruled surface")
     _face_input(f, "eq18 | hypar | liu (the paper's surfaces, exact)", "STEP file with a ruled face (or use --example)")
     f.add_argument("--ruled-tolerance", type=_finite, default=None, help="accept a non-ruled face within this many mm")
-    f.add_argument("--tool", default="cyl:D=20", help="cylindrical cutter, e.g. cyl:D=80 (mm)")
+    f.add_argument("--tool", nargs="+", default=["cyl:D=20"],
+                   help="cylindrical cutter, e.g. cyl:D=80 (mm); several (--whole on a STEP part): each stretch of "
+                   "the face by the largest that clears the part there")  # fmt: skip
     f.add_argument("--rule", type=_finite, default=0.5, help="rule position as a fraction of the u range [0, 1]")
     f.add_argument(
         "--setting",
@@ -367,7 +369,7 @@ def _flank_parser(sub) -> None:
         "--check-faces",
         default="rest",
         help="--whole on a STEP part: faces the cylinder is lifted clear of (rules it cannot clear are left out): "
-        "rest (default: the solid the face bounds) | all | none | 1,2",
+        "rest (default: every other face) | body (the solid the face bounds) | none | 1,2",
     )
     f.add_argument("--no-render", dest="render", action="store_false", help="numbers and files, no pictures")
     _gouge(f, "--tolerance")

@@ -447,3 +447,12 @@ def test_rotary_limit_cuts_out_what_the_machine_cannot_reach(tmp_path):
                        "0..180"), (["--max-axis-angle", 80], "add --toolpath")):  # fmt: skip
         r = run(*base, *extra, "-o", tmp_path / "bad")
         assert r.returncode == 1 and msg in r.stderr and r.stderr.count("\n") == 1, r.stderr
+
+
+def test_several_flank_diameters_need_the_part(tmp_path):
+    """Several --tool diameters are given out against a STEP part's faces: without --whole and a part, one line."""
+    for extra in ([], ["--whole"]):
+        r = run("flank", "--example", "hypar", "--tool", "cyl:D=20", "cyl:D=10", *extra, "-o", tmp_path / "x")
+        assert r.returncode == 1 and "add --whole and give a STEP part" in r.stderr and r.stderr.count("\n") == 1
+    r = run("flank", "--example", "hypar", "--tool", "cyl:D=20", "--no-render", "-o", tmp_path / "one")
+    assert r.returncode == 0, r.stderr  # one diameter through the same option

@@ -115,3 +115,39 @@ def test_flank_with_check_faces_lifts_links_and_writes_a_clean_path():
     assert v.clean, v.report()
     # every position's cylinder clear of the floor and wall by the brute force (links included)
     assert _brute_depth(res.toolpath.tip, res.toolpath.axis, faces) == 0.0
+
+
+def test_several_diameters_each_stretch_by_the_largest_that_clears():
+    """Cylinders D6 and D4 beside the wall: the D6 (axis at x = 3, side at x = 6) cannot pass the wall at
+    x = 5 beyond y = 25 - sqrt(2.99^2 - 2^2), the D4 (side at x = 4) passes it everywhere; the D6 machines the
+    blade up to there, the D4 the rest (closed forms within a rule step), together all of it. Each tool's
+    path is checked clean and its cylinder kept out of the wall by the brute force."""
+    blade = _blade()
+    wall = _wall()
+    res = ms.flank(blade, ["cyl:D=4", "cyl:D=6"], setting="standard-distributed", whole=True, check_faces=[wall],
+                   gouge_tolerance=0.01)  # fmt: skip
+    big, small = res.by_diameter
+    assert big.cutter.D == 6 and small.cutter.D == 4 and res.toolpath is big.toolpath
+    edge = (25.0 - math.sqrt(2.99**2 - 2.0**2)) / 40.0  # u of the last rule the D6 clears
+    step = float(np.diff(big.cleared.path.u).max())
+    (a0, b0), (a1, b1) = big.u_machined[0], small.u_machined[0]
+    assert len(big.u_machined) == len(small.u_machined) == 1
+    assert a0 == 0.0 and abs(b0 - edge) <= step and a1 == b0 and b1 == 1.0
+    assert big.machined_fraction == pytest.approx(b0, abs=1e-3) and small.machined_fraction == pytest.approx(
+        1 - b0, abs=1e-3
+    )
+    rep = res.report()["whole"]
+    assert rep["machined_fraction_all_tools"] == pytest.approx(1.0, abs=1e-3) and rep["u_left_out"] == []
+    part = [wall, Face(blade.to_bspline().surface, name="blade")]
+    for p in (big, small):
+        v = ms.verify(part, p.toolpath, gouge_tolerance=0.01)
+        assert v.clean, v.report()
+        tip, axis = p.toolpath.tip, p.toolpath.axis
+        d = wall.surface.evaluate(*np.meshgrid(np.linspace(0, 1, 300), np.linspace(0, 1, 300))).reshape(-1, 3)
+        for t0, a in zip(tip, axis):
+            q = d - t0
+            s = q @ a
+            rho = np.linalg.norm(q - np.outer(s, a), axis=1)
+            assert not np.any((s > 0) & (rho < p.cutter.D / 2 - 1e-9))  # no wall point inside its cylinder
+    with pytest.raises(ms.InputError, match="several diameters"):
+        ms.flank(blade, ["cyl:D=4", "cyl:D=6"], whole=True)

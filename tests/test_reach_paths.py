@@ -146,11 +146,11 @@ def test_bad_input():
 
 
 @needs_kernel
-def test_a_face_of_an_assembly_is_machined_in_its_own_body(tmp_path):
-    """A STEP of two solids: a plate and a lid 1 mm over it (another part of the assembly, like the pump's
-    face 731 and the shaft's body). The plate's top face is machined checked against its own solid by
-    default - every position kept, clean by the brute force - and against the lid too with --check-faces all,
-    where the lid leaves the ball no room: nothing is written."""
+def test_a_face_of_an_assembly_is_checked_against_every_solid_or_its_own(tmp_path):
+    """A STEP of two solids: a plate and a lid 1 mm over it (another part of an assembly, like the pump's face
+    731 and the shaft's body). The plate's top face checked against every face of the file: the lid leaves the
+    ball no room, nothing is written, and the message says how to machine the face in its own solid; with
+    --check-faces body it is machined against the plate alone: every position kept, clean by the brute force."""
     import json
 
     import cadquery as cq
@@ -169,7 +169,9 @@ def test_a_face_of_an_assembly_is_machined_in_its_own_body(tmp_path):
         and abs(f.surface.poles[0, 0, 2] - 5) < 1e-9
     )  # fmt: skip
     args = ["machining-surface", step, "--face", top, "--axes", "3", "--tool", "ball:D=6", "--toolpath"]
-    r = run(*args, "--stepover", 4, "-o", tmp_path / "own")
+    r = run(*args, "--stepover", 4, "-o", tmp_path / "all")
+    assert r.returncode == 1 and "reaches none" in r.stderr and "--check-faces body" in r.stderr, r.stderr
+    r = run(*args, "--stepover", 4, "--check-faces", "body", "-o", tmp_path / "own")
     assert r.returncode == 0, r.stderr
     assert "the 6 faces of body 0" in r.stdout
     rep = json.loads((tmp_path / "own" / "report.json").read_text())
@@ -178,7 +180,5 @@ def test_a_face_of_an_assembly_is_machined_in_its_own_body(tmp_path):
     cut = tp.tip[tp.move == ms.Move.CUT]
     assert np.allclose(cut[:, 2], 5.0, atol=1e-6) and np.abs(cut[:, :2]).max() <= 20 + 1e-6
     assert _brute_force(tp, [f.surface for f in faces if f.body == 0]).min() > -0.01
-    r = run(*args, "--stepover", 4, "--check-faces", "all", "-o", tmp_path / "all")
-    assert r.returncode == 1 and "reaches none" in r.stderr, r.stderr
     r = run(*args, "--check-faces", "0,1", "-o", tmp_path / "bad")
-    assert r.returncode == 1 and "rest (the solid it bounds) or all" in r.stderr
+    assert r.returncode == 1 and "rest (every other face of the file) or body" in r.stderr

@@ -79,6 +79,10 @@ class FlankResult(Result):
     cleared: Any = None
     """``whole`` with ``check_faces``: the rules lifted clear of the other faces or left out
     (:class:`~machsurf_cad.flank_milling.clear.ClearedFlank`); ``path`` is then the cleared path."""
+    by_diameter: tuple = ()
+    """Several tools: each one's share of the face, largest first
+    (:class:`~machsurf_cad.flank_milling.tools.FlankToolPass`); ``path``, ``toolpath`` and ``cleared`` are
+    those of the largest tool that machines any of it."""
 
     @property
     def R(self) -> float:
@@ -112,6 +116,13 @@ class FlankResult(Result):
                 "segments": [_segment_report(*x) for x in self.segment_envelopes],
                 "clear_of_part": self.cleared.report() if self.cleared is not None else None,
             }
+            if self.by_diameter:
+                from .tools import left_out
+
+                lo, hi = self.surface.u_range
+                rep["whole"]["by_diameter"] = [p.report() for p in self.by_diameter]
+                rep["whole"]["machined_fraction_all_tools"] = float(sum(p.machined_fraction for p in self.by_diameter))
+                rep["whole"]["u_left_out"] = [list(r) for r in left_out(self.by_diameter, lo, hi)]
         if self.study is not None:
             rep["study"] = self.study
         if self.radius_range is not None:
@@ -136,7 +147,7 @@ def _as_ruled(surface, ruled_tolerance: float) -> RuledSurface:
 
 def flank(
     surface: RuledSurface | FaceLike,
-    tool: ToolLike | float,
+    tool: ToolLike | float | Sequence[ToolLike | float],
     *,
     rule: float = 0.5,
     setting: SettingKind = "optimum",
@@ -161,8 +172,10 @@ def flank(
     ----------
     surface : RuledSurface, BSplineSurface or Face
         The ruled surface; a B-spline face is checked to be ruled within ``ruled_tolerance`` mm.
-    tool : str or Cutter
-        A cylindrical cutter, ``"cyl:D=20"`` (a flat end mill), or a radius in mm.
+    tool : str, Cutter, float or a sequence of them
+        A cylindrical cutter, ``"cyl:D=20"`` (a flat end mill), or a radius in mm. Several (with ``whole``
+        and ``check_faces``): each stretch of the face by the largest that clears the part there
+        (:mod:`~machsurf_cad.flank_milling.tools`, ``by_diameter``).
     rule : float
         Rule position as a fraction of the u range, in [0, 1].
     setting : {"standard-tangent", "standard-distributed", "standard-bisector", "optimum", "minimax"}
@@ -214,7 +227,16 @@ def flank(
     from ..cutters import FlatEndMill
 
     t0 = time.perf_counter()
-    cutter = _flank_cutter(tool)
+    given: list = list(tool) if isinstance(tool, (list, tuple)) else [tool]
+    tools = sorted((_flank_cutter(t) for t in given), key=lambda c: -c.D)
+    if not tools:
+        raise InputError("flank milling needs a cylindrical cutter: cyl:D=..")
+    cutter = tools[0]
+    if len(tools) > 1 and not (whole and check_faces is not None):
+        raise InputError(
+            "several diameters are given out per stretch of the face against the part's other faces: "
+            "give whole=True and check_faces (machsurf flank --whole on a STEP part)"
+        )
     if not 0.0 <= rule <= 1.0:
         raise InputError(f"rule {rule:g} is outside [0, 1] (fraction of the u range)")
     if side not in (1, -1):
@@ -238,17 +260,24 @@ def flank(
     path = tp = env = dev = None
     segment_envelopes: tuple = ()
     cleared = None
+    passes: tuple = ()
     if whole:
         t1 = time.perf_counter()
-        path = _whole_path(surf, cutter, setting, side, tolerance, progress, chunks, map_chunks)
-        body = FlatEndMill(cutter.D, max(cutter.length, path.length))
-        if check_faces is not None:
-            gtol = tolerance if gouge_tolerance is None else gouge_tolerance
-            cleared = _cleared(path, check_faces, gtol)
-            path = cleared.path
-            tp = _linked(path, body, [*check_faces, _face_of(surface, surf)], clearance, gtol)
+        gtol = tolerance if gouge_tolerance is None else gouge_tolerance
+        if len(tools) > 1:
+            passes = _by_diameter(surf, tools, (setting, side, tolerance, progress, chunks, map_chunks),
+                                  list(check_faces or []), gtol, clearance, _face_of(surface, surf))  # fmt: skip
+            main = next(p for p in passes if p.path is not None)
+            path, tp, cleared = main.path, main.toolpath, main.cleared
         else:
-            tp = path.toolpath(body, clearance=clearance)
+            path = _whole_path(surf, cutter, setting, side, tolerance, progress, chunks, map_chunks)
+            body = FlatEndMill(cutter.D, max(cutter.length, path.length))
+            if check_faces is not None:
+                cleared = _cleared(path, check_faces, gtol)
+                path = cleared.path
+                tp = _linked(path, body, [*check_faces, _face_of(surface, surf)], clearance, gtol)
+            else:
+                tp = path.toolpath(body, clearance=clearance)
         env, dev, segment_envelopes = _segment_envelopes(path, envelope_tolerance)
         times["whole_s"] = time.perf_counter() - t1
     data = None
@@ -275,7 +304,7 @@ def flank(
     times["total_s"] = time.perf_counter() - t0
     return FlankResult(
         surf, cutter, float(rule), float(u_p), st, e, comparison, path, tp, env, dev, data, rr, times, profiles,
-        segment_envelopes, sm, cleared,
+        segment_envelopes, sm, cleared, passes,
     )  # fmt: skip
 
 
@@ -302,6 +331,30 @@ def _whole_path(surf: RuledSurface, cutter, setting, side, tolerance, progress, 
         surf, cutter.D / 2, setting, side=side, tolerance=tolerance, progress=progress, chunks=chunks,
         map_chunks=map_chunks,
     )  # fmt: skip
+
+
+def _by_diameter(surf, tools, how, check_faces, gouge_tolerance, clearance, face) -> tuple:
+    """Each stretch of the face by the largest tool that clears the part there (:mod:`.tools`); no tool
+    machining any of it is an input error."""
+    from ..cutters import FlatEndMill
+    from .tools import by_diameter
+
+    setting, side, tolerance, progress, chunks, map_chunks = how
+
+    def link(path, c):
+        body = FlatEndMill(c.D, max(c.length, path.length))
+        return _linked(path, body, [*check_faces, face], clearance, gouge_tolerance)
+
+    passes = by_diameter(
+        surf, tools, lambda c: _whole_path(surf, c, setting, side, tolerance, progress, chunks, map_chunks),
+        check_faces, gouge_tolerance=gouge_tolerance, link=link,
+    )  # fmt: skip
+    if all(p.path is None for p in passes):
+        raise InputError(
+            f"no rule of the face can be flank-milled clear of the other faces with any of "
+            f"{', '.join(c.spec() for c in tools)}"
+        )
+    return passes
 
 
 def _cleared(path, check_faces, gouge_tolerance: float):

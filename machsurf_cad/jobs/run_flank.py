@@ -53,8 +53,10 @@ def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
         from .inputs import body_faces, part_faces
 
         faces = part_faces(spec.part)
-        if str(spec.check_faces).strip().lower() == "rest":  # the solid the face bounds (a file may hold several)
+        if str(spec.check_faces).strip().lower() == "body":  # the solid the face bounds: its others are other parts
             check = [f for f in body_faces(faces, spec.face) if f.index != spec.face] or None
+        elif str(spec.check_faces).strip().lower() == "rest":
+            check = [f for f in faces if f.index != spec.face] or None
         else:
             check = [faces[i] for i in select_faces(faces, spec.check_faces, what="--check-faces") if i != spec.face]
             check = check or None
@@ -145,10 +147,15 @@ def _whole_surface(st: Staging, say: Say, spec: FlankJob, res, surf, rep: dict) 
     env, dev = res.envelope, res.envelope_deviation
     # the tool body against the part: every face of a STEP part, or the example's surface
     faces = part_faces(spec.part) if spec.part else [_example_face(spec.example, spec.side)]
+    if spec.part and str(spec.check_faces).strip().lower() == "body":  # the face's solid: the others are other parts
+        from .inputs import body_faces
+
+        faces = body_faces(faces, spec.face)
     gtol = spec.gouge_tolerance if spec.gouge_tolerance is not None else spec.tolerance
     rep["whole"]["verify"], vcode = write_checked_toolpath(
         st, say, res.toolpath, faces, spec, tolerance=gtol, render=spec.render
     )
+    vcode = max(vcode, _other_tools(st, say, spec, res, rep, faces, gtol))
     env_faces = [
         Face(fit.surface, name=f"flank_envelope_{k}" if len(res.segment_envelopes) > 1 else "flank_envelope")
         for k, (_, fit, *_) in enumerate(res.segment_envelopes)
@@ -174,6 +181,35 @@ def _whole_surface(st: Staging, say: Say, spec: FlankJob, res, surf, rep: dict) 
         say(f"tolerance {spec.tolerance:g} mm NOT met on the whole surface")
         code = EXIT_TOLERANCE
     return max(code, vcode)
+
+
+def _other_tools(st: Staging, say: Say, spec: FlankJob, res, rep: dict, faces, gtol: float) -> int:
+    """Several diameters: each tool's share said; the paths of the tools after the main one checked and
+    written as ``toolpath_2``, ``toolpath_3``, ... with the next tool numbers. The worst exit code."""
+    import dataclasses
+
+    from .run_verify import write_checked_toolpath
+
+    code, k = EXIT_OK, 1
+    for p, prep in zip(res.by_diameter, rep["whole"].get("by_diameter", [])):
+        ranges = ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in p.u_machined) or "none"
+        say(
+            f"{p.cutter.spec()}: {prep['n_rules_machined']} rules, u in {ranges}, "
+            f"{100 * p.machined_fraction:.1f} % of the face" + (f" ({p.why_none})" if p.why_none else "")
+        )
+        if p.toolpath is None or p.toolpath is res.toolpath:
+            continue
+        k += 1
+        sub = dataclasses.replace(spec, tool_number=spec.tool_number + k - 1)
+        say(f"tool {sub.tool_number}, {p.cutter.spec()}: toolpath_{k}")
+        prep["verify"], c = write_checked_toolpath(st, say, p.toolpath, faces, sub, tolerance=gtol, render=False,
+                                                   stem=f"toolpath_{k}")  # fmt: skip
+        code = max(code, c)
+    if res.by_diameter:
+        w = rep["whole"]
+        left = ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in w["u_left_out"]) or "none"
+        say(f"all tools: {100 * w['machined_fraction_all_tools']:.1f} % of the face machined; u left out: {left}")
+    return code
 
 
 def _say_whole(say: Say, spec: FlankJob, res) -> None:

@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 
+from ..errors import InputError
 from .base import EXIT_OK, JobOutcome, Say, Staging, face_input, finish
 from .specs import MachiningSurfaceJob
 
@@ -28,17 +29,17 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
     faces_of_part: list = []
 
     def part():
-        """Every face of the part the face came from, read once: its body (solid) in a file of several unless
-        ``--check-faces all``; an example is its own part."""
+        """Every face of the file the face came from, read once (an example is its own part); with
+        ``--check-faces body`` those of the solid it bounds (the file's other solids are other parts)."""
         if not faces_of_part:
             from .inputs import body_faces, part_faces
 
             every = part_faces(spec.part) if spec.part else [face]
-            faces_of_part.extend(every if spec.check_faces == "all" else body_faces(every, face.index))
+            faces_of_part.extend(body_faces(every, face.index) if spec.check_faces == "body" else every)
             if len(faces_of_part) < len(every):
                 say(
                     f"part: the {len(faces_of_part)} faces of body {face.body} (the solid face {face.index} bounds) "
-                    f"of the file's {len(every)}; --check-faces all checks every body"
+                    f"of the file's {len(every)} (--check-faces body: its other solids are left out)"
                 )
         return faces_of_part
 
@@ -226,7 +227,17 @@ def _trimmed_to_reach(say: Say, spec: MachiningSurfaceJob, ms, tp, faces):
     skim-linked (:func:`machsurf_cad.trim_to_reach`); the figures said."""
     from ..threeaxis.reachpath import trim_to_reach
 
-    out = trim_to_reach(tp, faces, gouge_tolerance=spec.gouge_tolerance, clearance=spec.clearance, face=ms.nominal)
+    try:
+        out = trim_to_reach(tp, faces, gouge_tolerance=spec.gouge_tolerance, clearance=spec.clearance,
+                            face=ms.nominal)  # fmt: skip
+    except InputError as exc:
+        bodies = sorted({f.body for f in faces if f.body >= 0})
+        if len(bodies) > 1 and "reaches none" in str(exc):  # another part of an assembly may stand in the way
+            raise InputError(
+                f"{exc}; the file holds {len(bodies)} solids: if the others are other parts of an assembly, "
+                "--check-faces body machines the face in its own solid"
+            ) from None
+        raise
     i = out.info
     frac = i.get("machined_area_fraction")
     say(

@@ -102,7 +102,8 @@ def on_gouge(spec) -> str:
     return "trim" if trim else "allow" if spec.allow_gouge else "refuse"
 
 
-def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool, check=None):
+def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool, check=None,
+                   stem: str = "toolpath"):  # fmt: skip
     """Check ``tp`` against the part (:func:`machsurf_cad.pathcheck.check_toolpath`), then write what may
     be written: the clean path, its clear stretches (``spec.trim_gouges``), or the gouging path
     (``spec.allow_gouge``, listed in the report). Returns ``(verify report, exit code, the path written or
@@ -117,7 +118,7 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
     if render:
         _draw_check(st, tp, pc.check, rep, tolerance)
     if pc.toolpath is not None:
-        write_toolpath(st, pc.toolpath, spec)
+        write_toolpath(st, pc.toolpath, spec, stem)
     if pc.verdict == "trimmed":
         cut, again = pc.toolpath, pc.recheck
         assert cut is not None and again is not None
@@ -151,11 +152,13 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
     return rep, (EXIT_TOLERANCE if pc.toolpath is None else EXIT_OK), pc.toolpath
 
 
-def write_checked_toolpath(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool, check=None):
+def write_checked_toolpath(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, render: bool, check=None,
+                           stem: str = "toolpath"):  # fmt: skip
     """Check ``tp`` against the part and write it unless it gouges (:func:`_write_checked`); with
     ``spec.simulate`` the written path's cut is simulated on the part too (report ``simulate``; a simulated
     gouge beyond ``tolerance`` exits 2). Returns ``(verify report, exit code)``."""
-    rep, code, written = _write_checked(st, say, tp, faces, spec, tolerance=tolerance, render=render, check=check)
+    rep, code, written = _write_checked(st, say, tp, faces, spec, tolerance=tolerance, render=render, check=check,
+                                        stem=stem)  # fmt: skip
     if getattr(spec, "simulate", False):
         if written is None:
             say("--simulate: nothing written, nothing simulated")

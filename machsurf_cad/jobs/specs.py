@@ -260,10 +260,10 @@ class MachiningSurfaceJob(_Post, JobSpec):
             ]  # fmt: skip
             if given:
                 raise InputError(f"{given[0]} applies to the whole-part 3-axis engine: add --faces (e.g. --faces top)")
-            if self.check_faces not in ("rest", "all"):
+            if self.check_faces not in ("rest", "body"):
                 raise InputError(
-                    "--check-faces of one face is rest (the solid it bounds) or all (every solid of the file); "
-                    f"face lists need --faces, got {self.check_faces!r}"
+                    "--check-faces of one face is rest (every other face of the file) or body (the faces of the "
+                    f"solid it bounds); face lists need --faces, got {self.check_faces!r}"
                 )
 
     @property
@@ -378,7 +378,8 @@ class FlankJob(_Post, JobSpec):
     example: str | None = None
     face: int = 0
     ruled_tolerance: float | None = None
-    tool: str = "cyl:D=20"
+    tool: str | tuple = "cyl:D=20"
+    """A cylindrical cutter, or several (``--whole`` on a STEP part: the largest that clears per stretch)."""
     rule: float = 0.5
     setting: SettingKind = "optimum"
     side: int = 1
@@ -410,6 +411,14 @@ class FlankJob(_Post, JobSpec):
         if self.smooth is not None and not (isinstance(self.smooth, (int, float)) and self.smooth >= 0):
             raise InputError(f"smooth must be an axis turn bound >= 0 deg/mm (0: the default), got {self.smooth!r}")
         _positive("ruled_tolerance (mm)", self.ruled_tolerance, allow_none=True)
+        if isinstance(self.tool, (list, tuple)):
+            tools = tuple(str(t) for t in self.tool)
+            if not tools:
+                raise InputError("--tool names no cutter")
+            object.__setattr__(self, "tool", tools[0] if len(tools) == 1 else tools)
+        if isinstance(self.tool, tuple) and not (self.whole and self.part):
+            raise InputError("several --tool diameters are given out against the part's faces: add --whole and "
+                             "give a STEP part")  # fmt: skip
         if int(self.chunks) < 1:
             raise InputError(f"chunks must be >= 1, got {self.chunks}")
         self._check_post()
