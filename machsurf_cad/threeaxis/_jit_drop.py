@@ -23,7 +23,7 @@ from ._jit_solve import ON_CIRCLE, edge_search, enters_face, face_newton, into_d
 
 FACE, RIM, EDGE, TIP, SAMPLE = 1, 2, 3, 4, 5
 
-KERNEL_SOURCES = "b566316a98e3e647"
+KERNEL_SOURCES = "352096a7714c5446"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 
@@ -49,11 +49,17 @@ def _solve(kind, j, cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk):
     D = W[0]
     if kind == FACE:
         surf(S, f, u0, v0, 0, D, W[5])
-        if hyp(D[0, 0] - cx, D[0, 1] - cy) > R * (1 - 1e-3):
-            u0, v0 = into_disc(S, sp, R, cx, cy, f, u0, v0, W)
-        u, v, g = face_newton(S, PR, sp, cx, cy, f, u0, v0, W)
-        if isfin(g) and inside(S, T, f, u, v) and enters_face(S, T, R, cx, cy, f, u, v, W):
-            _add(best, bp, g, FACE, f, D[0, 0], D[0, 1], D[0, 2])
+        n_starts = 1
+        ua, va = u0, v0
+        if hyp(D[0, 0] - cx, D[0, 1] - cy) > R * (1 - 1e-3):  # as _solve: onto the circle, and further in
+            ua, va = into_disc(S, sp, R, cx, cy, f, u0, v0, W, False)
+            n_starts = 2
+        for s in range(n_starts):
+            us, vs = (ua, va) if s == 0 else into_disc(S, sp, R, cx, cy, f, u0, v0, W, True)
+            u, v, g = face_newton(S, PR, sp, cx, cy, f, us, vs, W)
+            if isfin(g) and inside(S, T, f, u, v) and enters_face(S, T, R, cx, cy, f, u, v, W):
+                _add(best, bp, g, FACE, f, D[0, 0], D[0, 1], D[0, 2])
+        u0, v0 = ua, va
         if K[4] > 0:
             u, v, ok = tip_solve(S, cx, cy, f, u0, v0, W)
             g = D[0, 2] - K[7]
@@ -209,7 +215,6 @@ def _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K):
 def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
     """The tip height at one query point: ``best`` = (rank, height, kind, face, found), ``bp`` the contact."""
     xyz, pf = SM[0], SM[1]
-    cov, rise = SM[7], SM[8]
     R, h_R = K[0], K[3]
     W = (np.empty((6, 3)), np.empty((6, 3)), np.empty((6, 3)), np.empty((9, 3)), np.empty((3, 3)), np.empty(480))
     best[4] = 0.0
@@ -242,14 +247,41 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
     low = _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, is_seed, feas, is_e, ub, gk, ng, CB)
     _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed, is_e, ek, n_eg)
     for kk in range(kinks.shape[0]):
-        rk, hk = kinks[kk, 0], kinks[kk, 1]
-        near_k = np.empty(m, np.bool_)
-        for k in range(m):
-            j = idx[k]
-            near_k[k] = abs(rr[k] - rk) <= cov[j] and zz[k] + rise[j] - hk >= low
-        for s in _group_best(ng, gk, zz, near_k, idx):
+        _kink_rounds(kinks[kk, 0], kinks[kk, 1], low, cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, zz, gk, ng)
+
+
+@njit(cache=True)
+def _kink_rounds(rk, hk, low, cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, zz, gk, ng):
+    """``_kink_solves`` for one kink circle: per group, inside the circle and outside it apart, the highest near
+    sample whose bound reaches ``low``, then rounds of the untried ones whose bound beats the best height."""
+    cov, rise = SM[7], SM[8]
+    m = idx.shape[0]
+    near = np.empty(m, np.bool_)
+    bound = np.empty(m)
+    key = np.empty(m, np.int64)
+    for k in range(m):
+        j = idx[k]
+        near[k] = abs(rr[k] - rk) <= cov[j]
+        bound[k] = zz[k] + rise[j] - hk
+        key[k] = gk[k] * 2 + (1 if rr[k] < rk else 0)
+    tried = np.zeros(m, np.bool_)
+    sel = np.empty(m, np.bool_)
+    for k in range(m):
+        sel[k] = near[k] and bound[k] >= low
+    seeds = _group_best(2 * ng, key, zz, sel, idx)
+    for _ in range(5):
+        any_ = False
+        for s in seeds:
             if s >= 0:
+                any_ = True
+                tried[s] = True
                 _solve(RIM, idx[s], cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk)
+        if not any_:
+            break
+        top = best[1] if best[4] > 0 else -math.inf
+        for k in range(m):
+            sel[k] = near[k] and not tried[k] and bound[k] > top + 1e-7
+        seeds = _group_best(2 * ng, key, bound, sel, idx)
 
 
 @njit(cache=True)

@@ -218,16 +218,18 @@ def project_circle(S, sp, R, cx, cy, f, u, v, n, W):
 
 
 @njit(cache=True)
-def into_disc(S, sp, R, cx, cy, f, u, v, W, iters=16):
-    """``_into_disc``: onto a circle just inside the rim, else towards the face's point nearest the axis."""
+def into_disc(S, sp, R, cx, cy, f, u, v, W, deeper, iters=16):
+    """``_into_disc``: onto a circle just inside the rim, else (or ``deeper``: also from it) towards the face's
+    point nearest the axis."""
     D, wk = W[0], W[5]
     target = R * (1 - 1e-3)
+    stop = target * (1 - 1e-6) if deeper else target * (1 + 1e-9)
     u, v = project_circle(S, sp, target, cx, cy, f, u, v, 6, W)
     for _ in range(iters):
         surf(S, f, u, v, 1, D, wk)
         dx, dy = D[0, 0] - cx, D[0, 1] - cy
         rho = hyp(dx, dy)
-        if not (rho > target):
+        if not (rho > stop):
             break
         a = D[1, 0] ** 2 + D[1, 1] ** 2
         b = D[1, 0] * D[2, 0] + D[1, 1] * D[2, 1]
@@ -397,7 +399,7 @@ def edge_search(S, E, PR, cx, cy, e, t0, dt, W, iters=40):
         t = _onto_circle(S, E, PR, cx, cy, e, t, ts, gs, W)
         edge_derivs(S, E, e, t, 0, Ed, cu, wk)
         g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
-    if feasible and rho <= R * (1 + 1e-12) and _enters_edge(S, E, R, cx, cy, e, t, W):
+    if feasible and rho <= R * (1 + 1e-11) and _enters_edge(S, E, R, cx, cy, e, t, W):
         return g
     return -math.inf
 

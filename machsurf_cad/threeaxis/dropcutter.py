@@ -268,15 +268,21 @@ def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str, kink: int | None = 
     if kind == "face":
         P0 = _surface_eval(fs, fid, u0, v0, 0)[0]
         out = np.nonzero(np.hypot(*(P0[:, :2] - c).T) > prof.R * (1 - 1e-3))[0]
+        starts = [(u0, v0)]
         if out.size:  # starts outside the disc or at its rim: towards the axis, onto a circle just inside
             # the rim where the face reaches it (1e-3 R: a ball's profile turns vertical at the rim, where
-            # Newton would crawl), else to the face's point nearest the axis (a sliver under the rim)
+            # Newton would crawl), else to the face's point nearest the axis (a sliver under the rim); and a
+            # second start further in, towards that point, from which Newton may reach a higher maximum
             u0, v0 = u0.copy(), v0.copy()
-            u0[out], v0[out] = _into_disc(fs, prof.R, c[out], fid[out], u0[out], v0[out])
-        u, v, g, P = _face_newton(fs, prof, c, fid, u0, v0)
-        ok = np.isfinite(g) & _inside(fs, fid, u, v)
-        ok[ok] = _enters_face(fs, prof.R, c[ok], fid[ok], u[ok], v[ok], P[ok])
-        cand.add(q, g, Contact.FACE, fid, P, ok)
+            u1, v1 = u0[out], v0[out]
+            u0[out], v0[out] = _into_disc(fs, prof.R, c[out], fid[out], u1, v1)
+            starts = [(u0, v0), _into_disc(fs, prof.R, c[out], fid[out], u1.copy(), v1.copy(), deeper=True)]
+        for k, (us, vs) in enumerate(starts):
+            sel = slice(None) if k == 0 else out
+            u, v, g, P = _face_newton(fs, prof, c[sel], fid[sel], us, vs)
+            ok = np.isfinite(g) & _inside(fs, fid[sel], u, v)
+            ok[ok] = _enters_face(fs, prof.R, c[sel][ok], fid[sel][ok], u[ok], v[ok], P[ok])
+            cand.add(q[sel], g, Contact.FACE, fid[sel], P, ok)
         if prof.pointed:
             u, v, ok, P = _tip_solve(fs, c, fid, u0.copy(), v0.copy())
             g = P[:, 2] - prof(np.zeros(P.shape[0]))[0]
@@ -442,14 +448,27 @@ def _more_edge_rounds(fs, prof, C, cand, m, pairs, ed, e2, e_ub, e_cov, ekey) ->
 
 
 def _kink_solves(fs, prof, C, cand, pairs, fkey, cover, low) -> None:
-    """Circles inside the rim where the profile's slope jumps (a cone's or APT tool's bottom edge): the
-    highest sample near each, where its bound can still beat ``low``."""
+    """Circles inside the rim where the profile's slope jumps (a cone's or APT tool's bottom edge): per group,
+    inside the circle and outside it apart, the highest sample near each, where its bound can still beat
+    ``low`` (from inside, the solve reaches a sliver of the face just across the circle); then rounds of the
+    untried samples whose bound beats the best height (a face can meet the circle in two places of one group)."""
     qi, sj, rho, xyz = pairs
+    m = C.shape[0]
     for k, (rk, hk) in enumerate(prof.kinks):
         near_k = np.nonzero(np.abs(rho - rk) <= cover)[0]
-        near_k = near_k[xyz[near_k, 2] + fs.rise[sj[near_k]] - hk >= low[qi[near_k]]]
-        seeds_k = near_k[_best_per(fkey[near_k], xyz[near_k, 2], sj[near_k])]
-        _solve(fs, prof, C, cand, qi[seeds_k], sj[seeds_k], "rim", kink=k)
+        bound = xyz[:, 2] + fs.rise[sj] - hk
+        key = fkey * 2 + (rho < rk)
+        tried = np.zeros(qi.size, bool)
+        seeds_k = near_k[bound[near_k] >= low[qi[near_k]]]
+        seeds_k = seeds_k[_best_per(key[seeds_k], xyz[seeds_k, 2], sj[seeds_k])]
+        for _ in range(1 + _EXTRA_ROUNDS):
+            if seeds_k.size == 0:
+                break
+            tried[seeds_k] = True
+            _solve(fs, prof, C, cand, qi[seeds_k], sj[seeds_k], "rim", kink=k)
+            best = np.nan_to_num(cand.best(m)[0], nan=-np.inf)
+            p = near_k[~tried[near_k] & (bound[near_k] > best[qi[near_k]] + _BOUND_MARGIN_MM)]
+            seeds_k = p[_best_per(key[p], bound[p], sj[p])]
 
 
 _EXTRA_ROUNDS = 4

@@ -267,14 +267,16 @@ def _project_circle(fs, R, c, fid, u, v, n: int = 4):
     return u, v
 
 
-def _into_disc(fs, R, c, fid, u, v, iters: int = 16):
+def _into_disc(fs, R, c, fid, u, v, deeper: bool = False, iters: int = 16):
     """Starts moved onto a circle just inside the rim (``rho = R (1 - 1e-3)``: a ball's profile turns
     vertical at the rim, where Newton would crawl), and where the face does not reach that circle near
     the start, to its point nearest the axis (damped Gauss-Newton on ``|S_xy - c|^2``, halving steps
     that do not get closer): a face that only grazes the disc (a sliver under the rim, e.g. the
     vertical foot of a boss's round under a bull-nose's corner) has its feasible starts there. Starts
-    that cannot get inside stay where the descent ends."""
+    that cannot get inside stay where the descent ends. ``deeper``: the descent also from the circle (a second
+    start for the face's maximum: from the circle, Newton may end on a lower local maximum near the rim)."""
     target = R * (1 - 1e-3)
+    stop = target * (1 - 1e-6) if deeper else target * (1 + 1e-9)  # whether on the circle: never rounding's call
     u, v = _project_circle(fs, target, c, fid, u, v, 6)
     active = np.ones(u.shape, bool)
     for _ in range(iters):
@@ -284,7 +286,7 @@ def _into_disc(fs, R, c, fid, u, v, iters: int = 16):
         P, Su, Sv = _surface_eval(fs, fid[a_], u[a_], v[a_], 1)
         d = P[:, :2] - c[a_]
         rho = np.hypot(d[:, 0], d[:, 1])
-        active[a_[~(rho > target)]] = False
+        active[a_[~(rho > stop)]] = False
         xu, xv = Su[:, :2], Sv[:, :2]
         a = np.einsum("ij,ij->i", xu, xu)
         b = np.einsum("ij,ij->i", xu, xv)
@@ -459,7 +461,7 @@ def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
         t = _onto_circle(fs, prof, c, eid, t, ts, g_s, out)
         P = _edge_points(fs, eid, t)
         g, rho = _edge_g(prof, c, P)
-    ok = feasible & (rho <= R * (1 + 1e-12))
+    ok = feasible & (rho <= R * (1 + 1e-11))  # looser than _onto_circle's 1e-12: its point, evaluated again, stays in
     ok &= _enters_edge(fs, R, c, eid, t, rho)
     return np.where(ok, g, -np.inf), P
 
@@ -581,7 +583,7 @@ def _onto_circle(fs, prof, c, eid, t, ts, g, out, iters: int = 40):
         xa, ti, to = x[act], t_in[act], t_out[act]
         P, P1 = _edge_derivs(fs, eid[idx[act]], xa, 1)
         _, rho, _, r1 = _edge_g(prof, c[idx[act]], P, P1)
-        f = rho - R  # inside: within the disc as the edge search accepts it (rho <= R (1 + 1e-12))
+        f = rho - R  # inside: within the disc (rho <= R (1 + 1e-12); the edge search accepts up to 1e-11)
         ti = np.where(f <= 1e-12 * R, xa, ti)
         to = np.where(f > 1e-12 * R, xa, to)
         newton = xa - f / np.where(r1 != 0, r1, np.inf)
