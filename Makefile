@@ -11,6 +11,7 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	$(BIN)/python -m machsurf_cad.threeaxis.compiled
+	$(FC_KERNEL)
 	touch $(STAMP)
 
 venv: $(STAMP)
@@ -62,16 +63,17 @@ np124:
 # the FreeCAD add-on, linked into the current user's Mod folder (FreeCAD 0.20+ on Linux)
 FC_MOD ?= $(HOME)/.local/share/FreeCAD/Mod
 FC_NUMBA ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/machsurf_cad/freecad-numba
+# the drop-cutter kernel compiled once for FreeCAD's Python when it has numba (Debian: python3-numba), into the
+# cache the add-on (and the FreeCAD tests) read; without FreeCAD or numba nothing happens (the numpy path runs)
+FC_KERNEL = -command -v freecadcmd >/dev/null 2>&1 && NUMBA_CACHE_DIR=$(FC_NUMBA) freecadcmd -c "import sys; \
+	sys.path.insert(0, '$(CURDIR)'); import runpy; runpy.run_module('machsurf_cad.threeaxis.compiled', \
+	run_name='__main__')" < /dev/null
 workbench-install:
 	mkdir -p $(FC_MOD)
 	rm -f $(FC_MOD)/machsurf  # the link of versions before 0.3.0
 	ln -sfn $(CURDIR) $(FC_MOD)/machsurf_cad
 	@echo "linked $(FC_MOD)/machsurf_cad -> $(CURDIR) (package.xml: workbench/); restart FreeCAD, pick machsurf"
-	@# the drop-cutter kernel compiled once for FreeCAD's Python when it has numba (Debian: python3-numba),
-	@# into the cache the add-on reads; without numba the add-on runs the numpy path
-	-command -v freecadcmd >/dev/null 2>&1 && NUMBA_CACHE_DIR=$(FC_NUMBA) freecadcmd -c "import sys; \
-	sys.path.insert(0, '$(CURDIR)'); import runpy; runpy.run_module('machsurf_cad.threeaxis.compiled', \
-	run_name='__main__')" < /dev/null
+	$(FC_KERNEL)
 
 workbench-uninstall:
 	rm -f $(FC_MOD)/machsurf_cad $(FC_MOD)/machsurf

@@ -316,6 +316,7 @@ def test_gui_command_on_a_selected_face(tmp_path):
     assert img.shape[:2] == (900, 1200) and len(np.unique(img.reshape(-1, 3), axis=0)) > 100
 
 
+@pytest.mark.slow
 def test_a_cam_programmers_steps_with_clicks_and_keys(tmp_path):
     """The face picked, the CAM operation's toolbar button clicked (a Job and its tool made, the raster computed
     and checked clean), the task panel opened from the tree, a step-over typed and OK clicked: recomputed with
