@@ -317,6 +317,7 @@ def test_gui_command_on_a_selected_face(tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.skipif((FREECAD is None or XVFB is None) and not IN_CI, reason="FreeCAD GUI or xvfb-run is not installed")
 def test_a_cam_programmers_steps_with_clicks_and_keys(tmp_path):
     """The face picked, the CAM operation's toolbar button clicked (a Job and its tool made, the raster computed
     and checked clean), the task panel opened from the tree, a step-over typed and OK clicked: recomputed with
