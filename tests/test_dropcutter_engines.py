@@ -219,3 +219,31 @@ def test_fine_cells_cover_every_face_point(parts, name):
         assert np.all(np.linalg.norm(p - pool[owner[near]], axis=1) <= c.radius[owner[near]])
         checked += p.shape[0]
     assert checked > 2000
+
+
+@pytest.mark.parametrize("engine", ["numpy", pytest.param("compiled", marks=needs_numba)])
+def test_a_closed_edge_is_searched_across_its_seam(engine):
+    """A disc of radius 5 trimmed by one circle (its seam at angle 0) from a plane rising towards -10 deg: a
+    flat end mill D12 centred over it rests on the circle's highest point, z = 5 tan(5 deg) at -10 deg, just
+    before the seam. Searched from the seam's first sample, a window stopped at the seam saw only the lower
+    side (FreeCAD's stock bull nose gouged the block by 0.027 mm that way); it runs across the seam."""
+    from machsurf_cad.geometry.builders import circular_arc
+    from machsurf_cad.threeaxis import solves
+    from machsurf_cad.threeaxis.faceset import face_set
+
+    slope = np.tan(np.radians(5.0))
+    d = np.array([np.cos(np.radians(-10.0)), np.sin(np.radians(-10.0))])
+    poles = [[[x, y, slope * (np.array([x, y]) @ d)] for y in (-20.0, 20.0)] for x in (-20.0, 20.0)]
+    plane = ms.builders.bezier_surface(np.array(poles))
+    disc = ms.Face(plane, ((circular_arc(5.0 / 40.0, 0.0, 360.0, center=(0.5, 0.5)),),), name="disc")
+    fs = face_set([disc], spacing=2.0)
+    e = int(np.nonzero(fs.edge_loop)[0][0])
+    k = int(np.nonzero(fs.edge_id == e)[0][0])  # the loop's first sample: at its seam
+    tool = ms.FlatEndMill(12.0)
+    c = np.zeros((1, 2))
+    expect = 5.0 * slope
+    if engine == "numpy":
+        prof = solves._Profile(tool)
+        g, _ = solves._edge_search(fs, prof, c, np.array([e]), fs.edge_t[k : k + 1], fs.edge_dt[k : k + 1])
+        assert g[0] == pytest.approx(expect, abs=1e-9)
+    assert ms.drop_cutter([disc], tool, c, engine=engine).height[0] == pytest.approx(expect, abs=1e-9)

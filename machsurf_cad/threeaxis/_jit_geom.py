@@ -252,7 +252,11 @@ def _curve_uv(E, e, x, order, cu, wk):
 @njit(cache=True)
 def edge_derivs(S, E, e, x, order, out, cu, wk):
     """Surface point of edge ``e`` at ``x`` into ``out[0]`` and its first (second) derivatives in ``x`` into
-    ``out[1]`` (``out[2]``); ``out`` rows 3.. are scratch for the surface's derivatives."""
+    ``out[1]`` (``out[2]``); ``out`` rows 3.. are scratch for the surface's derivatives. A closed edge's
+    parameter runs on across its seam."""
+    if E[0][e, 6] == 1:
+        lo, hi = E[1][e, 0], E[1][e, 1]
+        x = lo + (x - lo) % (hi - lo)
     _curve_uv(E, e, x, order, cu, wk)
     f = E[0][e, 5]
     # surface derivatives into out[3:9] via a view

@@ -367,8 +367,9 @@ def edge_search(S, E, PR, cx, cy, e, t0, dt, W, iters=40):
     ``W[3][0]``."""
     Ed, cu, wk = W[3], W[4], W[5]
     R = PR[1][0]
-    a = max(t0 - 2 * dt, E[1][e, 0])
-    b = min(t0 + 2 * dt, E[1][e, 1])
+    loop = E[0][e, 6] == 1  # a closed edge's window runs across its seam
+    a = t0 - 2 * dt if loop else max(t0 - 2 * dt, E[1][e, 0])
+    b = t0 + 2 * dt if loop else min(t0 + 2 * dt, E[1][e, 1])
     n = 17
     ts = wk[400:417]
     gs = wk[420:437]  # the samples' values, -inf outside the disc
@@ -384,9 +385,44 @@ def edge_search(S, E, PR, cx, cy, e, t0, dt, W, iters=40):
             kbest = k
     if not isfin(gs[kbest]):  # ``_graze``: an edge grazing the disc between the samples
         kbest = _graze(S, E, PR, cx, cy, e, ts, gs, rs, W)
-    feasible = isfin(gs[kbest])
-    lo, hi = ts[max(kbest - 1, 0)], ts[min(kbest + 1, n - 1)]
-    t = ts[kbest]
+    if not isfin(gs[kbest]):
+        edge_derivs(S, E, e, ts[kbest], 0, Ed, cu, wk)
+        return -math.inf
+    # from each of the (at most) three highest local maxima of the samples: an edge may rise to two maxima
+    # within the window, the higher one not the best sample's
+    best_g, bx, by, bz = -math.inf, math.nan, math.nan, math.nan
+    taken = wk[460:463]
+    for r in range(3):
+        kr = -1
+        for k in range(n):
+            if not isfin(gs[k]) or (k > 0 and gs[k - 1] > gs[k]) or (k < n - 1 and gs[k + 1] > gs[k]):
+                continue
+            if (r > 0 and k == taken[0]) or (r > 1 and k == taken[1]):
+                continue
+            if kr < 0 or gs[k] > gs[kr]:
+                kr = k
+        if r == 0:
+            kr = kbest
+        if kr < 0:
+            break
+        taken[r] = kr
+        g = _edge_from(S, E, PR, cx, cy, e, kr, ts, gs, W, iters)
+        if g > best_g:
+            best_g, bx, by, bz = g, Ed[0, 0], Ed[0, 1], Ed[0, 2]
+    Ed[0, 0], Ed[0, 1], Ed[0, 2] = bx, by, bz
+    return best_g
+
+
+@njit(cache=True)
+def _edge_from(S, E, PR, cx, cy, e, k0, ts, gs, W, iters):
+    """The edge search's safeguarded Newton from sample ``k0`` (bracketed by its neighbours), onto the tool's
+    circle where it ends outside the disc; ``g`` where the part enters the disc there, else ``-inf``; the point
+    in ``W[3][0]``."""
+    Ed, cu, wk = W[3], W[4], W[5]
+    R = PR[1][0]
+    n = ts.shape[0]
+    lo, hi = ts[max(k0 - 1, 0)], ts[min(k0 + 1, n - 1)]
+    t = ts[k0]
     for _ in range(iters):
         edge_derivs(S, E, e, t, 2, Ed, cu, wk)
         _, _, g1, _, g2 = edge_g(PR, cx, cy, Ed, 2)
@@ -395,11 +431,11 @@ def edge_search(S, E, PR, cx, cy, e, t0, dt, W, iters=40):
             break
     edge_derivs(S, E, e, t, 0, Ed, cu, wk)
     g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
-    if feasible and rho > R:
+    if rho > R:
         t = _onto_circle(S, E, PR, cx, cy, e, t, ts, gs, W)
         edge_derivs(S, E, e, t, 0, Ed, cu, wk)
         g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
-    if feasible and rho <= R * (1 + 1e-11) and _enters_edge(S, E, R, cx, cy, e, t, W):
+    if rho <= R * (1 + 1e-11) and _enters_edge(S, E, R, cx, cy, e, t, W):
         return g
     return -math.inf
 
@@ -444,7 +480,8 @@ def _enters_edge(S, E, R, cx, cy, e, t, W):
         step = PROBE_MM / nmax(norm3(Ed[1, 0], Ed[1, 1], Ed[1, 2]), 1e-300)
         ok = False
         for sgn in (-1.0, 1.0):
-            edge_derivs(S, E, e, min(max(t + sgn * step, E[1][e, 0]), E[1][e, 1]), 0, Ed, cu, wk)
+            tq = t + sgn * step
+            edge_derivs(S, E, e, tq if E[0][e, 6] == 1 else min(max(tq, E[1][e, 0]), E[1][e, 1]), 0, Ed, cu, wk)
             if math.sqrt((Ed[0, 0] - cx) ** 2 + (Ed[0, 1] - cy) ** 2) < min(r0, R) - PROBE_DROP * R:
                 ok = True
     edge_derivs(S, E, e, t, 0, Ed, cu, wk)

@@ -160,7 +160,8 @@ def _slabs(fi, loops, px, py):
 
 def _curves(fs: FaceSet):
     n = len(fs.edges)
-    ei = np.zeros((max(n, 1), 6), np.int64)
+    ei = np.zeros((max(n, 1), 7), np.int64)
+    loop = fs.edge_loop
     ef = np.zeros((max(n, 1), 2))
     knots, poles = [], []
     nk = npol = 0
@@ -168,7 +169,7 @@ def _curves(fs: FaceSet):
         t, hp = c._eval_data
         if hp.shape[1] == 2:
             hp = np.column_stack([hp, np.ones(hp.shape[0])])
-        ei[e] = c.degree, nk, t.size, npol, hp.shape[0], fs.edge_face[e]
+        ei[e] = c.degree, nk, t.size, npol, hp.shape[0], fs.edge_face[e], int(loop[e])
         ef[e] = c.bounds
         knots.append(t)
         poles.append(hp)

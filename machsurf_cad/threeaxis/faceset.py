@@ -173,6 +173,17 @@ class FaceSet:
     edge_rise: np.ndarray = field(repr=False)
 
     @cached_property
+    def edge_loop(self) -> np.ndarray:
+        """Per edge: whether it closes on itself (a loop of one curve, a hole's circle): its parameter then
+        runs on across the seam (a search window at the seam sees both sides)."""
+        out = np.zeros(len(self.edges), bool)
+        for e, c in enumerate(self.edges):
+            uv = c.evaluate(np.array(c.bounds, float))
+            P = self.faces[self.edge_face[e]].surface.evaluate(uv[:, 0], uv[:, 1])
+            out[e] = bool(np.linalg.norm(P[0] - P[1]) <= 1e-9 * max(1.0, float(np.abs(P).max())))
+        return out
+
+    @cached_property
     def atlas(self) -> SurfaceAtlas:
         """The faces' surfaces, evaluated together (one vectorised pass per degree pair)."""
         return SurfaceAtlas([f.surface for f in self.faces])

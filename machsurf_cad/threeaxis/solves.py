@@ -368,9 +368,14 @@ def _edge_derivs(fs, eid, t, order: int):
     ``P' = Su u' + Sv v'``, ``P'' = Suu u'^2 + 2 Suv u' v' + Svv v'^2 + Su u'' + Sv v''``."""
     m = t.size
     uv = np.empty((m, 3, 2))
+    loop = fs.edge_loop
     for e in np.unique(eid):
         sel = np.nonzero(eid == e)[0]
-        uv[sel, : order + 1] = fs.edges[e].derivatives(t[sel], order)
+        te = t[sel]
+        if loop[e]:  # a closed edge: its parameter runs on across the seam
+            lo, hi = fs.edges[e].bounds
+            te = lo + np.mod(te - lo, hi - lo)
+        uv[sel, : order + 1] = fs.edges[e].derivatives(te, order)
     fid = fs.edge_face[eid]
     if order == 0:
         return (_surface_eval(fs, fid, uv[:, 0, 0], uv[:, 0, 1], 0)[0],)
@@ -427,7 +432,9 @@ def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
     the bracket. Returns the value (``-inf`` where no point of the interval is in the disc) and the point."""
     lo_b = np.array([e.bounds[0] for e in fs.edges])[eid]
     hi_b = np.array([e.bounds[1] for e in fs.edges])[eid]
-    a, b = np.maximum(t0 - 2 * dt, lo_b), np.minimum(t0 + 2 * dt, hi_b)
+    loop = fs.edge_loop[eid]  # a closed edge's window runs across its seam
+    a = np.where(loop, t0 - 2 * dt, np.maximum(t0 - 2 * dt, lo_b))
+    b = np.where(loop, t0 + 2 * dt, np.minimum(t0 + 2 * dt, hi_b))
     R = prof.R
     m = t0.size
     n = _EDGE_SAMPLES
@@ -436,13 +443,40 @@ def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
     g_s, rho = _edge_g(prof, np.repeat(c, n, axis=0), P)
     g_s = np.where(rho <= R, g_s, -np.inf).reshape(m, n)  # the samples' values, -inf outside the disc
     _graze(fs, prof, c, eid, ts, g_s, rho.reshape(m, n))
+    # from each of the (at most) three highest local maxima of the samples (the first: the best sample): an
+    # edge may rise to two maxima within the window, the higher one not the best sample's
+    fin = np.isfinite(g_s)
+    left = np.concatenate([np.full((m, 1), -np.inf), g_s[:, :-1]], axis=1)
+    right = np.concatenate([g_s[:, 1:], np.full((m, 1), -np.inf)], axis=1)
+    local = fin & ~(left > g_s) & ~(right > g_s)
     k = np.argmax(g_s, axis=1)
-    feasible = np.isfinite(g_s[np.arange(m), k])
+    score = np.where(local, g_s, -np.inf)
+    g = np.full(m, -np.inf)
+    P = _edge_points(fs, eid, ts[np.arange(m), k])
+    rows = np.nonzero(fin[np.arange(m), k])[0]
+    for r in range(3):
+        if r > 0:  # the next highest local maximum not taken yet (ties: the first)
+            score[np.arange(m), k] = -np.inf
+            k = np.argmax(score, axis=1)
+            rows = np.nonzero(np.isfinite(score[np.arange(m), k]))[0]
+        if rows.size == 0:
+            break
+        gr, Pr = _edge_from(fs, prof, c[rows], eid[rows], ts[rows], g_s[rows], k[rows], iters)
+        better = gr > g[rows]
+        g[rows[better]], P[rows[better]] = gr[better], Pr[better]
+    return g, P
+
+
+def _edge_from(fs, prof, c, eid, ts, g_s, k, iters: int):
+    """The edge search's safeguarded Newton on ``g'(t) = 0`` from sample ``k`` of each row (bracketed by its
+    neighbours; a row stops when its step vanishes, so its answer does not depend on the others), onto the
+    tool's circle where it ends outside the disc; ``g`` where the part enters the disc there (else ``-inf``)
+    and the point."""
+    m, n = ts.shape
+    R = prof.R
     lo = ts[np.arange(m), np.maximum(k - 1, 0)]
     hi = ts[np.arange(m), np.minimum(k + 1, n - 1)]
-    t = ts[np.arange(m), k]
-    # safeguarded Newton on g' = 0 inside [lo, hi] (an ascent: g' > 0 moves right); each row stops when its
-    # step vanishes, so a row's answer does not depend on the others
+    t = ts[np.arange(m), k].copy()
     act = np.arange(m)
     for _ in range(iters):
         if act.size == 0:
@@ -456,12 +490,12 @@ def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
     # and the first outside (Newton on rho(t) = R, kept in that bracket)
     P = _edge_points(fs, eid, t)
     g, rho = _edge_g(prof, c, P)
-    out = feasible & (rho > R)
+    out = rho > R
     if out.any():
         t = _onto_circle(fs, prof, c, eid, t, ts, g_s, out)
         P = _edge_points(fs, eid, t)
         g, rho = _edge_g(prof, c, P)
-    ok = feasible & (rho <= R * (1 + 1e-11))  # looser than _onto_circle's 1e-12: its point, evaluated again, stays in
+    ok = rho <= R * (1 + 1e-11)  # looser than _onto_circle's 1e-12: its point, evaluated again, stays in
     ok &= _enters_edge(fs, R, c, eid, t, rho)
     return np.where(ok, g, -np.inf), P
 
@@ -527,8 +561,10 @@ def _enters_edge(fs, R, c, eid, t, rho) -> np.ndarray:
     lo_b = np.array([e.bounds[0] for e in fs.edges])[eid[on]]
     hi_b = np.array([e.bounds[1] for e in fs.edges])[eid[on]]
     closer = np.zeros(on.size, bool)
+    loop = fs.edge_loop[eid[on]]
     for sgn in (-1.0, 1.0):
-        Q = _edge_points(fs, eid[on], np.clip(t[on] + sgn * step, lo_b, hi_b))
+        tq = t[on] + sgn * step
+        Q = _edge_points(fs, eid[on], np.where(loop, tq, np.clip(tq, lo_b, hi_b)))
         rq = np.sqrt((Q[:, 0] - c[on, 0]) ** 2 + (Q[:, 1] - c[on, 1]) ** 2)
         closer |= rq < np.minimum(r0, R) - _PROBE_DROP * R
     ok[on] = closer
