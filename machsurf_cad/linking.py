@@ -54,11 +54,9 @@ def surface_for(faces, fixed_axis, clearance: float, kind: str = "auto", axis=No
 
 def _elongated(faces, ratio: float = 2.0) -> bool:
     """Whether the poles' bounding box is at least ``ratio`` times longer than it is wide."""
-    from .geometry.face import Face
+    from .machining.toolpath import part_poles
 
-    pts = np.concatenate([np.asarray((f.surface if isinstance(f, Face) else f).poles, float).reshape(-1, 3)
-                          for f in faces])  # fmt: skip
-    e = np.sort(np.ptp(pts, axis=0))
+    e = np.sort(np.ptp(part_poles(faces), axis=0))
     return bool(e[2] >= ratio * e[1])
 
 

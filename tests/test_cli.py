@@ -455,4 +455,6 @@ def test_several_flank_diameters_need_the_part(tmp_path):
         r = run("flank", "--example", "hypar", "--tool", "cyl:D=20", "cyl:D=10", *extra, "-o", tmp_path / "x")
         assert r.returncode == 1 and "add --whole and give a STEP part" in r.stderr and r.stderr.count("\n") == 1
     r = run("flank", "--example", "hypar", "--tool", "cyl:D=20", "--no-render", "-o", tmp_path / "one")
-    assert r.returncode == 0, r.stderr  # one diameter through the same option
+    assert r.returncode == 0, r.stderr  # one diameter through the same option: that tool, R = 10
+    rep = json.loads((tmp_path / "one" / "report.json").read_text())
+    assert rep["R_mm"] == 10.0 and "by_diameter" not in (rep.get("whole") or {})

@@ -234,12 +234,7 @@ def part_sphere(faces: Iterable[FaceLike], clearance: float = 5.0) -> tuple:
     """(centre, radius) of a sphere holding every face (their poles' bounding box: a B-spline with positive
     weights lies in its poles' convex hull) with ``clearance`` mm to spare: the sphere 5-axis passes are
     linked over (``tool_paths(..., safe_sphere=...)``)."""
-    from ..geometry.face import Face
-
-    poles = [np.asarray((f.surface if isinstance(f, Face) else f).poles, float).reshape(-1, 3) for f in faces]
-    if not poles:
-        raise InputError("a sphere around the part needs at least one face")
-    pts = np.concatenate(poles)
+    pts = part_poles(faces, "a sphere around the part")
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     return 0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + float(clearance)
 
@@ -258,12 +253,7 @@ def part_cylinder(faces: Iterable[FaceLike], axis: Sequence[float] | None = None
     >>> axis.tolist(), round(radius, 9), round(half_length, 9)
     ([1.0, 0.0, 0.0], 6.0, 55.0)
     """
-    from ..geometry.face import Face
-
-    poles = [np.asarray((f.surface if isinstance(f, Face) else f).poles, float).reshape(-1, 3) for f in faces]
-    if not poles:
-        raise InputError("a cylinder around the part needs at least one face")
-    pts = np.concatenate(poles)
+    pts = part_poles(faces, "a cylinder around the part")
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     if axis is None:
         w = np.eye(3)[int(np.argmax(hi - lo))]
@@ -291,14 +281,20 @@ def part_plane(faces: Iterable[FaceLike], axis: Sequence[float] = (0.0, 0.0, 1.0
     >>> round(part_plane([example("bezier5")], clearance=5.0) - float(example("bezier5").poles[..., 2].max()), 9)
     5.0
     """
-    from ..geometry.face import Face
-
     a = np.asarray(axis, float)
     a = a / np.linalg.norm(a)
+    return float((part_poles(faces, "a plane above the part") @ a).max()) + float(clearance)
+
+
+def part_poles(faces: Iterable[FaceLike], what: str = "the part") -> np.ndarray:
+    """Every face's poles, ``(n, 3)`` mm: a B-spline with positive weights lies in its poles' convex hull, so
+    what holds them holds the part. No face is an input error naming ``what`` needs them."""
+    from ..geometry.face import Face
+
     poles = [np.asarray((f.surface if isinstance(f, Face) else f).poles, float).reshape(-1, 3) for f in faces]
     if not poles:
-        raise InputError("a plane above the part needs at least one face")
-    return float((np.concatenate(poles) @ a).max()) + float(clearance)
+        raise InputError(f"{what} needs at least one face")
+    return np.concatenate(poles)
 
 
 def _densify(uv: np.ndarray, ms: MachiningSurface, level: float, kind: str, N) -> np.ndarray:

@@ -184,6 +184,16 @@ class FaceSet:
         return out
 
     @cached_property
+    def edge_bounds(self) -> np.ndarray:
+        """Per edge its parameter range, ``(n_edges, 2)``."""
+        return np.array([e.bounds for e in self.edges], float).reshape(-1, 2)
+
+    def on_edge(self, eid, t) -> np.ndarray:
+        """Parameters ``t`` of edges ``eid`` kept within their ranges; a closed edge's run on (its seam)."""
+        b = self.edge_bounds[eid]
+        return np.where(self.edge_loop[eid], t, np.clip(t, b[..., 0], b[..., 1]))
+
+    @cached_property
     def atlas(self) -> SurfaceAtlas:
         """The faces' surfaces, evaluated together (one vectorised pass per degree pair)."""
         return SurfaceAtlas([f.surface for f in self.faces])

@@ -430,11 +430,7 @@ def _edge_search(fs, prof, c, eid, t0, dt, iters: int = 40):
     ``g'(t) = 0`` with exact derivatives (the bracket shrinks by the sign of ``g'``; a bisection step when
     Newton leaves it), and where the maximum sits on the tool's circle, Newton on ``rho(t) = R`` within
     the bracket. Returns the value (``-inf`` where no point of the interval is in the disc) and the point."""
-    lo_b = np.array([e.bounds[0] for e in fs.edges])[eid]
-    hi_b = np.array([e.bounds[1] for e in fs.edges])[eid]
-    loop = fs.edge_loop[eid]  # a closed edge's window runs across its seam
-    a = np.where(loop, t0 - 2 * dt, np.maximum(t0 - 2 * dt, lo_b))
-    b = np.where(loop, t0 + 2 * dt, np.minimum(t0 + 2 * dt, hi_b))
+    a, b = fs.on_edge(eid, t0 - 2 * dt), fs.on_edge(eid, t0 + 2 * dt)  # a closed edge's runs across its seam
     R = prof.R
     m = t0.size
     n = _EDGE_SAMPLES
@@ -558,13 +554,9 @@ def _enters_edge(fs, R, c, eid, t, rho) -> np.ndarray:
     P, P1 = _edge_derivs(fs, eid[on], t[on], 1)
     r0 = np.sqrt((P[:, 0] - c[on, 0]) ** 2 + (P[:, 1] - c[on, 1]) ** 2)
     step = _PROBE_MM / np.maximum(np.linalg.norm(P1, axis=1), 1e-300)
-    lo_b = np.array([e.bounds[0] for e in fs.edges])[eid[on]]
-    hi_b = np.array([e.bounds[1] for e in fs.edges])[eid[on]]
     closer = np.zeros(on.size, bool)
-    loop = fs.edge_loop[eid[on]]
     for sgn in (-1.0, 1.0):
-        tq = t[on] + sgn * step
-        Q = _edge_points(fs, eid[on], np.where(loop, tq, np.clip(tq, lo_b, hi_b)))
+        Q = _edge_points(fs, eid[on], fs.on_edge(eid[on], t[on] + sgn * step))
         rq = np.sqrt((Q[:, 0] - c[on, 0]) ** 2 + (Q[:, 1] - c[on, 1]) ** 2)
         closer |= rq < np.minimum(r0, R) - _PROBE_DROP * R
     ok[on] = closer

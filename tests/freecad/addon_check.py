@@ -2,13 +2,14 @@
 to workbench/): the workbench package is found through the root package.xml, the core beside it, and a
 feature recomputes. Writes its figures to MACHSURF_FC_OUT."""
 
-import json
 import os
-import traceback
+import sys
 
-out_path = os.environ["MACHSURF_FC_OUT"]
-result = {"ok": False}
-try:
+sys.path.insert(0, os.path.join(os.environ["MACHSURF_ROOT"], "tests", "freecad"))
+import fcscript
+
+
+def main(result):
     import FreeCAD
     import Part
     from freecad.machsurf import features
@@ -33,10 +34,6 @@ try:
             "max_s1": ms.GuidingSurfaceError.Value,
         }
     )
-    result["ok"] = True
-except Exception:
-    result["error"] = traceback.format_exc()
-finally:
-    with open(out_path, "w") as fh:
-        json.dump(result, fh, indent=1, default=str)
-    os._exit(0)
+
+
+fcscript.run(main)

@@ -6,11 +6,10 @@ import csv
 import json
 import os
 import sys
-import traceback
 import types
 
-out_path = os.environ["MACHSURF_FC_OUT"]
 sys.path.insert(0, os.path.join(os.environ["MACHSURF_ROOT"], "tests", "freecad"))
+import fcscript
 from fcscript import split_moves
 
 
@@ -23,8 +22,9 @@ def safe_moves(commands):
 
 
 root = os.environ["MACHSURF_ROOT"]
-result = {"ok": False}
-try:
+
+
+def main(result):
     import FreeCAD
     import numpy as np
     import Part
@@ -79,7 +79,7 @@ try:
     rest = [f for i, f in enumerate(faces) if i != top]
     tp = ms.raster([faces[top]], ms.parse_cutter(op.CutterUsed), check_faces=rest, stepover=4.0,
                    chordal_tolerance=0.005, clearance=5.0, gouge_tolerance=0.01)  # the defaults  # fmt: skip
-    csv_path = os.path.join(os.path.dirname(out_path), "cam.csv")
+    csv_path = fcscript.out_file("cam.csv")
     ms.write_csv(csv_path, tp)
     rows = [r for r in csv.DictReader(open(csv_path)) if r["move"] != "rapid"]
     dev = max(
@@ -116,7 +116,7 @@ try:
     five = features.make("CamOperation", doc, (part, [f"Face{top + 1}"]), Pattern="5-axis surface", StepOver=4.0,
                          Tool="ball:D=6", Lead=10.0)  # fmt: skip
     five.ToolController = None
-    apt = os.path.join(os.path.dirname(out_path), "five.apt")
+    apt = fcscript.out_file("five.apt")
     five.AptFile = apt
     doc.recompute()
     m5 = ms.machining_surface(faces[top], "ball:D=6", axes=5, strategy="planes:-0,1,0", lead=10.0, tolerance=1e-3)
@@ -245,10 +245,6 @@ try:
     op.ToolController = None
     doc.recompute()
     result["no_tool"] = {"status": op.Status, "n_commands": len(op.Path.Commands), "cut_points": op.CutPoints}
-    result["ok"] = True
-except Exception:
-    result["error"] = traceback.format_exc()
-finally:
-    with open(out_path, "w") as fh:
-        json.dump(result, fh, indent=1, default=str)
-    os._exit(0)
+
+
+fcscript.run(main)

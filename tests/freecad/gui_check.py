@@ -1,14 +1,16 @@
 """Runs inside the FreeCAD GUI under Xvfb: activates the workbench, selects a face, runs the command,
 saves a screenshot, exports STEP, writes the figures to MACHSURF_FC_OUT and exits."""
 
-import json
 import os
-import traceback
+import sys
 
-out_path = os.environ["MACHSURF_FC_OUT"]
+sys.path.insert(0, os.path.join(os.environ["MACHSURF_ROOT"], "tests", "freecad"))
+import fcscript
+
 root = os.environ["MACHSURF_ROOT"]
-result = {"ok": False}
-try:
+
+
+def main(result):
     import FreeCAD
     import FreeCADGui as Gui
     import Part
@@ -38,12 +40,12 @@ try:
     view.viewIsometric()
     Gui.SendMsgToActiveView("ViewFit")
     Gui.updateGui()
-    png = os.path.join(os.path.dirname(out_path), "freecad_gui.png")
+    png = fcscript.out_file("freecad_gui.png")
     view.saveImage(png, 1200, 900, "White")
     result["png"] = png
     from freecad.machsurf.gui.commands import ExportStepCommand
 
-    step = os.path.join(os.path.dirname(out_path), "freecad_export.step")
+    step = fcscript.out_file("freecad_export.step")
     ExportStepCommand().Activated(step)
     result["step_bytes"] = os.path.getsize(step)
     text = open(step, errors="replace").read()
@@ -68,7 +70,7 @@ try:
     bare = doc.addObject("Part::FeaturePython", "Bare")
     MachiningSurfaceFeature(bare)
     before = type(bare.ViewObject.Proxy).__name__
-    path = os.path.join(os.path.dirname(out_path), "gui_saved.FCStd")
+    path = fcscript.out_file("gui_saved.FCStd")
     doc.saveAs(path)
     FreeCAD.closeDocument(doc.Name)
     doc2 = FreeCAD.openDocument(path)
@@ -103,7 +105,7 @@ try:
                     # FreeCAD's stand-in for a missing icon is a black cross: no saturated pixel
                     prefs["icon_saturated"] = sum(max(c.red(), c.green(), c.blue()) - min(c.red(), c.green(), c.blue())
                                                   > 60 for c in rgb)  # fmt: skip
-        prefs["png"] = os.path.join(os.path.dirname(out_path), "freecad_preferences.png")
+        prefs["png"] = fcscript.out_file("freecad_preferences.png")
         dlg.grab().save(prefs["png"])
         dlg.reject()
 
@@ -111,10 +113,6 @@ try:
     Gui.runCommand("Std_DlgPreferences")
     result["preferences"] = prefs
     result["reopened_view"] = {"before": before, "after": type(doc2.getObject("Bare").ViewObject.Proxy).__name__}
-    result["ok"] = True
-except Exception:
-    result["error"] = traceback.format_exc()
-finally:
-    with open(out_path, "w") as fh:
-        json.dump(result, fh, indent=1, default=str)
-    os._exit(0)
+
+
+fcscript.run(main)

@@ -2,14 +2,16 @@
 effective radius (R_eff) and the CAM operation (material left) in the 3D view, each saved as a screenshot;
 writes the display modes and the pixel figures of each picture to MACHSURF_FC_OUT."""
 
-import json
 import os
-import traceback
+import sys
 
-out_path = os.environ["MACHSURF_FC_OUT"]
+sys.path.insert(0, os.path.join(os.environ["MACHSURF_ROOT"], "tests", "freecad"))
+import fcscript
+
 root = os.environ["MACHSURF_ROOT"]
-result = {"ok": False}
-try:
+
+
+def main(result):
     import FreeCAD
     import FreeCADGui as Gui
     import numpy as np
@@ -70,7 +72,7 @@ try:
         view.viewIsometric()
         Gui.SendMsgToActiveView("ViewFit")
         Gui.updateGui()
-        png = os.path.join(os.path.dirname(out_path), f"map_{name}.png")
+        png = fcscript.out_file(f"map_{name}.png")
         view.saveImage(png, 1200, 900, "White")
         img = QtGui.QImage(png)
         w, h = img.width(), img.height()
@@ -103,10 +105,6 @@ try:
     doc.recompute()
     result["after_error"] = {"status": ms.Status, "n_values": len(ms.MapValues),
                              "children": ms.ViewObject.Proxy.map_root.getNumChildren()}  # fmt: skip
-    result["ok"] = True
-except Exception:
-    result["error"] = traceback.format_exc()
-finally:
-    with open(out_path, "w") as fh:
-        json.dump(result, fh, indent=1, default=str)
-    os._exit(0)
+
+
+fcscript.run(main)

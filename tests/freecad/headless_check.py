@@ -5,20 +5,21 @@ file named by MACHSURF_FC_OUT (FreeCADCmd exits 0 even on an uncaught exception:
 import json
 import os
 import sys
-import traceback
 
-out_path = os.environ["MACHSURF_FC_OUT"]
+sys.path.insert(0, os.path.join(os.environ["MACHSURF_ROOT"], "tests", "freecad"))
+import fcscript
+
 root = os.environ["MACHSURF_ROOT"]
 # the add-on is installed in the Mod folder of $HOME (see tests/test_freecad.py)
-result = {"ok": False, "steps": []}
 
 
-def step(name, **kw):
-    result["steps"].append(name)
-    result[name] = kw
+def main(result):
+    result["steps"] = []
 
+    def step(name, **kw):
+        result["steps"].append(name)
+        result[name] = kw
 
-try:
     import FreeCAD
     import numpy as np
     import Part
@@ -165,7 +166,7 @@ try:
         tight_status=tight.Status,
     )
     # save, reopen, recompute
-    path = os.path.join(os.path.dirname(out_path), "machsurf_test.FCStd")
+    path = fcscript.out_file("machsurf_test.FCStd")
     ms_name = ms.Name
     ms.removeProperty("Loops")  # as a document saved before the property existed
     doc.saveAs(path)
@@ -197,7 +198,7 @@ try:
     )
     # preferences (the preferences page writes them): default tolerance and grid of new features, a tool library
     prefs = FreeCAD.ParamGet("User parameter:BaseApp/Preferences/Mod/machsurf")
-    library = os.path.join(os.path.dirname(out_path), "tools.json")
+    library = fcscript.out_file("tools.json")
     with open(library, "w") as fh:
         json.dump({"bull16": "bull:D=16,r=3"}, fh)
     prefs.SetFloat("DefaultTolerance", 0.002)
@@ -218,9 +219,6 @@ try:
         tool=json.loads(named.Report)["tool"]["spec"] if named.Report else "",
         unknown_status=unknown.Status,
     )
-    result["ok"] = True
-except Exception:
-    result["error"] = traceback.format_exc()
-finally:
-    with open(out_path, "w") as fh:
-        json.dump(result, fh, indent=1, default=str)
+
+
+fcscript.run(main)
