@@ -215,10 +215,16 @@ def _check_placements(tp: ToolPath, step_mm: float, step_deg: float) -> None:
         )
 
 
-def _placements(tp: ToolPath, step_mm: float, step_deg: float):
-    """Tips, axes and owning position of every checked placement (positions and the motion between)."""
+def _placements(tp: ToolPath, step_mm: float, step_deg: float, jumps=None):
+    """Tips, axes and owning position of every checked placement (positions and the motion between); a
+    position of ``jumps`` (a mask) has no motion into it, only its own placement."""
     tips, axes, owner = [tp.tip[:1]], [tp.axis[:1]], [np.array([0])]
     for k in range(1, tp.n_positions):
+        if jumps is not None and jumps[k]:
+            tips.append(tp.tip[k : k + 1])
+            axes.append(tp.axis[k : k + 1])
+            owner.append(np.array([k]))
+            continue
         a, b = tp.tip[k - 1], tp.tip[k]
         ta, tb = tp.axis[k - 1], tp.axis[k]
         ang = math.degrees(math.acos(float(np.clip(ta @ tb, -1.0, 1.0))))
@@ -234,16 +240,19 @@ def _placements(tp: ToolPath, step_mm: float, step_deg: float):
     return np.concatenate(tips), np.concatenate(axes), np.concatenate(owner)
 
 
-def _coarse(c, tree, P, h, tolerance, T, A, progress=None):
+def _coarse(c, tree, P, h, tolerance, T, A, progress=None, clear=0.0):
     """The sampled pass over placements ``(T, A)``: per placement the smallest signed distance of a part
     sample to the cutting part, to shank and holder, and that sample; the samples inside the cutting
-    part with their depth (indices, depths). Module level: chunks of placements travel to workers."""
+    part with their depth (indices, depths). Samples up to ``clear`` mm beyond the body are seen (a
+    clearance of several mm asked for a rapid is measured, not read as clear). Module level: chunks of
+    placements travel to workers."""
     m = T.shape[0]
     L_cut = float(c.length)
     r_cut = float(c.profile_points(16)[:, 0].max())
     L_all, r_all = c.body_length(), c.max_radius()
     has_holder = bool(c.body_parts())
-    reach = math.hypot(L_all / 2, r_all) + h + tolerance
+    pad = h + tolerance + max(0.0, float(clear))
+    reach = math.hypot(L_all / 2, r_all) + pad
     cut_d = np.full(m, np.inf)
     hold_d = np.full(m, np.inf)
     seed = np.full(m, -1)
@@ -263,7 +272,7 @@ def _coarse(c, tree, P, h, tolerance, T, A, progress=None):
         rel = P[pi] - T[pl]
         z = np.einsum("ij,ij->i", rel, A[pl])
         rho = np.linalg.norm(rel - z[:, None] * A[pl], axis=1)
-        near = (z > -h - tolerance) & (z < L_cut + h + tolerance) & (rho < r_cut + h + tolerance)
+        near = (z > -pad) & (z < L_cut + pad) & (rho < r_cut + pad)
         sd = np.full(pi.size, np.inf)
         sd[near] = c.cutting_distance_rz(rho[near], z[near])
         inside = sd < 0
@@ -333,6 +342,7 @@ def verify(
     chunks: int = 1,
     map_chunks: MapChunks = None,
     clearance: float | None = None,
+    jumps: np.ndarray | None = None,
 ) -> VerifyResult:
     """Gouges and collisions of a tool path's tool body against every face of a part.
 
@@ -368,6 +378,9 @@ def verify(
         depends on no other: the figures are the same to the last digit).
     map_chunks : callable, optional
         ``map``-like callable running the chunks (e.g. :func:`machsurf_cad.batchrun.dask_map`).
+    jumps : array of bool, optional
+        Positions with no motion into them: each starts a separate stretch (several candidate moves
+        checked in one call); only the position itself is placed there.
 
     Returns
     -------
@@ -408,11 +421,16 @@ def verify(
     angle_step = positive("angle_step", angle_step, "deg")
     faces = _faces(part)
     h = positive("spacing", spacing) if spacing is not None else _auto_spacing(faces, c, max_samples)
+    if jumps is not None:
+        jumps = np.asarray(jumps, bool).reshape(-1)
+        if jumps.shape != (toolpath.n_positions,):
+            raise InputError(f"jumps: one flag per position ({toolpath.n_positions}), got {jumps.size}")
     _check_placements(toolpath, step, angle_step)
     from .contentkey import faces_key
 
     fk = faces_key(faces)  # once: the check's memo and the part's samples are both keyed by it
-    key = _memo_key(fk, toolpath, c, (gouge_tolerance, clear, step, angle_step, h, max_samples), map_chunks)
+    jk = None if jumps is None else np.flatnonzero(jumps).tolist()
+    key = _memo_key(fk, toolpath, c, (gouge_tolerance, clear, step, angle_step, h, max_samples, jk), map_chunks)
     if key in _RECENT:  # the very same check just ran (a raster's own check, then the check before writing)
         _RECENT.move_to_end(key)
         res = _RECENT[key]
@@ -420,11 +438,11 @@ def verify(
             warnings.warn(w, stacklevel=2)
         return replace(res, toolpath=toolpath)
     smp, tree = _sampled(faces, fk, h, max_samples)
-    T, A, owner = _placements(toolpath, step, angle_step)
+    T, A, owner = _placements(toolpath, step, angle_step, jumps)
     m = T.shape[0]
     t1 = time.perf_counter()
     cut_d, hold_d, seed, hold_seed, depth = _coarse_pass(
-        c, tree, smp.P, h, gouge_tolerance, T, A, chunks, map_chunks, progress
+        c, tree, smp.P, h, gouge_tolerance, T, A, chunks, map_chunks, progress, clear=clear
     )
     t2 = time.perf_counter()
     best_face, best_xyz = _refine_close(faces, c, smp, T, A, seed, cut_d, gouge_tolerance, h)
@@ -524,12 +542,12 @@ def _sample_part(faces: list[Face], h: float, max_samples: int) -> _Samples:
     return _Samples(P, F, SU, SV, dus, dvs)
 
 
-def _coarse_pass(c, tree, P, h, gouge_tolerance, T, A, chunks, map_chunks, progress, threaded_from=4096):
+def _coarse_pass(c, tree, P, h, gouge_tolerance, T, A, chunks, map_chunks, progress, threaded_from=4096, clear=0.0):
     """The sampled pass (:func:`_coarse`) over the placements in chunks; per sample the deepest depth. From
     ``threaded_from`` placements in one chunk it runs in a thread per core: same result, each placement's
     figures being its own."""
     one = check_chunks(chunks) == 1
-    work = functools.partial(_coarse, c, tree, P, h, gouge_tolerance)
+    work = functools.partial(_coarse, c, tree, P, h, gouge_tolerance, clear=clear)
     if one and map_chunks is None and T.shape[0] >= threaded_from and (os.cpu_count() or 1) > 1:
         parts = threaded_split_map(work, [T, A], progress, "tool placements")
     else:

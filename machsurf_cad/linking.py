@@ -5,7 +5,7 @@ clear (all candidates of all gaps are checked in one :func:`~machsurf_cad.verify
 
 1. **direct**: retract ``clearance`` along the axis, straight across to ``clearance`` above the next run
    along its axis, approach - the short link that stays down on the part; then the same with a 1 mm lift
-   (in a channel a full retract would leave);
+   (in a channel a full retract would leave); not tried where the axis turns by more than 120 deg;
 2. **over the clearance surface**: out along the axis to the plane above the part (a fixed axis) or to the
    sphere or cylinder around it (the axis turning; :mod:`machsurf_cad.cam.clearance`), over it, and back in
    along the next run's axis.
@@ -20,6 +20,9 @@ same way.
 """
 
 from __future__ import annotations
+
+import warnings
+from dataclasses import replace
 
 import numpy as np
 
@@ -77,7 +80,7 @@ def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndar
     out = []
     up0 = None if p0 is None else p0 + clearance * a0
     up1 = None if p1 is None else p1 + clearance * a1
-    if p0 is not None and p1 is not None:
+    if p0 is not None and p1 is not None and float(a0 @ a1) > -0.5:  # no direct link turning the axis over
         for lift in sorted({clearance, min(clearance, 1.0)}, reverse=True):
             q0, q1 = p0 + lift * a0, p1 + lift * a1
             out.append((np.array([q0, q1, p1]), np.array([a0, a1, a1]), [Move.RETRACT, Move.RAPID, Move.APPROACH],
@@ -120,8 +123,10 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
     -------
     ToolPath
         ``extras["planned_index"]`` (given the indices; -1 on links); ``info`` adds ``links_direct``,
-        ``links_over_surface``, ``runs_left_out``, ``gaps_not_linked`` (where: the two ends, mm) and
-        ``clearance_surface`` (``plane``, ``sphere`` or ``cylinder``).
+        ``links_over_surface``, ``runs_left_out``, ``gaps_not_linked`` (where: the two ends, mm),
+        ``clearance_surface`` (``plane``, ``sphere`` or ``cylinder``), ``n_rapids_at_feed`` and
+        ``rapid_distance_min_mm`` (:func:`rapids_kept_clear`: rapids keep the whole tool ``clearance``
+        from the part, else are made feed moves).
     """
     runs = [r for r in runs if len(r[0]) >= 1]
     if not runs:
@@ -173,7 +178,8 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
     chosen, left_out, not_linked = _walk(n, first_clear, exit_, entry)
     inserted = _insert_left_out(chosen, left_out, ends, check, first_clear)
     info = dict(info or {}, runs_visited_later=inserted)
-    return _assemble(runs, chosen, cand, cutter, name, info, surface, sorted(left_out), not_linked)
+    tp = _assemble(runs, chosen, cand, cutter, name, info, surface, sorted(left_out), not_linked)
+    return rapids_kept_clear(tp, faces, cutter, clearance, surface)
 
 
 def _insert_left_out(chosen, left_out, ends, check, first_clear, near: int = 3) -> list[int]:
@@ -287,8 +293,10 @@ def _clear(todo, c, starts, faces, cutter, gouge_tolerance, link_clearance, surf
     tp = ToolPath(np.vstack(T), np.vstack(A), np.concatenate(M), np.concatenate(P), cutter=cutter)
     step = 2.0
     hidden = step**2 / (8.0 * max(cutter.radius, 1e-3))
-    res = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance, clearance=link_clearance + hidden, step=step)
-    bad = (np.asarray(res.status) != CLEAR) & ~np.concatenate(first)
+    jumps = np.concatenate(first)  # each segment on its own: no motion from the one before
+    res = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance, clearance=link_clearance + hidden, step=step,
+                 jumps=jumps)  # fmt: skip
+    bad = (np.asarray(res.status) != CLEAR) & ~jumps
     bad_keys = set(np.unique(tp.pass_index[bad]).tolist()) | over_limit
     return {key: k not in bad_keys for k, key in enumerate(keys)}
 
@@ -341,4 +349,40 @@ def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_lin
                     {"planned_index": np.concatenate(X)} if has_idx else {}, info)  # fmt: skip
 
 
-__all__ = ["link_runs", "surface_for"]
+def rapids_kept_clear(toolpath: ToolPath, part, cutter, clearance: float, surface, *, step: float = 1.0) -> ToolPath:
+    """``toolpath`` with each rapid move along which the whole tool (cutting part, shank and holder) comes
+    closer than ``clearance`` mm to the part made a feed move: a retract while no rapid of its link went
+    before, else an approach (both at the plunge feed). Rapid, approach and retract distances are so
+    measured from the whole tool, holder included, not from the tip. Rapids between two positions on the
+    clearance ``surface`` (:func:`surface_for`) keep it by construction and are not measured; the others
+    are, by one tool-body check with placements ``step`` mm apart (between two the tool can come closer by
+    ``step^2 / (8 R)``). ``info`` adds ``n_rapids_at_feed`` and ``rapid_distance_min_mm`` (the least
+    distance measured over the rapids left; None when every rapid is on the surface)."""
+    mv = np.asarray(toolpath.move).copy()
+    X = toolpath.tip
+    on = _on_surface(X, surface)
+    k = np.nonzero((mv == Move.RAPID) & ~(on & np.roll(on, 1)))[0]
+    k = k[k > 0]
+    info = dict(toolpath.info, n_rapids_at_feed=0, rapid_distance_min_mm=None)
+    if k.size:
+        rows = np.column_stack([k - 1, k]).ravel()  # each move on its own: its start, then the motion
+        moves = ToolPath(X[rows], toolpath.axis[rows], np.full(rows.size, Move.RAPID),
+                         np.repeat(np.arange(k.size), 2), cutter=cutter)  # fmt: skip
+        with warnings.catch_warnings():  # rapids far from the part are the point, not a wrong part
+            warnings.simplefilter("ignore")
+            res = verify(part, moves, cutter, clearance=clearance, step=step, jumps=np.arange(rows.size) % 2 == 0)
+        d = np.minimum(res.cut_distance, res.holder_distance).reshape(-1, 2).min(axis=1)
+        slow = d < clearance * (1.0 - 1e-9)
+        nc = mv != Move.CUT
+        link = np.cumsum(nc & np.r_[True, ~nc[:-1]])  # the links: runs of moves that do not cut
+        for i in k[slow]:
+            fast_before = np.any((mv[:i] == Move.RAPID) & (link[:i] == link[i]))
+            mv[i] = Move.APPROACH if fast_before else Move.RETRACT
+        left = d[~slow]
+        info.update(n_rapids_at_feed=int(slow.sum()), rapid_distance_min_mm=float(left.min()) if left.size else None)
+    if info["rapid_distance_min_mm"] is not None and not np.isfinite(info["rapid_distance_min_mm"]):
+        info["rapid_distance_min_mm"] = None  # nothing of the part within the measured reach
+    return replace(toolpath, move=mv, info=info)
+
+
+__all__ = ["link_runs", "rapids_kept_clear", "surface_for"]

@@ -199,6 +199,7 @@ def check_toolpath(
     if on_gouge not in ("refuse", "trim", "allow"):
         raise InputError(f"on_gouge must be refuse, trim or allow, got {on_gouge!r}")
     gouge_tolerance = positive("gouge_tolerance", gouge_tolerance)
+    clearance = positive("clearance", clearance)
     clear = min(gouge_tolerance, COLLISION_CLEARANCE)
     res = verify(
         part,
@@ -219,23 +220,43 @@ def check_toolpath(
             raise InputError(f"max_axis_angle must be within 0..180 deg, got {max_axis_angle!r}")
         limit = (np.asarray(machine_axis, float), float(max_axis_angle))
     n_out = int(beyond(toolpath.axis, limit).sum())
+    surface = (clearance_surface, clearance_axis, limit)
     if res.clean and not n_out:
-        return PathCheck(toolpath, toolpath, res, None, "clean", float(clearance))
+        out = _rapids_clear(toolpath, part, tool, clearance, surface)
+        return PathCheck(toolpath, out, res, None, "clean", float(clearance))
     if on_gouge == "allow" and not n_out:
-        return PathCheck(toolpath, toolpath, res, None, "gouges allowed", float(clearance))
+        out = _rapids_clear(toolpath, part, tool, clearance, surface)
+        return PathCheck(toolpath, out, res, None, "gouges allowed", float(clearance))
     if on_gouge == "trim":
         cutter = checks.tool(tool if tool is not None else toolpath.cutter)
         dense = densified(toolpath, max(0.5 * cutter.radius, 0.25))
         res_d = (
             res if dense is toolpath else verify(part, dense, tool, gouge_tolerance=gouge_tolerance, clearance=clear)
         )
-        cut = _relinked(dense, res_d, part, tool, gouge_tolerance, clearance, clear,
-                        (clearance_surface, clearance_axis, limit))  # fmt: skip
+        cut = _relinked(dense, res_d, part, tool, gouge_tolerance, clearance, clear, surface)
         if cut is not None and not beyond(cut.axis, limit).any():
             again = verify(part, cut, tool, gouge_tolerance=gouge_tolerance, clearance=clear)
             if again.clean:
                 return PathCheck(toolpath, cut, res, again, "trimmed", float(clearance), dense, n_out)
     return PathCheck(toolpath, None, res, None, "refused", float(clearance), None, n_out)
+
+
+def _rapids_clear(toolpath: ToolPath, part, tool, clearance: float, surface) -> ToolPath:
+    """The path to write: its rapids that come within ``clearance`` of the part made feed moves
+    (:func:`~machsurf_cad.linking.rapids_kept_clear`)."""
+    from .gougecheck import _faces
+    from .linking import rapids_kept_clear, surface_for
+
+    if "n_rapids_at_feed" in toolpath.info:  # linked by link_runs: done there
+        return toolpath
+
+    faces = _faces(part)
+    cutter = checks.tool(tool if tool is not None else toolpath.cutter)
+    a = toolpath.axis
+    fixed = a[0] if a.shape[0] and np.abs(a - a[0]).max() <= 1e-9 else None
+    kind = surface[0] if fixed is not None or surface[0] != "plane" else "auto"
+    geo = surface_for(faces, fixed, clearance, kind, surface[1])
+    return rapids_kept_clear(toolpath, faces, cutter, clearance, (*geo, surface[2]))
 
 
 def machined_area_fraction(face, planned: ToolPath, kept, *, step: float = 1.0, samples: int = 80) -> float:

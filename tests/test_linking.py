@@ -218,3 +218,51 @@ def test_clearance_surface_choice_and_bad_input():
         surface_for([plate], None, 5.0, "cone")
     with pytest.raises(ms.InputError, match="non-zero"):
         ms.part_cylinder([plate], (0, 0, 0))
+
+
+def _body_to_bridge(tip, parts, xs=(0.0, 20.0)) -> float:
+    """Least distance (mm) of a vertical tool at ``tip`` to the floor (z = 0) and the bridge's plate (z = 12
+    over ``xs``, |y| <= 30), closed form: the ball and each cylinder of the body (radius, z from, z to above
+    the tip) against the plate's rectangle, the tip against the floor."""
+    best = float(tip[2])
+    plan = max(xs[0] - tip[0], tip[0] - xs[1], 0.0)
+    for rad, z0, z1 in parts:
+        dz = max(tip[2] + z0 - 12.0, 12.0 - tip[2] - z1, 0.0)
+        best = min(best, float(np.hypot(max(plan - rad, 0.0), dz)))
+    centre_z = tip[2] + 3.0  # the ball of radius 3
+    best = min(best, float(np.hypot(plan, max(12.0 - centre_z, centre_z - 12.0, 0.0)) - 3.0))
+    return best
+
+
+def test_rapids_keep_the_clearance_from_the_holder():
+    """Rapid distances are the whole tool's, holder included (issue 28, item 1). A ball D6 with a holder D20
+    from 10 mm above its tip cuts the floor beside the bridge: at x = -13 the holder passes 3 mm from the
+    bridge's edge while the cutting part is 10 mm away, so the moves up to the plane over the part and back
+    down (4 of them) are made at the plunge feed; at x = -17 (7 mm) they stay rapids, and the least rapid
+    distance is the floor's 5 mm under the retract point. Every rapid left keeps 5 mm by the closed form,
+    every move sampled every 0.1 mm."""
+    floor = builders.plane_patch((-40, -30, 0), (100, 0, 0), (0, 60, 0), name="floor")
+    bridge = builders.plane_patch((0, -30, 12), (20, 0, 0), (0, 60, 0), name="bridge")
+    part = [floor, bridge]
+    tool = BallEndMill(6, length=10.0, holder=ms.Shank(20, 30))
+    body = [(3.0, 3.0, 10.0), (10.0, 10.0, 40.0)]
+    ys = np.linspace(-20, 20, 21)
+    for xs, at_feed in (((-13.0, 33.0), 4), ((-17.0, 37.0), 0)):
+        runs = []
+        for k, x in enumerate(xs):
+            t = np.column_stack([np.full(ys.size, x), ys if k == 0 else ys[::-1], np.zeros(ys.size)])
+            runs.append((t, np.tile([0.0, 0, 1], (ys.size, 1)), t.copy()))
+        pc = ms.check_toolpath(link_runs(runs, part, tool, clearance=5.0), part, clearance=5.0)
+        tp = pc.toolpath
+        assert pc.verdict == "clean" and tp.info["n_rapids_at_feed"] == at_feed
+        worst = np.inf
+        for i in np.flatnonzero(tp.move[1:] == Move.RAPID) + 1:
+            for w in np.linspace(0, 1, int(np.linalg.norm(tp.tip[i] - tp.tip[i - 1]) / 0.1) + 2):
+                worst = min(worst, _body_to_bridge(tp.tip[i - 1] * (1 - w) + tp.tip[i] * w, body))
+        assert worst >= 5.0 - 1e-9
+        if at_feed:  # the feed moves are the ones the holder takes within 5 mm of the bridge
+            slow = np.flatnonzero((tp.move[1:] != Move.RAPID) & (tp.move[1:] != Move.CUT)) + 1
+            assert any(_body_to_bridge(tp.tip[i], body) < 5.0 for i in slow)
+            assert tp.info["rapid_distance_min_mm"] is None  # the rapids left are all over the plane
+        else:  # measured on the part's samples: over the true 5 mm by less than the sampling's 0.03 mm
+            assert 5.0 <= tp.info["rapid_distance_min_mm"] < 5.03

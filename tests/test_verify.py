@@ -134,6 +134,19 @@ def test_shank_and_holder_collisions_and_rapids():
     assert_close(v3.report()["min_clearance_mm"], -2.0, 1e-6, "shank depth (R 8 at 6 mm from the wall)")
 
 
+def test_a_rapid_within_a_clearance_of_several_mm_is_seen():
+    """A rapid 1.5 mm over a plane, ball D10, part sampled every 1 mm: with a 2 mm clearance it is a
+    collision at the closed-form 1.5 mm (the samples' window grows by the clearance; before, the cutting
+    part's window ended a sample spacing past the tool and the rapid read clear); with 1 mm it is clear."""
+    plane = builders.plane_patch()  # z = 0, 100 x 100
+    tp = ms.ToolPath([[20.0, 50, 1.5], [80, 50, 1.5]], [[0, 0, 1.0]] * 2, [ms.Move.RAPID] * 2, [0, 0],
+                     cutter=ms.BallEndMill(10))  # fmt: skip
+    res = ms.verify(plane, tp, clearance=2.0, spacing=1.0)
+    assert not res.clean and res.report()["n_collisions"] == 2
+    assert 1.5 <= res.cut_distance.min() < 1.5 + 1e-3
+    assert ms.verify(plane, tp, clearance=1.0, spacing=1.0).clean
+
+
 def test_bad_input():
     face = ms.Face(ms.example("bezier5"))
     tp = ms.ToolPath.from_passes([np.array([[0.0, 0, 500], [10, 0, 500]])], [np.array([[0, 0, 1.0]] * 2)])

@@ -7,10 +7,12 @@ on every face of the part gives the lowest tip height at which the tool enters n
 holder (flat discs at their heights). A position lower than that by more than the gouge tolerance cannot
 be reached from anywhere: it is cut out of the path instead of the path being refused.
 
-The runs left are joined by **skim links**: up along the axis by the clearance, across at the clearance
-above the highest drop height along the straight plan line between the two ends (sampled at most a fifth
-of the tool's radius apart), down along the axis and onto the next run. The path starts and ends on a
-plane ``clearance`` above the whole part. Every position of a link is certified clear by the
+The runs left are joined by **skim links**: up along the axis by the clearance, or higher until the whole
+tool (cutting part, shank and holder: the drop-cutter of the body grown by the clearance) keeps the
+clearance from every face; across at the highest such height along the straight plan line between the
+two ends (sampled at most a fifth of the tool's radius apart); down along the axis and onto the next
+run. Rapid, approach and retract distances are so measured from the whole tool, not from the tip. The
+path starts and ends on a plane ``clearance`` above the whole part. Every position of a link is certified clear by the
 drop-cutter; the motions between positions are for the tool-body check
 (:func:`machsurf_cad.check_toolpath`) to confirm.
 """
@@ -32,9 +34,6 @@ from .dropcutter import default_seed_spacing, drop_cutter
 from .faceset import face_set as build_face_set
 
 _LINK_SAMPLES_MAX = 2000
-LINK_MARGIN = 0.05
-"""Least distance (mm) the whole tool body keeps from the part on links (above the tool-body check's
-0.01 mm collision clearance)."""
 
 
 def _fixed_axis(tp: ToolPath) -> np.ndarray:
@@ -228,8 +227,8 @@ def trim_to_reach(
     gouge_tolerance : float
         How far (mm) a kept position may lie below the drop-cutter height.
     clearance : float
-        Retract and approach along the axis, and the height links keep above the highest drop height
-        under them, mm.
+        Least retract and approach along the axis, and the distance the whole tool (holder included)
+        keeps from every face on links, mm.
     tool : Cutter or str, optional
         The tool with its shank and holder; the path's own by default.
     face : Face, optional
@@ -268,7 +267,7 @@ def trim_to_reach(
         raise InputError("trimming to the tool's reach needs the part's faces")
     a = _fixed_axis(toolpath)
     heights = _Heights(faces, cutter, a)
-    clear = _Heights(faces, cutter, a, margin=LINK_MARGIN)  # for the links: the body keeps a margin
+    clear = _Heights(faces, cutter, a, margin=clearance)  # links: the whole body keeps the clearance
     F = heights.frame
     q = toolpath.tip @ F.T  # tool frame
     cutting = (toolpath.move == Move.CUT) | (toolpath.move == Move.APPROACH)
@@ -299,14 +298,14 @@ def trim_to_reach(
     link_max = -math.inf
     up = np.full(qd.shape[0], np.nan)  # per run end: how high the tool must go to move freely
     ends = np.array([i for r in runs for i in (r[0], r[-1])])
-    up[ends] = np.fmax(clear(qd[ends, :2]), qd[ends, 2]) + clearance
+    up[ends] = np.fmax(clear(qd[ends, :2]), qd[ends, 2] + clearance)
     for k, r in enumerate(runs):
         start = qd[r[0]]
         if k == 0:
             zl = max(z_plane, up[r[0]])
         else:
             e = runs[k - 1][-1]
-            zl = max(up[e], up[r[0]], _link_height(clear, qd[e], start, R) + clearance)
+            zl = max(up[e], up[r[0]], _link_height(clear, qd[e], start, R))
             link_max = max(link_max, zl - max(qd[e, 2], start[2]))
             add((qd[e, 0], qd[e, 1], up[e]), Move.RETRACT, k - 1)
             if zl > up[e] + 1e-12:
