@@ -102,7 +102,9 @@ TERMS: dict[str, Term] = {
     "directions": Term(_DEG, "machining directions theta"),
     "pattern": Term("", "raster | waterline"),
     "zigzag": Term("", "alternate the pass direction"),
-    "clearance": Term(_MM, "distance the tool keeps from the part on links and retracts"),
+    "clearance": Term(
+        _MM, "distance the whole tool, holder included, keeps from the part on rapids; approach and retract length"
+    ),
     "safe_sphere": Term("", "a sphere around the part that links travel on"),
     "safe_plane": Term(_MM, "height along the fixed axis of a plane above the part that links travel in"),
     "safe_cylinder": Term("", "a cylinder around the part that links travel on (point, axis, radius, half length)"),

@@ -188,12 +188,24 @@ MAX_PLACEMENTS = 20_000_000
 """Most tool placements verify checks before it refuses (about 10 us each in the sampled pass)."""
 
 
-def _auto_spacing(faces, c, max_samples: int) -> float:
+def _face_sizes(faces, fk: str) -> np.ndarray:
+    """:func:`face_size` of every face, kept for the last part (by its content key ``fk``): a path's links
+    are checked in many calls on the same part."""
+    if fk and fk in _SIZES:
+        return _SIZES[fk]
+    sizes = np.array([face_size(f) for f in faces], float).reshape(-1, 2)
+    if fk:
+        _SIZES.clear()
+        _SIZES[fk] = sizes
+    return sizes
+
+
+def _auto_spacing(faces, c, max_samples: int, fk: str = "") -> float:
     """The part's sample spacing when none is given: min(1, D/8) mm, or larger where the faces' parameter
     boxes would hold more than 80 % of ``max_samples`` (large faces are checked, not refused: every close
     approach is refined on the exact surfaces whatever the spacing)."""
     h = min(1.0, c.D / 8.0)
-    sizes = np.array([face_size(f) for f in faces], float).reshape(-1, 2)
+    sizes = _face_sizes(faces, fk)
     for _ in range(40):
         n = np.clip(np.ceil(sizes / h) + 1, 8, 3000).prod(axis=1).sum()
         if n <= 0.8 * max_samples:
@@ -307,6 +319,7 @@ def _coarse(c, tree, P, h, tolerance, T, A, progress=None, clear=0.0):
 _RECENT: OrderedDict = OrderedDict()
 _MAX_RECENT = 2
 _SAMPLED: OrderedDict = OrderedDict()
+_SIZES: dict = {}
 
 
 def _memo_key(fk: str, toolpath, tool, params, map_chunks) -> str:
@@ -420,15 +433,15 @@ def verify(
     step = min(1.0, math.sqrt(4.0 * rho_motion * gouge_tolerance)) if step is None else positive("step", step)
     angle_step = positive("angle_step", angle_step, "deg")
     faces = _faces(part)
-    h = positive("spacing", spacing) if spacing is not None else _auto_spacing(faces, c, max_samples)
+    from .contentkey import faces_key
+
+    fk = faces_key(faces)  # once: the check's memo, the part's samples and sizes are all keyed by it
+    h = positive("spacing", spacing) if spacing is not None else _auto_spacing(faces, c, max_samples, fk)
     if jumps is not None:
         jumps = np.asarray(jumps, bool).reshape(-1)
         if jumps.shape != (toolpath.n_positions,):
             raise InputError(f"jumps: one flag per position ({toolpath.n_positions}), got {jumps.size}")
     _check_placements(toolpath, step, angle_step)
-    from .contentkey import faces_key
-
-    fk = faces_key(faces)  # once: the check's memo and the part's samples are both keyed by it
     jk = None if jumps is None else np.flatnonzero(jumps).tolist()
     key = _memo_key(fk, toolpath, c, (gouge_tolerance, clear, step, angle_step, h, max_samples, jk), map_chunks)
     if key in _RECENT:  # the very same check just ran (a raster's own check, then the check before writing)
@@ -588,8 +601,9 @@ def _buried(faces, c, tree, smp: _Samples, T, A, h, gouge_tolerance, cut_d, seed
     r_cut = float(c.profile_points(16)[:, 0].max())
     mid = T + A * min(L_cut, c.D) / 2
     kn = min(8, P.shape[0])
-    _, nk = tree.query(mid, k=kn, workers=-1)
+    dk, nk = tree.query(mid, k=kn, workers=-1)
     nk = nk.reshape(mid.shape[0], kn)
+    dk = dk.reshape(mid.shape[0], kn)
     flat = nk.ravel()
     nrm = np.empty((flat.size, 3))
     for fi in np.unique(F[flat]):
@@ -600,11 +614,42 @@ def _buried(faces, c, tree, smp: _Samples, T, A, h, gouge_tolerance, cut_d, seed
     ni = nk[:, 0]
     behind = np.where(np.isfinite(behind_k).all(axis=1), behind_k.min(axis=1), np.nan)
     buried = np.isfinite(behind) & (behind > h + gouge_tolerance + r_cut) & (cut_d > -gouge_tolerance)
+    # far from every face the nearest samples can all be the back of a thin feature (a rapid far above an
+    # impeller's blade tips): there the samples' winding number must say inside too
+    far = np.flatnonzero(buried & (dk[:, 0] > L_cut + c.D))
+    if far.size:
+        buried[far[_winding_number(faces, smp, mid[far]) < 0.5]] = False
     if np.any(buried):
         cut_d[buried] = -behind[buried]
         best_face[buried] = F[ni[buried]]
         best_xyz[buried] = P[ni[buried]]
         seed[buried] = ni[buried]
+
+
+def _winding_number(faces, smp: _Samples, X: np.ndarray, budget: float = 2e8) -> np.ndarray:
+    """The generalized winding number of the sampled faces at the points ``X`` (about 1 inside a closed
+    part, 0 outside): the sum over the samples of their outward area element's solid angle, each sample
+    standing for its parameter cell (``|S_u x S_v| du dv``). Over ``budget`` sample-point pairs every
+    k-th sample stands for k cells (the points asking are far from every face, where this is smooth)."""
+    n = smp.P.shape[0]
+    k = max(1, math.ceil(n * X.shape[0] / budget))
+    idx = np.arange(0, n, k)
+    F = smp.F[idx]
+    dA = np.empty((idx.size, 3))
+    for fi in np.unique(F):
+        j = np.nonzero(F == fi)[0]
+        fc = faces[fi]
+        d = fc.surface.derivatives(smp.SU[idx[j]], smp.SV[idx[j]], order=1)
+        cell = smp.dus[fi] * smp.dvs[fi] * k * (-1.0 if fc.reversed else 1.0)
+        dA[j] = np.cross(d.su, d.sv) * cell
+    P = smp.P[idx]
+    out = np.empty(X.shape[0])
+    rows = max(1, int(2e6 // idx.size))  # pairs per chunk: about 50 MB
+    for a in range(0, X.shape[0], rows):
+        q = P[None, :, :] - X[a : a + rows, None, :]
+        r3 = np.maximum(np.linalg.norm(q, axis=2) ** 3, 1e-30)
+        out[a : a + rows] = (np.einsum("mnk,nk->mn", q, dA) / r3).sum(axis=1)
+    return out / (4.0 * math.pi)
 
 
 def _per_position(

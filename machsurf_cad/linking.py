@@ -132,6 +132,7 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
     if not runs:
         raise InputError("no run of cutting positions to link")
     faces = list(part)
+    runs = _liftable(runs, faces, cutter, gouge_tolerance, link_clearance)
     n = len(runs)
     axes = np.concatenate([np.asarray(r[1]) for r in runs])
     fixed = axes[0] if np.abs(axes - axes[0]).max() <= 1e-9 else None
@@ -175,77 +176,230 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
     check(gaps, 0)
     for c in (1, 2):
         check([k for k in gaps if not any(ok.get((k, x), False) for x in range(c))], c)
-    chosen, left_out, not_linked = _walk(n, first_clear, exit_, entry)
-    inserted = _insert_left_out(chosen, left_out, ends, check, first_clear)
+    def near_direct(cur, pending, k: int = 4):
+        """The first clear direct link from ``cur`` to one of the ``k`` run ends not yet cut nearest its exit
+        (no farther than 20 tool radii), all checked together; ``(node, candidate)`` or None."""
+        p0 = exit_(cur)[0]
+        nodes = [(j, o) for j in pending for o in (0, 1)]
+        d = np.array([np.linalg.norm(entry(nd)[0] - p0) for nd in nodes])
+        near = [nodes[i] for i in np.argsort(d, kind="stable")[:k] if d[i] <= 20.0 * cutter.radius]
+        keys = [(cur, nd) for nd in near]
+        for c in (0, 1):
+            check([key for key in keys if c < len(candidates(key)) and candidates(key)[c][3] == "direct"], c)
+        for key in keys:
+            for c, cd in enumerate(candidates(key)):
+                if cd[3] == "direct" and ok.get((key, c), False):
+                    return key[1], c
+        return None
+
+    chosen, left_out, not_linked = _walk(n, first_clear, exit_, entry, near_direct)
+    inserted = _insert_left_out(chosen, left_out, ends, check, candidates, ok)
+    inserted += _chains_at_end(chosen, left_out, n, check, candidates, ok, near_direct)
     info = dict(info or {}, runs_visited_later=inserted)
     tp = _assemble(runs, chosen, cand, cutter, name, info, surface, sorted(left_out), not_linked)
     return rapids_kept_clear(tp, faces, cutter, clearance, surface)
 
 
-def _insert_left_out(chosen, left_out, ends, check, first_clear, near: int = 3) -> list[int]:
-    """Visit left-out runs later: a link ``a -> b`` of the path replaced by ``a -> L -> b`` (``L`` either way
-    round) where both links are clear, trying the ``near`` links whose start is nearest ``L``; the first
-    links of all tries checked together. Changes ``chosen`` and ``left_out``; returns the runs visited."""
-    if not left_out:
-        return []
-    starts = np.array([np.full(3, np.nan) if a[0] < 0 else ends[a[0]][2] if a[1] == 0 else ends[a[0]][0]
-                       for (a, _), _c in chosen])  # fmt: skip
-    tries = {}
-    for L in left_out:
-        d = np.linalg.norm(starts - ends[L][0], axis=1)
-        d = np.where(np.isfinite(d), d, np.inf)
-        tries[L] = [int(k) for k in np.argsort(d)[:near] if np.isfinite(d[k])]
-    keys = [(chosen[k][0][0], (L, o)) for L, ks in tries.items() for k in ks for o in (0, 1)]
-    check(keys, 0)  # the direct links into the left-out runs, together
-    done = []
-    for L in list(left_out):
-        for k in tries[L]:
-            if k >= len(chosen):
-                continue
-            (a, b), _ = chosen[k]
-            for o in (0, 1):
-                c1 = first_clear((a, (L, o)))
-                c2 = None if c1 is None else first_clear(((L, o), b))
-                if c2 is not None:
-                    chosen[k : k + 1] = [((a, (L, o)), c1), (((L, o), b), c2)]
-                    left_out.remove(L)
-                    done.append(int(L))
+def _liftable(runs, faces, cutter, gouge_tolerance: float, link_clearance: float, lift: float = 1.0,
+              backs: tuple = (1, 2, 4, 8, 16)) -> list:  # fmt: skip
+    """``runs`` with each end moved in, where lifting the tool ``lift`` mm along its axis there enters the part
+    (a stretch that ends against a blade, its axis leaning towards it), to the nearest of ``backs``
+    positions in from which the lift is clear: every way out of a run starts with such a lift. All the
+    lifts checked in one tool-body check; an end no lift clears is left as it is."""
+    rows: list = []
+    for i, r in enumerate(runs):
+        t, a = np.asarray(r[0], float), np.asarray(r[1], float)
+        for e in (0, 1):
+            for b in (0, *backs):
+                if b >= len(t) - 1:
                     break
-            if L in done:
-                break
+                k = b if e == 0 else len(t) - 1 - b
+                rows.append((i, e, b, t[k], a[k]))
+    if not rows:
+        return runs
+    T = np.array([x for *_, p, a in rows for x in (p, p + lift * a)])
+    A = np.array([x for *_, _p, a in rows for x in (a, a)])
+    mv = np.tile([Move.RAPID, Move.RETRACT], len(rows))
+    tp = ToolPath(T, A, mv, np.repeat(np.arange(len(rows)), 2), cutter=cutter)
+    res = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance, clearance=link_clearance,
+                 jumps=np.arange(2 * len(rows)) % 2 == 0)  # fmt: skip
+    ok = np.asarray(res.status)[1::2] == CLEAR
+    cut = {}
+    for (i, e, b, *_), good in zip(rows, ok):
+        if (i, e) not in cut:
+            cut[(i, e)] = None
+        if good and cut[(i, e)] is None:
+            cut[(i, e)] = b
+    out = []
+    for i, r in enumerate(runs):
+        b0, b1 = cut.get((i, 0)) or 0, cut.get((i, 1)) or 0
+        n = len(r[0])
+        if b0 + b1 >= n - 1:  # nothing would be left: as it was
+            b0 = b1 = 0
+        out.append(tuple(None if x is None else x[b0 : n - b1] for x in r))
+    return out
+
+
+def _insert_left_out(chosen, left_out, ends, check, candidates, ok, near: int = 6, rounds: int = 3) -> list[int]:
+    """Visit left-out runs later: a link ``a -> b`` of the path replaced by ``a -> L -> b`` (``L`` either way
+    round) where both links are clear, trying the ``near`` links whose ends are nearest ``L``'s; every
+    candidate of every try checked together, in ``rounds`` rounds (a run put in opens links for the next).
+    Changes ``chosen`` and ``left_out``; returns the runs visited."""
+    done: list[int] = []
+    nan = np.full(3, np.nan)
+    for _ in range(rounds):
+        if not left_out:
+            break
+        src = np.array([nan if a[0] < 0 else ends[a[0]][2] if a[1] == 0 else ends[a[0]][0] for (a, _), _c in chosen])
+        dst = np.array([nan if b[0] >= len(ends) else ends[b[0]][0] if b[1] == 0 else ends[b[0]][2]
+                        for (_, b), _c in chosen])  # fmt: skip
+        tries = {}
+        for L in left_out:
+            d = np.full(len(chosen), np.inf)
+            for p in (ends[L][0], ends[L][2]):
+                for q in (src, dst):
+                    e = np.linalg.norm(q - p, axis=1)
+                    d = np.fmin(d, np.where(np.isfinite(e), e, np.inf))
+            tries[L] = [int(k) for k in np.argsort(d, kind="stable")[:near] if np.isfinite(d[k])]
+        keys = list(dict.fromkeys(key for L, ks in tries.items() for k in ks for o in (0, 1)
+                                  for key in ((chosen[k][0][0], (L, o)), ((L, o), chosen[k][0][1]))))  # fmt: skip
+        for c in range(max((len(candidates(key)) for key in keys), default=0)):
+            check([key for key in keys if not any(ok.get((key, x), False) for x in range(c))], c)
+
+        def clear(key):
+            return next((c for c in range(len(candidates(key))) if ok.get((key, c), False)), None)
+
+        put: dict[int, tuple] = {}
+        for L in list(left_out):
+            for k in tries[L]:
+                if k in put:
+                    continue
+                (a, b), _ = chosen[k]
+                for o in (0, 1):
+                    c1, c2 = clear((a, (L, o))), clear(((L, o), b))
+                    if c1 is not None and c2 is not None:
+                        put[k] = (((a, (L, o)), c1), (((L, o), b), c2))
+                        left_out.remove(L)
+                        done.append(int(L))
+                        break
+                if L in done:
+                    break
+        if not put:
+            break
+        chosen[:] = [x for k, link in enumerate(chosen) for x in (put[k] if k in put else (link,))]
     return done
 
 
-def _walk(n, first_clear, exit_, entry):
+def _chains_at_end(chosen, left_out, n, check, candidates, ok, near_direct) -> list[int]:
+    """Runs still left out, strung into chains at the path's end: a chain enters a left-out run where a link
+    from the clearance surface is clear, goes on by direct links to the nearest left-out runs (the stretches
+    of one channel, none of which the surface reaches at both ends), backs off a run that leads nowhere, and
+    ends where the way out to the surface is clear; the chains follow the path's last run over the
+    surface. Changes ``chosen`` and ``left_out``; returns the runs put in."""
+    if not left_out or not chosen:
+        return []
+    nodes = [(L, o) for L in left_out for o in (0, 1)]
+    keys = [((-1, 0), nd) for nd in nodes] + [(nd, (n, 0)) for nd in nodes]
+    for c in range(max(len(candidates(key)) for key in keys)):
+        check([key for key in keys if not any(ok.get((key, x), False) for x in range(c))], c)
+
+    def clear(key):
+        return next((c for c in range(len(candidates(key))) if ok.get((key, c), False)), None)
+
+    avail = set(left_out)
+    chains: list[list] = []
+    for L in sorted(left_out):
+        starts = [(L, o) for o in (0, 1) if L in avail and clear(((-1, 0), (L, o))) is not None]
+        if not starts:
+            continue
+        chain, skip = [(starts[0], None)], set()
+        avail.discard(L)
+        while chain:
+            cur = chain[-1][0]
+            got = near_direct(cur, sorted(avail - skip))
+            if got is not None:
+                chain.append(got)
+                avail.discard(got[0][0])
+                continue
+            if clear((cur, (n, 0))) is not None:
+                break
+            skip.add(cur[0])  # leads nowhere: backed off, free for another chain
+            avail.add(cur[0])
+            chain.pop()
+        if chain:
+            chains.append(chain)
+    last, c_end = chosen.pop()
+    cur = last[0]
+    put: list[int] = []
+    for chain in chains:
+        key = (cur, chain[0][0])
+        check([key], 0)
+        c0 = clear(key)
+        if c0 is None:
+            for c in range(1, len(candidates(key))):
+                check([key], c)
+            c0 = clear(key)
+        if c0 is None:
+            continue
+        chosen.append((key, c0))
+        for (a, _), (b, cb) in zip(chain[:-1], chain[1:]):
+            chosen.append(((a, b), cb))
+        cur = chain[-1][0]
+        put += [int(nd[0]) for nd, _ in chain]
+    chosen.append(((cur, (n, 0)), clear((cur, (n, 0))) if put else c_end))
+    for L in put:
+        left_out.remove(L)
+    return put
+
+
+def _walk(n, first_clear, exit_, entry, near_direct):
     """Runs in order, each entered at its start or else, reversed, at its end, by the first clear link from
-    the last one kept; a run no clear link enters is left out; a run no clear link leaves at the path's end
-    is left out too (and its way in dropped)."""
+    the last one kept. Where the next run cannot be reached, a direct link to one of the nearest runs not
+    yet cut is tried (:func:`link_runs`' ``near_direct``: in a channel, the stretch beside it); where none is
+    clear either, the last run kept is a dead end if no clear link leaves it for the clearance surface (it
+    is left out, its way in dropped, and the walk goes on from the run before); else the next run is left
+    out. A run no clear link leaves at the path's end is left out too (and its way in dropped)."""
     chosen: list[tuple[tuple, int]] = []
     left_out: list[int] = []
     not_linked: list[dict] = []
-    cur, j = (-1, 0), 0
+    pending = list(range(n))
+    cur = (-1, 0)
+
+    def drop_cur(to):
+        nonlocal cur
+        p0 = exit_(cur)[0]
+        not_linked.append({"from_mm": p0.tolist(), "to_mm": to})
+        left_out.append(cur[0])
+        chosen.pop()
+        cur = chosen[-1][0][1] if chosen else (-1, 0)
+
     while True:
-        if cur[0] < 0 and j >= n:
-            raise InputError("no run of the path can be reached and left without crossing the part")
-        tries = [(j, 0), (j, 1)] if j < n else [(n, 0)]
-        got = next(((node, c) for node in tries for c in [first_clear((cur, node))] if c is not None), None)
+        if not pending:
+            if cur[0] < 0:
+                raise InputError("no run of the path can be reached and left without crossing the part")
+            c = first_clear((cur, (n, 0)))
+            if c is not None:
+                chosen.append(((cur, (n, 0)), c))
+                break
+            drop_cur(None)  # no clear way out of the last run to the end
+            continue
+        j = pending[0]
+        got = next(((node, c) for node in [(j, 0), (j, 1)] for c in [first_clear((cur, node))] if c is not None), None)
+        if got is None and cur[0] >= 0:
+            got = near_direct(cur, pending)
         if got is not None:
             chosen.append(((cur, got[0]), got[1]))
-            if j == n:
-                break
-            cur, j = got[0], j + 1
+            pending.remove(got[0][0])
+            cur = got[0]
             continue
-        p0, p1 = exit_(cur)[0], entry((j, 0))[0]
-        not_linked.append(
-            {"from_mm": None if p0 is None else p0.tolist(), "to_mm": None if p1 is None else p1.tolist()}
-        )
-        if j < n:  # no clear way into run j: it is left out
-            left_out.append(j)
-            j += 1
-        else:  # no clear way out of the last run to the end: it is left out, and its way in dropped
-            left_out.append(cur[0])
-            chosen.pop()
-            cur = chosen[-1][0][1] if chosen else (-1, 0)
+        p1 = entry((j, 0))[0]
+        if cur[0] >= 0 and first_clear((cur, (n, 0))) is None:
+            drop_cur(p1.tolist())  # a dead end: nothing reached from it, not even the clearance surface
+            continue
+        p0 = exit_(cur)[0]
+        not_linked.append({"from_mm": None if p0 is None else p0.tolist(), "to_mm": p1.tolist()})
+        left_out.append(j)  # no clear way into run j: it is left out
+        pending.remove(j)
     return chosen, left_out, not_linked
 
 
@@ -351,8 +505,8 @@ def _assemble(runs, chosen, cand, cutter, name, info, surface, left_out, not_lin
 
 def rapids_kept_clear(toolpath: ToolPath, part, cutter, clearance: float, surface, *, step: float = 1.0) -> ToolPath:
     """``toolpath`` with each rapid move along which the whole tool (cutting part, shank and holder) comes
-    closer than ``clearance`` mm to the part made a feed move: a retract while no rapid of its link went
-    before, else an approach (both at the plunge feed). Rapid, approach and retract distances are so
+    closer than ``clearance`` mm to the part made a feed move that does not cut (:attr:`Move.RETRACT`, at
+    the plunge feed). Rapid, approach and retract distances are so
     measured from the whole tool, holder included, not from the tip. Rapids between two positions on the
     clearance ``surface`` (:func:`surface_for`) keep it by construction and are not measured; the others
     are, by one tool-body check with placements ``step`` mm apart (between two the tool can come closer by
@@ -373,11 +527,7 @@ def rapids_kept_clear(toolpath: ToolPath, part, cutter, clearance: float, surfac
             res = verify(part, moves, cutter, clearance=clearance, step=step, jumps=np.arange(rows.size) % 2 == 0)
         d = np.minimum(res.cut_distance, res.holder_distance).reshape(-1, 2).min(axis=1)
         slow = d < clearance * (1.0 - 1e-9)
-        nc = mv != Move.CUT
-        link = np.cumsum(nc & np.r_[True, ~nc[:-1]])  # the links: runs of moves that do not cut
-        for i in k[slow]:
-            fast_before = np.any((mv[:i] == Move.RAPID) & (link[:i] == link[i]))
-            mv[i] = Move.APPROACH if fast_before else Move.RETRACT
+        mv[k[slow]] = Move.RETRACT  # a feed move that does not cut (an approach is a cutting position's)
         left = d[~slow]
         info.update(n_rapids_at_feed=int(slow.sum()), rapid_distance_min_mm=float(left.min()) if left.size else None)
     if info["rapid_distance_min_mm"] is not None and not np.isfinite(info["rapid_distance_min_mm"]):

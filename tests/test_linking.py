@@ -266,3 +266,29 @@ def test_rapids_keep_the_clearance_from_the_holder():
             assert tp.info["rapid_distance_min_mm"] is None  # the rapids left are all over the plane
         else:  # measured on the part's samples: over the true 5 mm by less than the sampling's 0.03 mm
             assert 5.0 <= tp.info["rapid_distance_min_mm"] < 5.03
+
+
+def test_a_run_ending_against_a_wall_its_axis_leans_to_is_shortened_until_it_can_lift():
+    """A ball D6 (10 mm long) leaning 30 deg towards a wall at x = 10 cuts the floor in two passes up to
+    x = 2, where the body's far side (its top rim, x + 5 + 2.6, closed form) is 0.4 mm from the wall.
+    Lifting along the leaning axis moves it 0.5 mm towards the wall per mm: no link can leave either pass
+    at x = 2 (before, the second pass was left out). Each pass's end is moved in one position (x = 1.5),
+    where the 1 mm lift is clear, and the passes are joined there; the body never reaches the wall (closed
+    form over every move sampled every 0.05 mm) and the check is clean."""
+    floor = builders.plane_patch((-30, -10, 0), (40, 0, 0), (0, 20, 0), name="floor")
+    wall = builders.plane_patch((10, -10, -5), (0, 0, 30), (0, 20, 0), name="wall")  # material at x > 10
+    a = np.array([np.sin(np.radians(30.0)), 0.0, np.cos(np.radians(30.0))])
+    tool = BallEndMill(6, length=10.0)
+    x = np.arange(-20.0, 2.01, 0.5)
+    runs = []
+    for k, y in enumerate((0.0, 2.0)):
+        t = np.column_stack([x if k == 0 else x[::-1], np.full(x.size, y), np.full(x.size, 3.0 - 3.0 * a[2])])
+        runs.append((t, np.tile(a, (x.size, 1)), t.copy()))  # the ball on the floor: its tip 0.4 mm up
+    tp = link_runs(runs, [floor, wall], tool, clearance=5.0)
+    assert tp.info["runs_left_out"] == [] and tp.info["links_direct"] == 1
+    cut = (tp.move == Move.CUT) | (tp.move == Move.APPROACH)
+    assert tp.n_cut == 2 * (x.size - 1) and tp.tip[cut, 0].max() == 1.5
+    assert ms.verify([floor, wall], tp).clean
+    far = max(3.0 * a[0] + 3.0, 10.0 * a[0] + 3.0 * a[2])  # the body's largest x for a tip at x = 0: 7.6
+    worst = max(float(max(p[0], q[0])) for p, q in zip(tp.tip[:-1], tp.tip[1:]))  # tips move straight
+    assert worst + far <= 10.0 - 0.4 + 1e-9

@@ -391,6 +391,26 @@ def test_a_tool_high_above_a_hole_is_not_buried():
     assert not w.clean and w.max_gouge > 1.0  # at least this deep (a bound: the nearest tangent planes)
 
 
+def test_far_from_every_face_buried_needs_the_winding_number_too():
+    """Far from the part the nearest samples can all show their backs (the impeller's rapids 116 mm above its
+    blade tips read 80 mm "into" them): there a tool is buried only if the samples' winding number says it is
+    inside. The block's winding number is 1 in its material and 0 far outside (a closed part); with
+    every face turned over, a tool 60 mm above it is behind all its nearest samples yet outside: clear."""
+    from dataclasses import replace
+
+    from machsurf_cad.gougecheck import _sample_part, _winding_number
+    from machsurf_cad.occ import read_step_faces
+
+    faces = read_step_faces(ROOT / "example_parts" / "freeform_block.step")
+    w = _winding_number(faces, _sample_part(faces, 1.0, 10**7), np.array([[20.0, 20, 0], [65, 50, 200], [300, 0, 0]]))
+    assert abs(w[0] - 1) < 0.02 and abs(w[1]) < 0.02 and abs(w[2]) < 0.02
+    turned = [replace(f, reversed=not f.reversed) for f in faces]
+    above = ms.ToolPath(np.array([[65.0, 50, 110], [75, 50, 110]]), np.array([[0.0, 0, 1]] * 2),
+                        np.array([ms.Move.RAPID] * 2), np.array([0, 0]), cutter=ms.BallEndMill(6))  # fmt: skip
+    with pytest.warns(UserWarning, match="never comes within"):
+        assert ms.verify(turned, above).clean
+
+
 def test_the_same_check_twice_is_answered_once_and_a_changed_input_is_checked_again():
     """verify keeps its last results by content: the same faces, positions, tool and parameters give the very
     same result at once (a raster's own check, then the check before writing); a position moved by 1 um, a

@@ -27,7 +27,8 @@ class Move(IntEnum):
 
     ``RAPID`` positioning at rapid traverse, ``APPROACH`` the plunge onto the start of a
     pass along the tool axis (plunge feed), ``CUT`` a cutting move (cutting feed),
-    ``RETRACT`` the move off the end of a pass along the tool axis (plunge feed).
+    ``RETRACT`` a move that does not cut at the plunge feed: off the end of a pass along the tool axis, or a
+    link move the tool may not make at rapid traverse (the whole tool within the clearance of the part).
     """
 
     RAPID = 0
