@@ -176,6 +176,7 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
     check(gaps, 0)
     for c in (1, 2):
         check([k for k in gaps if not any(ok.get((k, x), False) for x in range(c))], c)
+
     def near_direct(cur, pending, k: int = 4):
         """The first clear direct link from ``cur`` to one of the ``k`` run ends not yet cut nearest its exit
         (no farther than 20 tool radii), all checked together; ``(node, candidate)`` or None."""
