@@ -225,7 +225,7 @@ def _liftable(runs, faces, cutter, gouge_tolerance: float, link_clearance: float
     res = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance, clearance=link_clearance,
                  jumps=np.arange(2 * len(rows)) % 2 == 0)  # fmt: skip
     ok = np.asarray(res.status)[1::2] == CLEAR
-    cut = {}
+    cut: dict[tuple, int | None] = {}
     for (i, e, b, *_), good in zip(rows, ok):
         if (i, e) not in cut:
             cut[(i, e)] = None
@@ -313,7 +313,8 @@ def _chains_at_end(chosen, left_out, n, check, candidates, ok, near_direct) -> l
         starts = [(L, o) for o in (0, 1) if L in avail and clear(((-1, 0), (L, o))) is not None]
         if not starts:
             continue
-        chain, skip = [(starts[0], None)], set()
+        chain: list = [(starts[0], None)]
+        skip: set[int] = set()
         avail.discard(L)
         while chain:
             cur = chain[-1][0]
