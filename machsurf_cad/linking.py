@@ -99,6 +99,12 @@ def _candidates(p0, a0, p1, a1, clearance: float, surface) -> list[tuple[np.ndar
     else:
         over = over_cylinder if kind == "cylinder" else over_sphere
         tips, axes = over(up0, a0, up1, a1, geo, limit=surface[2])
+        # the clearance points themselves: the retract and the approach are the clearance long, the legs
+        # between them and the surface rapids (made feed moves where the tool comes near the part)
+        if np.linalg.norm(tips[-1] - up1) > 1e-9:
+            tips, axes = np.vstack([tips, up1]), np.vstack([axes, a1])
+        if np.linalg.norm(tips[0] - up0) > 1e-9:
+            tips, axes = np.vstack([up0, tips]), np.vstack([a0, axes])
     if p0 is not None:  # leave along the axis at the plunge feed, then rapid
         moves = [Move.RETRACT] + [Move.RAPID] * (len(tips) - 1)
     else:
