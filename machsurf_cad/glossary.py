@@ -208,6 +208,7 @@ TERMS: dict[str, Term] = {
     "timeout_s": Term("s", "time to reach the scheduler"),
     "say": Term("", "a function printing one line"),
     "progress": Term("", "a progress callback (Progress)"),
+    "jumps": Term("", "positions with no motion into them: separate stretches checked in one call"),
     # cutter geometry (OpenCAMLib/APT vocabulary)
     "D": Term(_MM, "cutter diameter"),
     "r": Term(_MM, "corner radius"),

@@ -252,6 +252,24 @@ def _placements(tp: ToolPath, step_mm: float, step_deg: float, jumps=None):
     return np.concatenate(tips), np.concatenate(axes), np.concatenate(owner)
 
 
+def _blocks(tree, centers, reach: float, chunk: int = 256, pairs: int = 4_000_000):
+    """Slices of the placements, ``chunk`` at most, cut smaller where their samples within ``reach`` would
+    pass ``pairs`` (a clearance of tens of mm puts much of the part in every placement's window)."""
+    for start in range(0, centers.shape[0], chunk):
+        stop = min(centers.shape[0], start + chunk)
+        counts = np.asarray(tree.query_ball_point(centers[start:stop], reach, workers=-1, return_length=True))
+        if counts.sum() <= pairs:
+            yield slice(start, stop)
+            continue
+        a, total = 0, 0
+        for k, n in enumerate(counts.tolist()):
+            if total + n > pairs and k > a:  # a placement over the budget alone goes on its own
+                yield slice(start + a, start + k)
+                a, total = k, 0
+            total += n
+        yield slice(start + a, stop)
+
+
 def _coarse(c, tree, P, h, tolerance, T, A, progress=None, clear=0.0):
     """The sampled pass over placements ``(T, A)``: per placement the smallest signed distance of a part
     sample to the cutting part, to shank and holder, and that sample; the samples inside the cutting
@@ -271,9 +289,7 @@ def _coarse(c, tree, P, h, tolerance, T, A, progress=None, clear=0.0):
     hold_seed = np.full(m, -1)
     d_idx: list = []
     d_val: list = []
-    chunk = 256
-    for start in range(0, m, chunk):
-        sl = slice(start, min(m, start + chunk))
+    for sl in _blocks(tree, T + A * (L_all / 2), reach):
         centers = T[sl] + A[sl] * (L_all / 2)
         lists = tree.query_ball_point(centers, reach, workers=-1)
         counts = np.fromiter((len(x) for x in lists), int, len(lists))

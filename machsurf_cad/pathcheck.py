@@ -59,6 +59,14 @@ class PathCheck(Result):
 
     def report(self) -> dict:
         rep = dict(self.check.report(), verdict=self.verdict, n_positions_beyond_axis_limit=self.beyond_axis_limit)
+        if self.toolpath is not None:  # the written path's rapids (holder included) and its links' length
+            info = self.toolpath.info
+            rep["rapids"] = {
+                "clearance_mm": self.link_clearance,
+                "n_rapids_at_feed": info.get("n_rapids_at_feed", 0),
+                "rapid_distance_min_mm": info.get("rapid_distance_min_mm"),
+                "link_length_mm": self.toolpath.link_length(),
+            }
         if self.recheck is not None and self.toolpath is not None:
             rep["trimmed"] = {
                 "n_cut_kept": self.toolpath.n_cut,

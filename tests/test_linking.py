@@ -255,6 +255,7 @@ def test_rapids_keep_the_clearance_from_the_holder():
         pc = ms.check_toolpath(link_runs(runs, part, tool, clearance=5.0), part, clearance=5.0)
         tp = pc.toolpath
         assert pc.verdict == "clean" and tp.info["n_rapids_at_feed"] == at_feed
+        assert pc.report()["rapids"]["n_rapids_at_feed"] == at_feed
         worst = np.inf
         for i in np.flatnonzero(tp.move[1:] == Move.RAPID) + 1:
             for w in np.linspace(0, 1, int(np.linalg.norm(tp.tip[i] - tp.tip[i - 1]) / 0.1) + 2):
