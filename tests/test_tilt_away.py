@@ -82,6 +82,19 @@ def test_the_nominal_axis_collides_with_the_blade(leaning):
     assert rep["axis_change_max_deg"] <= 40.0 + 1e-6
 
 
+def test_what_no_orientation_clears_is_reported_as_a_region(leaning):
+    """One region: the strip along the blade where the ball meets it whatever its lean, y from 15.57 to 20
+    (closed form, 177 mm^2). On the 15 x 15 lattice it is the rows from y = 15.71, their cells from y = 15:
+    200 mm^2 over the whole length, uv box v 0.75..1."""
+    _, _, rep, _ = leaning
+    (region,) = rep["regions_clear_nowhere"]
+    assert rep["n_regions_clear_nowhere"] == 1 and rep["area_clear_nowhere_mm2"] == region["area_mm2"]
+    assert region["uv_box"] == pytest.approx([0.0, 1.0, 0.75, 1.0])
+    assert region["area_mm2"] == pytest.approx(200.0)
+    assert abs(region["area_mm2"] - 40 * (20 - 15.57)) <= 40 * 20 / 14  # within a lattice row
+    assert region["xyz_mm"] == pytest.approx([20.0, 17.857, 0.0], abs=1e-3)
+
+
 def test_tilting_away_machines_more_of_the_floor(leaning):
     floor, _, _, paths = leaning
     frac = {}

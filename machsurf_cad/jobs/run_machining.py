@@ -275,6 +275,16 @@ def _tilt_away(say: Say, spec: MachiningSurfaceJob, face, cutter, part):
         f"turned up to {rep['axis_change_max_deg']:.3g} deg, at most {rep['axis_turn_max_deg_per_mm']:.3g} deg/mm), "
         f"{rep['lattice_points_clear_nowhere']} clear with no orientation (cut out of the path)"
     )
+    regions = rep["regions_clear_nowhere"]
+    if regions:
+        big = regions[0]
+        at = ", ".join(f"{x:.4g}" for x in big["xyz_mm"])
+        box = [round(x, 4) for x in big["uv_box"]]
+        say(
+            f"  {rep['n_regions_clear_nowhere']} region(s) no orientation clears, "
+            f"{rep['area_clear_nowhere_mm2']:.4g} mm^2 in all; the largest {big['area_mm2']:.4g} mm^2 around "
+            f"({at}), uv box {box} (report: tilt_away.regions_clear_nowhere)"
+        )
     return field, rep
 
 

@@ -184,6 +184,7 @@ def clear_axis_field(
         "lattice_points_tilted": int(tilted.sum()),
         "lattice_points_clear_nowhere": int(nowhere.sum()),
         "nowhere_uv": np.stack([U[nowhere], V[nowhere]], -1)[:20].tolist(),
+        **_regions(face, nowhere, us, vs),
         "axis_change_max_deg": float(change.max(initial=0.0)),
         "axis_turn_max_deg_per_mm": turn,
         "lattice_points_not_clear_smoothed": not_clear,
@@ -193,6 +194,36 @@ def clear_axis_field(
     surf = interpolate_grid(smooth, 3, 3, us, vs)
     field = AxisField(lambda u, v: surf.evaluate(u, v), feed, "tilt-away axis field")
     return field, report
+
+
+def _regions(face, mask, us, vs, most: int = 20) -> dict:
+    """The connected regions of lattice points ``mask`` (no orientation clears them), largest first (``most``
+    of them; their number and total area besides): each one's uv box (its points' cells, half the way to
+    their neighbours), the mean of its points on the face (xyz, mm) and its area (mm^2, the cells'
+    |S_u x S_v| du dv summed)."""
+    from scipy import ndimage
+
+    if not mask.any():
+        return {"regions_clear_nowhere": [], "n_regions_clear_nowhere": 0, "area_clear_nowhere_mm2": 0.0}
+    labels, n = ndimage.label(mask)
+    d = face.surface.derivatives_grid(us, vs, 1)
+
+    def halves(x):  # each lattice point's cell: half the way to its neighbours, inside the domain
+        mid = (x[1:] + x[:-1]) / 2
+        return np.r_[x[0], mid], np.r_[mid, x[-1]]
+
+    (ua, ub), (va, vb) = halves(us), halves(vs)
+    cell = np.linalg.norm(np.cross(d.su, d.sv), axis=-1) * (ub - ua)[:, None] * (vb - va)[None, :]
+    out = []
+    for k in range(1, n + 1):
+        i, j = np.nonzero(labels == k)
+        a = float(cell[i, j].sum())
+        box = [float(ua[i.min()]), float(ub[i.max()]), float(va[j.min()]), float(vb[j.max()])]
+        centre = d.point[i, j].mean(axis=0)
+        out.append({"uv_box": box, "xyz_mm": centre.tolist(), "area_mm2": a, "lattice_points": int(i.size)})
+    out.sort(key=lambda r: -r["area_mm2"])
+    return {"regions_clear_nowhere": out[:most], "n_regions_clear_nowhere": n,
+            "area_clear_nowhere_mm2": float(sum(r["area_mm2"] for r in out))}  # fmt: skip
 
 
 def _smoothed(face, cutter, feed, raw, nominal, choice, inside, check_faces, gouge_tolerance, us, vs, limits):
