@@ -163,3 +163,30 @@ def test_a_rotary_limit_cuts_out_what_the_machine_cannot_tilt_to(tilt_away):
     assert ms.check_toolpath(tp, [pipe], on_gouge="refuse", max_axis_angle=45.0).verdict == "refused"
     with pytest.raises(ms.InputError, match="0..180"):
         ms.check_toolpath(tp, [pipe], max_axis_angle=0.0)
+
+
+def _three_blades():
+    """A blade (x 0..40, 20 high, machined on its +y side) between two more 10 mm either side, on a floor."""
+    blade = ms.Face(builders.plane_patch((0, 0, 0), (0, 0, 20), (40, 0, 0)), name="blade")
+    near = ms.Face(builders.plane_patch((0, 10, 0), (40, 0, 0), (0, 0, 20)), name="blade +y")
+    far = ms.Face(builders.plane_patch((0, -10, 0), (0, 0, 20), (40, 0, 0)), name="blade -y")
+    floor = ms.Face(builders.plane_patch((-5, -15, 0), (50, 0, 0), (0, 30, 0)), name="floor")
+    return blade, [floor, blade, near, far]
+
+
+def test_a_blade_between_two_blades_in_3_plus_2():
+    """The ball D6 (25 mm long) along an axis 10 deg from +Z towards the next blade: its body clears that
+    blade down to the floor, and the ball reaches the blade from 3 mm up (its centre R off the floor):
+    85 % of the blade in closed form. The path is cut down to that, skim-linked, clean under the check and
+    under the brute force (the body against dense samples of every face, every move interpolated), and its
+    rapids keep the 5 mm clearance from the whole tool."""
+    blade, part = _three_blades()
+    a = np.array([0.0, np.sin(np.radians(10.0)), np.cos(np.radians(10.0))])
+    surf = ms.machining_surface(blade, TOOL, axes=3, axis=a)
+    planned = ms.tool_paths(surf, stepover=2.0, safe_plane=ms.part_plane(part, a, 5.0))
+    pc = ms.check_toolpath(ms.trim_to_reach(planned, part, clearance=5.0, face=blade), part, clearance=5.0)
+    tp = pc.toolpath
+    assert pc.verdict == "clean" and tp.info["machined_area_fraction"] == pytest.approx(0.85, abs=0.02)
+    d = _brute_force(tp, part)
+    assert d[(tp.move == Move.CUT) | (tp.move == Move.APPROACH)].min() > -0.01
+    assert d[tp.move == Move.RAPID].min() > 5.0 - 1e-6
