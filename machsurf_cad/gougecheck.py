@@ -252,11 +252,15 @@ def _placements(tp: ToolPath, step_mm: float, step_deg: float, jumps=None):
     return np.concatenate(tips), np.concatenate(axes), np.concatenate(owner)
 
 
-def _blocks(tree, centers, reach: float, chunk: int = 256, pairs: int = 4_000_000):
-    """Slices of the placements, ``chunk`` at most, cut smaller where their samples within ``reach`` would
-    pass ``pairs`` (a clearance of tens of mm puts much of the part in every placement's window)."""
+def _blocks(tree, centers, reach: float, count: bool, chunk: int = 256, pairs: int = 4_000_000):
+    """Slices of the placements, ``chunk`` at most; with ``count`` (a clearance of tens of mm puts much of the
+    part in every placement's window) cut smaller where their samples within ``reach`` would pass
+    ``pairs``."""
     for start in range(0, centers.shape[0], chunk):
         stop = min(centers.shape[0], start + chunk)
+        if not count:
+            yield slice(start, stop)
+            continue
         counts = np.asarray(tree.query_ball_point(centers[start:stop], reach, workers=-1, return_length=True))
         if counts.sum() <= pairs:
             yield slice(start, stop)
@@ -289,7 +293,7 @@ def _coarse(c, tree, P, h, tolerance, T, A, progress=None, clear=0.0):
     hold_seed = np.full(m, -1)
     d_idx: list = []
     d_val: list = []
-    for sl in _blocks(tree, T + A * (L_all / 2), reach):
+    for sl in _blocks(tree, T + A * (L_all / 2), reach, count=clear > max(2.0, 4.0 * h)):
         centers = T[sl] + A[sl] * (L_all / 2)
         lists = tree.query_ball_point(centers, reach, workers=-1)
         counts = np.fromiter((len(x) for x in lists), int, len(lists))
@@ -628,6 +632,9 @@ def _buried(faces, c, tree, smp: _Samples, T, A, h, gouge_tolerance, cut_d, seed
         nrm[k] = fc.surface.normals(SU[flat[k]], SV[flat[k]], check=False) * (-1.0 if fc.reversed else 1.0)
     behind_k = -np.einsum("ij,ij->i", np.repeat(mid, kn, axis=0) - P[flat], nrm).reshape(-1, kn)
     ni = nk[:, 0]
+    # behind each along its normal, not past its face's edge (a point above a sheet's top edge is behind
+    # its nearest samples only by a sliver of its distance): within 60 deg of the inward normal
+    behind_k = np.where(behind_k >= 0.5 * dk, behind_k, -np.inf)
     behind = np.where(np.isfinite(behind_k).all(axis=1), behind_k.min(axis=1), np.nan)
     buried = np.isfinite(behind) & (behind > h + gouge_tolerance + r_cut) & (cut_d > -gouge_tolerance)
     # far from every face the nearest samples can all be the back of a thin feature (a rapid far above an

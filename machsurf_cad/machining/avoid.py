@@ -61,7 +61,8 @@ def _clear(faces, cutter, tips, axes, gouge_tolerance) -> np.ndarray:
     if tips.shape[0] == 0:
         return np.zeros(0, bool)
     tp = ToolPath(tips, axes, np.full(tips.shape[0], Move.CUT), np.arange(tips.shape[0]), cutter=cutter)
-    res = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance, step=1e9, angle_step=180.0)
+    res = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance, step=1e9, angle_step=180.0,
+                 jumps=np.ones(tips.shape[0], bool))  # fmt: skip
     return np.asarray(res.status) == CLEAR
 
 
