@@ -391,6 +391,7 @@ def test_a_tool_high_above_a_hole_is_not_buried():
     assert not w.clean and w.max_gouge > 1.0  # at least this deep (a bound: the nearest tangent planes)
 
 
+@needs_kernel
 def test_far_from_every_face_buried_needs_the_winding_number_too():
     """Far from the part the nearest samples can all show their backs (the impeller's rapids 116 mm above its
     blade tips read 80 mm "into" them): there a tool is buried only if the samples' winding number says it is
