@@ -293,3 +293,22 @@ def test_a_run_ending_against_a_wall_its_axis_leans_to_is_shortened_until_it_can
     far = max(3.0 * a[0] + 3.0, 10.0 * a[0] + 3.0 * a[2])  # the body's largest x for a tip at x = 0: 7.6
     worst = max(float(max(p[0], q[0])) for p, q in zip(tp.tip[:-1], tp.tip[1:]))  # tips move straight
     assert worst + far <= 10.0 - 0.4 + 1e-9
+
+
+def test_rapids_made_feed_moves_read_back_from_apt(tmp_path):
+    """Our APT file of a path whose links run partly at the plunge feed (the holder beside the bridge) reads
+    back with the same move kinds, and each pass is entered by its approach: the reader tells the feed links
+    (moves at the plunge feed between cutting moves) from the cuts."""
+    floor = builders.plane_patch((-40, -30, 0), (100, 0, 0), (0, 60, 0), name="floor")
+    bridge = builders.plane_patch((0, -30, 12), (20, 0, 0), (0, 60, 0), name="bridge")
+    tool = BallEndMill(6, length=10.0, holder=ms.Shank(20, 30))
+    ys = np.linspace(-20, 20, 21)
+    runs = []
+    for k, x in enumerate((-13.0, 33.0, 36.0)):
+        t = np.column_stack([np.full(ys.size, x), ys if k % 2 == 0 else ys[::-1], np.zeros(ys.size)])
+        runs.append((t, np.tile([0.0, 0, 1], (ys.size, 1)), t.copy()))
+    tp = ms.check_toolpath(link_runs(runs, [floor, bridge], tool, clearance=5.0), [floor, bridge]).toolpath
+    assert tp.info["n_rapids_at_feed"] > 0 and tp.info["links_direct"] == 1  # one link at feed all the way
+    back = ms.read_apt(ms.write_apt(tmp_path / "linked.apt", tp))
+    np.testing.assert_array_equal(back.move, tp.move)
+    np.testing.assert_array_equal(back.pass_index[back.move == Move.APPROACH], [0, 1, 2])

@@ -239,12 +239,25 @@ def _passes(mv: np.ndarray, fd: np.ndarray) -> np.ndarray:
         while j < n and mv[j] != Move.RAPID:
             j += 1
         run = np.arange(k, j)  # feed moves k..j-1
-        pidx[run] = cur
         seen_feed = True
         if run.size >= 2 and k > 0 and fd[run[0]] != fd[run[1]]:
             mv[run[0]] = Move.APPROACH
         if run.size >= 3 and fd[run[-1]] != fd[run[-2]]:
             mv[run[-1]] = Move.RETRACT
+        # moves at another feed than the cutting one are a link made at the plunge feed: the last of them,
+        # onto the next pass, is its approach (a new pass after cutting), the others retracts
+        new = np.zeros(run.size, np.int64)
+        f = fd[run]
+        vals, counts = np.unique(f[1:-1], return_counts=True)  # the cutting feed: the interior's most common
+        if run.size >= 3 and np.unique(f).size >= 2 and np.isfinite(f).all():
+            cut_feed = vals[counts == counts.max()].max()  # a tie to the faster
+            cut = f == cut_feed
+            for i in np.flatnonzero(~cut):
+                onto = i + 1 < run.size and cut[i + 1]
+                mv[run[i]] = Move.APPROACH if onto else Move.RETRACT
+                new[i] = int(onto and cut[:i].any())  # onto another pass after cutting: a new pass
+        pidx[run] = cur + np.cumsum(new)
+        cur += int(new.sum())
         k = j
     return pidx
 
@@ -254,8 +267,10 @@ def read_apt(path: str | Path, *, name: str | None = None) -> ToolPath:
 
     Moves after ``RAPID`` are rapids; in each run of feed moves between rapids, a first move
     whose feed differs from the next one is the approach and a last move whose feed differs
-    from the previous one is the retract (our files write them at the plunge feed); the
-    others are cuts. Passes are counted at each rapid that follows feed moves.
+    from the previous one is the retract (our files write them at the plunge feed); inside a
+    run, moves at another feed than the cutting one (its interior's most common) are a link
+    made at feed: the last, onto a pass, its approach, the others retracts; the rest are cuts.
+    Passes are counted at each rapid that follows feed moves and at each such approach.
 
     Parameters
     ----------
