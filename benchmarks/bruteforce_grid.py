@@ -3,7 +3,7 @@ largest difference of the heights from the reference's (``tests/ball_reference.p
 on the exact faces and edges), over all points and over the points within 1 mm in plan of a trimming edge
 counted apart, with both times.
 
-    python -m benchmarks.bruteforce_grid [--n 200] [--D 10] [PART.step ...]
+    python -m benchmarks.bruteforce_grid [--n 200] [--D 10] [--spacing 0.15] [PART.step ...]
 
 The example parts by default; ../shared/real-parts files when named.
 """
@@ -21,7 +21,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def grid_row(path: Path, n: int, D: float) -> dict:
+def grid_row(path: Path, n: int, D: float, spacing: float = 0.15) -> dict:
     sys.path.insert(0, str(ROOT / "tests"))
     from ball_reference import BallReference
 
@@ -30,7 +30,7 @@ def grid_row(path: Path, n: int, D: float) -> dict:
 
     faces = read_step_faces(path)
     t = time.perf_counter()
-    ref = BallReference(faces)
+    ref = BallReference(faces, spacing=spacing)
     t_sample = time.perf_counter() - t
     lo, hi = ref.P[:, :2].min(axis=0), ref.P[:, :2].max(axis=0)
     X, Y = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n), indexing="ij")
@@ -55,6 +55,7 @@ def grid_row(path: Path, n: int, D: float) -> dict:
         "points_over_1e-6": int((np.abs(diff[both]) > 1e-6).sum()),
         "near_trim_points": int((both & near_trim).sum()),
         "near_trim_max_abs_diff_mm": float(np.abs(diff[both & near_trim]).max()) if (both & near_trim).any() else 0.0,
+        "reference_spacing_mm": spacing,
         "reference_samples": int(ref.P.shape[0]),
         "reference_edge_samples": int(ref.E.shape[0]),
         "reference_s": t_sample + t_ref,
@@ -71,11 +72,12 @@ def main(argv=None) -> int:
     ap.add_argument("parts", nargs="*")
     ap.add_argument("--n", type=int, default=200)
     ap.add_argument("--D", type=float, default=10.0)
+    ap.add_argument("--spacing", type=float, default=0.15, help="the reference's face samples, mm")
     args = ap.parse_args(argv)
     parts = [Path(p) for p in args.parts] or [ROOT / "example_parts" / f for f in ("freeform_block.step",
                                                                                  "mould_insert.step")]  # fmt: skip
     for p in parts:
-        print(json.dumps(grid_row(p, args.n, args.D)), flush=True)
+        print(json.dumps(grid_row(p, args.n, args.D, args.spacing)), flush=True)
     return 0
 
 

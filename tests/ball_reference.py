@@ -165,12 +165,22 @@ class BallReference:
             gc, gd = np.where(left, gnew, gd), np.where(left, gc, gnew)
         return np.maximum(gc, gd)
 
-    def heights(self, xy, R: float, chunk: int = 2000) -> np.ndarray:
-        """Tip heights of a ball of radius ``R`` over the plan points ``xy`` (NaN where no face is within R)."""
+    def heights(self, xy, R: float, chunk: int = 2000, pairs: int = 4_000_000) -> np.ndarray:
+        """Tip heights of a ball of radius ``R`` over the plan points ``xy`` (NaN where no face is within R), in
+        chunks of at most ``chunk`` points and about ``pairs`` point-sample pairs (steep faces stack many
+        samples under one point in plan)."""
         xy = np.asarray(xy, float).reshape(-1, 2)
         out = np.full(xy.shape[0], -np.inf)
-        for a in range(0, xy.shape[0], chunk):
-            q = xy[a : a + chunk]
+        n = np.asarray(self.tree.query_ball_point(xy, R, return_length=True), float)
+        n += np.asarray(self.etree.query_ball_point(xy, R, return_length=True), float)
+        starts, total = [0], 0.0
+        for k, c in enumerate(n.tolist()):
+            if k > starts[-1] and (total + c > pairs or k - starts[-1] >= chunk):
+                starts.append(k)
+                total = 0.0
+            total += c
+        for a, b in zip(starts, starts[1:] + [xy.shape[0]]):
+            q = xy[a:b]
             h = np.full(q.shape[0], -np.inf)
             qi, si, val = self._best(self.tree, self.P, self.F, q, R)
             np.maximum.at(h, qi, val)
@@ -184,5 +194,5 @@ class BallReference:
                 t = self.ET[se[k]]
                 dt = self.edge_dt[e]
                 np.maximum.at(h, qe[k], self._golden(e, np.maximum(t - dt, 0.0), np.minimum(t + dt, 1.0), q[qe[k]], R))
-            out[a : a + chunk] = h
+            out[a:b] = h
         return np.where(np.isfinite(out), out, np.nan)
