@@ -399,11 +399,12 @@ def test_far_from_every_face_buried_needs_the_winding_number_too():
     every face turned over, a tool 60 mm above it is behind all its nearest samples yet outside: clear."""
     from dataclasses import replace
 
-    from machsurf_cad.gougecheck import _sample_part, _winding_number
+    from machsurf_cad.buried import winding_number
+    from machsurf_cad.gougecheck import _sample_part
     from machsurf_cad.occ import read_step_faces
 
     faces = read_step_faces(ROOT / "example_parts" / "freeform_block.step")
-    w = _winding_number(faces, _sample_part(faces, 1.0, 10**7), np.array([[20.0, 20, 0], [65, 50, 200], [300, 0, 0]]))
+    w = winding_number(faces, _sample_part(faces, 1.0, 10**7), np.array([[20.0, 20, 0], [65, 50, 200], [300, 0, 0]]))
     assert abs(w[0] - 1) < 0.02 and abs(w[1]) < 0.02 and abs(w[2]) < 0.02
     turned = [replace(f, reversed=not f.reversed) for f in faces]
     above = ms.ToolPath(np.array([[65.0, 50, 110], [75, 50, 110]]), np.array([[0.0, 0, 1]] * 2),
