@@ -170,18 +170,21 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
             starts = {k: exit_(k[0]) for k in todo}
             ok.update(_clear(todo, c, starts, faces, cutter, gouge_tolerance, link_clearance, surface))
 
+    def check_all(keys):
+        """The candidates of ``keys`` in order, all keys together per candidate, each until one is clear."""
+        for c in range(max((len(candidates(k)) for k in keys), default=0)):
+            check([k for k in keys if not any(ok.get((k, x), False) for x in range(c))], c)
+
+    def known_clear(key):
+        """The first candidate of ``key`` found clear so far, or None."""
+        return next((c for c in range(len(candidates(key))) if ok.get((key, c), False)), None)
+
     def first_clear(key):
-        for c in range(len(candidates(key))):
-            check([key], c)
-            if ok[(key, c)]:
-                return c
-        return None
+        check_all([key])
+        return known_clear(key)
 
     # the direct links between neighbours in one check, then the links over the surface where they collide
-    gaps = [((i, 0), (i + 1, 0)) for i in range(-1, n)]
-    check(gaps, 0)
-    for c in (1, 2):
-        check([k for k in gaps if not any(ok.get((k, x), False) for x in range(c))], c)
+    check_all([((i, 0), (i + 1, 0)) for i in range(-1, n)])
 
     def near_direct(cur, pending, k: int = 4):
         """The first clear direct link from ``cur`` to one of the ``k`` run ends not yet cut nearest its exit
@@ -200,8 +203,8 @@ def link_runs(runs, part, cutter, *, clearance: float = 5.0, gouge_tolerance: fl
         return None
 
     chosen, left_out, not_linked = _walk(n, first_clear, exit_, entry, near_direct)
-    inserted = _insert_left_out(chosen, left_out, ends, check, candidates, ok)
-    inserted += _chains_at_end(chosen, left_out, n, check, candidates, ok, near_direct)
+    inserted = _insert_left_out(chosen, left_out, ends, check_all, known_clear)
+    inserted += _chains_at_end(chosen, left_out, n, check_all, known_clear, near_direct)
     info = dict(info or {}, runs_visited_later=inserted)
     tp = _assemble(runs, chosen, cand, cutter, name, info, surface, sorted(left_out), not_linked)
     return rapids_kept_clear(tp, faces, cutter, clearance, surface)
@@ -231,15 +234,13 @@ def _liftable(runs, faces, cutter, gouge_tolerance: float, link_clearance: float
     res = verify(faces, tp, cutter, gouge_tolerance=gouge_tolerance, clearance=link_clearance,
                  jumps=np.arange(2 * len(rows)) % 2 == 0)  # fmt: skip
     ok = np.asarray(res.status)[1::2] == CLEAR
-    cut: dict[tuple, int | None] = {}
-    for (i, e, b, *_), good in zip(rows, ok):
-        if (i, e) not in cut:
-            cut[(i, e)] = None
-        if good and cut[(i, e)] is None:
-            cut[(i, e)] = b
+    cut: dict[tuple, int] = {}
+    for (i, e, b, *_), good in zip(rows, ok):  # the fewest positions in (rows go outwards in) whose lift is clear
+        if good:
+            cut.setdefault((i, e), b)
     out = []
     for i, r in enumerate(runs):
-        b0, b1 = cut.get((i, 0)) or 0, cut.get((i, 1)) or 0
+        b0, b1 = cut.get((i, 0), 0), cut.get((i, 1), 0)
         n = len(r[0])
         if b0 + b1 >= n - 1:  # nothing would be left: as it was
             b0 = b1 = 0
@@ -247,7 +248,7 @@ def _liftable(runs, faces, cutter, gouge_tolerance: float, link_clearance: float
     return out
 
 
-def _insert_left_out(chosen, left_out, ends, check, candidates, ok, near: int = 6, rounds: int = 3) -> list[int]:
+def _insert_left_out(chosen, left_out, ends, check_all, clear, near: int = 6, rounds: int = 3) -> list[int]:
     """Visit left-out runs later: a link ``a -> b`` of the path replaced by ``a -> L -> b`` (``L`` either way
     round) where both links are clear, trying the ``near`` links whose ends are nearest ``L``'s; every
     candidate of every try checked together, in ``rounds`` rounds (a run put in opens links for the next).
@@ -270,12 +271,7 @@ def _insert_left_out(chosen, left_out, ends, check, candidates, ok, near: int = 
             tries[L] = [int(k) for k in np.argsort(d, kind="stable")[:near] if np.isfinite(d[k])]
         keys = list(dict.fromkeys(key for L, ks in tries.items() for k in ks for o in (0, 1)
                                   for key in ((chosen[k][0][0], (L, o)), ((L, o), chosen[k][0][1]))))  # fmt: skip
-        for c in range(max((len(candidates(key)) for key in keys), default=0)):
-            check([key for key in keys if not any(ok.get((key, x), False) for x in range(c))], c)
-
-        def clear(key):
-            return next((c for c in range(len(candidates(key))) if ok.get((key, c), False)), None)
-
+        check_all(keys)
         put: dict[int, tuple] = {}
         for L in list(left_out):
             for k in tries[L]:
@@ -297,7 +293,7 @@ def _insert_left_out(chosen, left_out, ends, check, candidates, ok, near: int = 
     return done
 
 
-def _chains_at_end(chosen, left_out, n, check, candidates, ok, near_direct) -> list[int]:
+def _chains_at_end(chosen, left_out, n, check_all, clear, near_direct) -> list[int]:
     """Runs still left out, strung into chains at the path's end: a chain enters a left-out run where a link
     from the clearance surface is clear, goes on by direct links to the nearest left-out runs (the stretches
     of one channel, none of which the surface reaches at both ends), backs off a run that leads nowhere, and
@@ -306,13 +302,7 @@ def _chains_at_end(chosen, left_out, n, check, candidates, ok, near_direct) -> l
     if not left_out or not chosen:
         return []
     nodes = [(L, o) for L in left_out for o in (0, 1)]
-    keys = [((-1, 0), nd) for nd in nodes] + [(nd, (n, 0)) for nd in nodes]
-    for c in range(max(len(candidates(key)) for key in keys)):
-        check([key for key in keys if not any(ok.get((key, x), False) for x in range(c))], c)
-
-    def clear(key):
-        return next((c for c in range(len(candidates(key))) if ok.get((key, c), False)), None)
-
+    check_all([((-1, 0), nd) for nd in nodes] + [(nd, (n, 0)) for nd in nodes])
     avail = set(left_out)
     chains: list[list] = []
     for L in sorted(left_out):
@@ -341,12 +331,8 @@ def _chains_at_end(chosen, left_out, n, check, candidates, ok, near_direct) -> l
     put: list[int] = []
     for chain in chains:
         key = (cur, chain[0][0])
-        check([key], 0)
+        check_all([key])
         c0 = clear(key)
-        if c0 is None:
-            for c in range(1, len(candidates(key))):
-                check([key], c)
-            c0 = clear(key)
         if c0 is None:
             continue
         chosen.append((key, c0))

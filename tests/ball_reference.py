@@ -1,8 +1,9 @@
 """An independent reference for the ball drop-cutter on trimmed faces, fast enough for 40,000-point grids.
 
-Written apart from ``machsurf_cad.threeaxis``: it shares only the faces' evaluation, derivatives and
-trimming test. The tip of a ball of radius R over the plan point q rests at the highest
-``g(p) = p_z + sqrt(R^2 - |p_xy - q|^2) - R`` over the part's points p within R of q in plan. Here:
+Written apart from ``machsurf_cad.threeaxis``: it shares only the faces' evaluation, derivatives,
+trimming test and size (:func:`machsurf_cad.gougecheck.face_size`, to space the samples). The tip of a
+ball of radius R over the plan point q rests at the highest ``g(p) = p_z + sqrt(R^2 - |p_xy - q|^2) - R``
+over the part's points p within R of q in plan. Here:
 
 1. every face is sampled about ``spacing`` mm apart inside its trimming, every trimming curve (and an
    untrimmed face's parameter box) ``edge_spacing`` mm apart;
@@ -18,15 +19,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from helpers import trimmed_grid
 from scipy.spatial import cKDTree
 
-
-def _extent(face):
-    u0, u1, v0, v1 = face.uv_bounds
-    g = face.surface.evaluate_grid(np.linspace(u0, u1, 17), np.linspace(v0, v1, 17))
-    lu = np.linalg.norm(np.diff(g, axis=0), axis=-1).sum(axis=0).max()
-    lv = np.linalg.norm(np.diff(g, axis=1), axis=-1).sum(axis=1).max()
-    return float(lu), float(lv)
+from machsurf_cad.gougecheck import face_size
 
 
 def _edges(face):
@@ -51,17 +47,11 @@ class BallReference:
         self.faces = list(faces)
         P, F, U, V = [], [], [], []
         for i, f in enumerate(self.faces):
-            lu, lv = _extent(f)
-            u0, u1, v0, v1 = f.uv_bounds
-            nu = int(np.clip(math.ceil(lu / spacing) + 1, 2, 6000))
-            nv = int(np.clip(math.ceil(lv / spacing) + 1, 2, 6000))
-            Ug, Vg = np.meshgrid(np.linspace(u0, u1, nu), np.linspace(v0, v1, nv), indexing="ij")
-            u, v = Ug.ravel(), Vg.ravel()
-            keep = f.contains_uv(u, v) if f.is_trimmed else np.ones(u.size, bool)
-            P.append(f.surface.evaluate(u[keep], v[keep]))
-            F.append(np.full(int(keep.sum()), i))
-            U.append(u[keep])
-            V.append(v[keep])
+            u, v = trimmed_grid(f, face_size(f), spacing, 2, 6000)
+            P.append(f.surface.evaluate(u, v))
+            F.append(np.full(u.size, i))
+            U.append(u)
+            V.append(v)
         self.P, self.F, self.U, self.V = (np.concatenate(x) for x in (P, F, U, V))
         E, EI, ET, self.edge_fn, self.edge_face, self.edge_dt = [], [], [], [], [], []
         for i, f in enumerate(self.faces):

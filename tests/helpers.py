@@ -35,6 +35,30 @@ def random_surface(rng, rational=False, degree=(3, 2), n=(7, 5), size=100.0):
     return BSplineSurface(p, q, ku, mu, kv, mv, poles, w)
 
 
+def shared_part(name: str) -> Path:
+    """A public STEP part of ../shared/real-parts (kept out of the repository by its licence); the test is
+    skipped where it is not present."""
+    import pytest
+
+    for d in (Path("/work/shared/real-parts"), ROOT.parent / "shared" / "real-parts"):
+        if (d / name).is_file():
+            return d / name
+    pytest.skip("shared/real-parts (public STEP parts) not present")
+
+
+def trimmed_grid(face, lengths, spacing: float, lo: int, hi: int):
+    """The face's parameter grid about ``spacing`` mm apart along its ``lengths`` (mm along u and v; ``lo`` to
+    ``hi`` samples each way), kept inside its trimming: ``(u, v)``."""
+    import math
+
+    u0, u1, v0, v1 = face.uv_bounds
+    nu, nv = (int(np.clip(math.ceil(x / spacing) + 1, lo, hi)) for x in lengths)
+    U, V = np.meshgrid(np.linspace(u0, u1, nu), np.linspace(v0, v1, nv), indexing="ij")
+    u, v = U.ravel(), V.ravel()
+    keep = face.contains_uv(u, v) if face.is_trimmed else np.ones(u.size, bool)
+    return u[keep], v[keep]
+
+
 def assert_points_close(actual, expected, atol, what="points"):
     """Every point (row) of ``actual`` within ``atol`` (mm, Euclidean) of ``expected``; reports the worst."""
     a = np.asarray(actual, float)

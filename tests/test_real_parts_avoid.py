@@ -9,39 +9,26 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import ROOT, needs_kernel
-from helpers import run
+from conftest import needs_kernel
+from helpers import run, shared_part, trimmed_grid
 
 import machsurf_cad as ms
 
 pytestmark = [needs_kernel, pytest.mark.slow]
 
 
-def _shared_part(name: str) -> Path:
-    for d in (Path("/work/shared/real-parts"), ROOT.parent / "shared" / "real-parts"):
-        if (d / name).is_file():
-            return d / name
-    pytest.skip("shared/real-parts (public STEP parts) not present")
-
-
 def _samples(faces, spacing: float) -> np.ndarray:
-    """Every face on a parameter grid about ``spacing`` mm apart (by its poles' extent), inside its trimming."""
+    """Every face on a parameter grid about ``spacing`` mm apart (by its poles' polygon, no shorter than the
+    face), inside its trimming."""
     pts = []
     for f in faces:
-        u0, u1, v0, v1 = f.uv_bounds
         P = np.asarray(f.surface.poles, float)
-        lu = float(np.linalg.norm(np.diff(P, axis=0), axis=-1).sum(axis=0).max())
-        lv = float(np.linalg.norm(np.diff(P, axis=1), axis=-1).sum(axis=1).max())
-        nu = int(np.clip(math.ceil(lu / spacing) + 1, 4, 4000))
-        nv = int(np.clip(math.ceil(lv / spacing) + 1, 4, 4000))
-        U, V = np.meshgrid(np.linspace(u0, u1, nu), np.linspace(v0, v1, nv), indexing="ij")
-        u, v = U.ravel(), V.ravel()
-        keep = f.contains_uv(u, v) if f.is_trimmed else np.ones(u.size, bool)
-        pts.append(f.surface.evaluate(u[keep], v[keep]))
+        lengths = (np.linalg.norm(np.diff(P, axis=0), axis=-1).sum(axis=0).max(),
+                   np.linalg.norm(np.diff(P, axis=1), axis=-1).sum(axis=1).max())  # fmt: skip
+        pts.append(f.surface.evaluate(*trimmed_grid(f, lengths, spacing, 4, 4000)))
     return np.concatenate(pts)
 
 
@@ -89,7 +76,7 @@ def test_impeller_hub_between_the_blades_is_machined_by_tilting_away_and_linking
 
     from machsurf_cad.occ import read_step_faces
 
-    step = _shared_part("turbo3d_impeller.step")
+    step = shared_part("turbo3d_impeller.step")
     res = run("machining-surface", step, "--face", 87, "--axes", 5, "--tool", "bull:D=4,r=1", "--lead", 5,
                          "--max-lead", 40, "--max-tilt", 90, "--toolpath", "-o", tmp_path / "out")  # fmt: skip
     assert res.returncode == 0, res.stderr

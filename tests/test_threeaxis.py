@@ -1,11 +1,11 @@
 """Exact drop-cutter on the B-rep: closed forms, an independent brute force, OpenCAMLib, invariants."""
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from conftest import ROOT, needs_kernel
+from helpers import shared_part
 
 import machsurf_cad as ms
 from machsurf_cad import builders
@@ -689,13 +689,6 @@ def test_reachable_area_beside_a_wall_closed_form():
     assert down["reachable_fraction"] == 0.0 and down["facing_away_fraction"] == 1.0
 
 
-def _shared_part(name: str):
-    for d in (Path("/work/shared/real-parts"), ROOT.parent / "shared" / "real-parts"):
-        if (d / name).is_file():
-            return d / name
-    pytest.skip("shared/real-parts (public STEP parts) not present")
-
-
 # points a hostile review found below the brute force (a gouge), or where the engines disagreed: a face
 # seed just outside the disc whose start on the circle led Newton to a lower maximum (the compiled engine,
 # 0.078 mm), kink circles met by a face in two places of one seed group or only across the circle (cones,
@@ -720,7 +713,7 @@ _HOSTILE = [
 def test_hostile_points_equal_the_brute_force_in_both_engines(part, spec, xy):
     from machsurf_cad.occ import read_step_faces
 
-    path = ROOT / "example_parts" / part if (ROOT / "example_parts" / part).is_file() else _shared_part(part)
+    path = ROOT / "example_parts" / part if (ROOT / "example_parts" / part).is_file() else shared_part(part)
     faces = read_step_faces(path)
     cutter = ms.parse_cutter(spec)
     q = np.array([xy])
