@@ -139,6 +139,15 @@ def source_face(obj):
         raise MachsurfError(f"{src.Label} has no {name} any more (topology changed or face deleted)") from None
 
 
+def _surface_and_deviation(*args, **kwargs):
+    """:func:`machsurf_cad.machining_surface` and its deviation map, both off the GUI thread (the GUI thread
+    only writes them: a deviation computed there stalled the window a quarter of a second)."""
+    from machsurf_cad import machining_surface
+
+    ms = machining_surface(*args, **kwargs)
+    return ms, maps.deviation(ms)
+
+
 class _Base:
     """Error handling and property migrations shared by the features.
 
@@ -307,14 +316,12 @@ class MachiningSurfaceFeature(_Base):
         maps.add_properties(obj)
 
     def compute(self, obj):
-        from machsurf_cad import machining_surface
-
         f = face_to_numpy(source_face(obj), "F")
         axes = int(obj.Axes)
         if axes not in (3, 5):
             raise InputError(f"Axes must be 3 or 5, got {axes}")
-        ms = self.core(
-            machining_surface,
+        ms, dev = self.core(
+            _surface_and_deviation,
             f,
             tool_text(obj.Tool),
             axes=axes,
@@ -325,12 +332,14 @@ class MachiningSurfaceFeature(_Base):
             loops=str(obj.Loops),
         )
         faces = [face_to_part(x) for x in ms.faces()]
+        self.tick("writing the result")
         obj.Shape = Part.Compound(faces)
+        self.tick("writing the result")
         obj.GuidingSurfaceError = ms.s1_fit.max_error
         obj.GuidingSurfacePoles = "x".join(str(n) for n in ms.s1_fit.surface.shape)
         obj.OrientationSurfaceError = ms.s2_fit.max_error if ms.s2_fit else 0.0
         obj.OrientationSurfacePoles = "x".join(str(n) for n in ms.s2_fit.surface.shape) if ms.s2_fit else ""
-        maps.deviation_map(obj, ms)
+        maps.deviation_map(obj, ms, dev)
         obj.AlphaMax = ms.alpha_max_deg_measured or 0.0
         obj.LoopReport = "none" if not ms.loops.found else "; ".join(r.describe() for r in ms.loops.regions)
         obj.Report = strict_json(ms.report(), indent=None)

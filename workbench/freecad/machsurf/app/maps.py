@@ -128,12 +128,17 @@ def normalised(values, low, high, diverging=False):
     return (v - low) / max(high - low, 1e-300)
 
 
-def deviation_map(obj, ms):
+def deviation(ms):
     """The guiding surface's signed deviation from its exact map (mm, along the face normal), on a grid
-    off the fit's samples, inside the trimmed face: ``machsurf_cad``'s own deviation map."""
+    off the fit's samples, inside the trimmed face: ``machsurf_cad``'s own deviation map (computed off the GUI
+    thread with the surface)."""
     from machsurf_cad.machining.surfaces import fit_deviation
 
-    dev = fit_deviation(ms, "S1", samples=MAX_SIDE)
+    return fit_deviation(ms, "S1", samples=MAX_SIDE)
+
+
+def deviation_map(obj, ms, dev):
+    """Store :func:`deviation` ``dev`` of ``ms`` as ``obj``'s map."""
     n = MAX_SIDE
     val = np.full(n * n, np.nan)
     pts = np.full((n * n, 3), np.nan)
