@@ -269,3 +269,33 @@ def test_ball_heights_equal_an_independent_reference_to_1e6_mm_near_the_trims_to
     ok = np.isfinite(bf)
     assert ok.sum() > 400
     assert np.abs(dc[ok] - bf[ok]).max() <= 1e-6
+
+
+PROFILE_SPECS = ["ball:D=10", "flat:D=16", "bull:D=20,r=4", "cone:D=10,angle=6", "cone:D=10,angle=-8",
+                 "drum:D=20,Rp=40,L=20", "barrel:D=20,Rp=40,L=20", "apt:D=20,r=4,e=6,f=4,alpha=10,beta=5,h=60"]  # fmt: skip
+
+
+@needs_numba
+@pytest.mark.parametrize("spec", PROFILE_SPECS)
+def test_the_kernels_profile_pieces_give_lower_heights_numbers_to_the_bit(spec):
+    """The kernel evaluates the cutter's lower surface from pieces of [0, R] (one segment lowest on each):
+    on 20,001 radii, the piece ends and points 1e-9 mm beside them (where the kernel falls back to the search
+    over the segments), h, h' and h'' are the search's own numbers, bit for bit."""
+    from machsurf_cad.threeaxis._jit_geom import lower_height, prof
+    from machsurf_cad.threeaxis.dropcutter import _Profile
+
+    p = _Profile(ms.parse_cutter(spec))
+    PR = compiled._profile(p)
+    tb = PR[2]
+    assert tb.shape[0] >= 1 and tb[0, 0] < 1e-9 and tb[-1, 1] == pytest.approx(p.R)  # pieces cover [0, R]
+    ends = np.r_[tb[:, 0], tb[-1, 1]]
+    rho = np.r_[np.linspace(0.0, p.R, 20001), ends, ends - 1e-9, ends + 1e-9, ends + 3e-9, ends - 3e-9]
+    for r in rho[(rho >= 0) & (rho <= p.R)]:
+        assert prof(PR, r) == lower_height(PR[0], min(r, PR[1][0])) or not np.isfinite(prof(PR, r)[0]), (spec, r)
+
+
+@needs_numba
+def test_crossing_profile_segments_get_no_pieces():
+    """Two segments crossing inside a piece (the lowest one changes there): no pieces, the search runs."""
+    segs = np.array([[0.0, 0.0, 0.0, 5.0, 1.0, 0.0], [0.0, 0.0, 1.0, 5.0, 0.0, 0.0]])  # they cross at rho = 2.5
+    assert compiled._pieces(segs, 5.0).shape == (0, 7)

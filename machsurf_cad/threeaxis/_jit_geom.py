@@ -317,13 +317,43 @@ def lower_height(segs, rho):
     return h, h1, h2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def piece_height(tb, rho):
+    """``lower_height`` from the profile's pieces (:func:`.compiled._pieces`): ``h, h', h''`` and whether
+    ``rho`` lies inside a piece (more than :data:`PIECE_MARGIN` from its ends; else the caller runs
+    ``lower_height``). The same formulas as ``lower_height`` for the segment that is lowest on the piece, so
+    the same numbers, without its search over the segments and their arcs' angles."""
+    for i in range(tb.shape[0]):
+        if rho > tb[i, 0] + PIECE_MARGIN and rho < tb[i, 1] - PIECE_MARGIN:
+            kind = tb[i, 2]
+            if kind == 0.0:
+                r0, z0, r1, z1 = tb[i, 3], tb[i, 4], tb[i, 5], tb[i, 6]
+                return z0 + (rho - r0) / (r1 - r0) * (z1 - z0), (z1 - z0) / (r1 - r0), 0.0, True
+            if kind == 1.0:
+                rc, zc, r, sgn = tb[i, 3], tb[i, 4], tb[i, 5], tb[i, 6]
+                dx = rho - rc
+                root = math.sqrt(max(r * r - dx * dx, 0.0))
+                safe = max(root, 1e-8 * r)
+                h1 = min(max(-sgn * dx / safe, -1e8), 1e8)
+                return zc + sgn * root, h1, min(max(-sgn * r * r / safe**3, -1e8), 1e8), True
+            return math.inf, 0.0, 0.0, True
+    return math.inf, 0.0, 0.0, False
+
+
+PIECE_MARGIN = 1e-9
+"""Within this distance (mm) of a piece's ends the profile is evaluated by ``lower_height`` itself."""
+
+
+@njit(cache=True, inline="always")
 def prof(PR, rho):
     """The profile's ``h, h', h''`` at ``rho``: ``inf`` beyond the rim, ``h(R)`` where no segment reaches
     (``_Profile.__call__``)."""
-    segs, k = PR
+    segs, k, tb = PR
     R = k[0]
-    h, h1, h2 = lower_height(segs, nmin(rho, R))
+    x = nmin(rho, R)
+    h, h1, h2, ok = piece_height(tb, abs(x))
+    if not ok:
+        h, h1, h2 = lower_height(segs, x)
     if rho <= R * (1 + 1e-12):
         if not isfin(h):
             h = k[1]
@@ -332,7 +362,7 @@ def prof(PR, rho):
     return h, h1, h2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def prof_floor(PR, rho):
     """A lower bound of ``h`` on ``[rho, R]`` (``_Profile.floor``)."""
     k = PR[1]
