@@ -272,7 +272,8 @@ def test_ball_heights_equal_an_independent_reference_to_1e6_mm_near_the_trims_to
 
 
 PROFILE_SPECS = ["ball:D=10", "flat:D=16", "bull:D=20,r=4", "cone:D=10,angle=6", "cone:D=10,angle=-8",
-                 "drum:D=20,Rp=40,L=20", "barrel:D=20,Rp=40,L=20", "apt:D=20,r=4,e=6,f=4,alpha=10,beta=5,h=60"]  # fmt: skip
+                 "drum:D=20,Rp=40,L=20", "barrel:D=20,Rp=40,L=20",
+                 "apt:D=20,r=4,e=6,f=4,alpha=10,beta=5,h=60"]  # fmt: skip
 
 
 @needs_numba

@@ -225,7 +225,7 @@ def _pieces(segs: np.ndarray, R: float) -> np.ndarray:
     from ._jit_geom import lower_height, piece_height
 
     ends = [0.0, R]
-    for typ, a, b, c, d, e in segs:
+    for typ, a, _b, c, d, e in segs:
         if typ == 0.0:
             ends += [a, c]
         else:
