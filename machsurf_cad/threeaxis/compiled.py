@@ -230,9 +230,9 @@ def _pieces(segs: np.ndarray, R: float) -> np.ndarray:
             ends += [a, c]
         else:
             ends += [a - c, a + c] + [a + c * math.cos(math.radians(x)) for x in (d, e)]
-    ends = np.unique(np.clip(np.array(ends, float), 0.0, R))
+    cuts = np.unique(np.clip(np.array(ends, float), 0.0, R))
     rows = []
-    for lo, hi in zip(ends[:-1], ends[1:]):
+    for lo, hi in zip(cuts[:-1], cuts[1:]):
         if hi - lo <= 4e-9:
             continue
         s, sgn = _lowest_segment(segs, 0.5 * (lo + hi))
