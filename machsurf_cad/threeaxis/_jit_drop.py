@@ -23,7 +23,7 @@ from ._jit_solve import ON_CIRCLE, edge_search, enters_face, face_newton, into_d
 
 FACE, RIM, EDGE, TIP, SAMPLE = 1, 2, 3, 4, 5
 
-KERNEL_SOURCES = "ad2401417c407de7"
+KERNEL_SOURCES = "b36433761311f4a0"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 

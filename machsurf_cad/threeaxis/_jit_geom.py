@@ -23,21 +23,21 @@ from numba import njit
 # profile PR = (segs, consts): segs[s] = kind (0 line, 1 arc), 5 numbers; consts = R, h_R, h_min, monotone
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def nmin(a, b):
     if a != a or b != b:
         return math.nan
     return a if a < b else b
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def nmax(a, b):
     if a != a or b != b:
         return math.nan
     return a if a > b else b
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def nsign(x):
     if x > 0:
         return 1.0
@@ -46,12 +46,12 @@ def nsign(x):
     return 0.0 if x == 0 else math.nan
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def isfin(x):
     return not (math.isinf(x) or math.isnan(x))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _wrap(x, x0, x1):
     p = x1 - x0
     w = (x - x0) % p
@@ -60,7 +60,7 @@ def _wrap(x, x0, x1):
     return x0 + w
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _span(keys, off, n, x):
     """Largest k in [0, n) with keys[off + k] <= x (0 below the first)."""
     if n <= 1 or x < keys[off + 1]:
@@ -372,7 +372,7 @@ def prof_floor(PR, rho):
 
 
 # ----------------------------------------------------------------------------- parameters and trims
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def clamp_uv(S, f, u, v):
     """``_clamp_uv``: wrapped across a closed face's seam, clamped to the face's box elsewhere."""
     fi, ff = S[0], S[1]
@@ -420,11 +420,11 @@ def inside(S, T, f, u, v):
     return flip
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def hyp(x, y):
     return math.hypot(x, y)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def norm3(x, y, z):
     return math.sqrt(x * x + y * y + z * z)

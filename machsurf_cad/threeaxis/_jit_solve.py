@@ -54,7 +54,7 @@ def enters_face(S, T, R, cx, cy, f, u, v, W):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def g_derivs(PR, cx, cy, D, order):
     """``g = S_z - h(|S_xy - c|)`` with its (u, v) gradient and (order 2) Hessian (``_g_and_derivs``)."""
     dx, dy = D[0, 0] - cx, D[0, 1] - cy
@@ -81,7 +81,7 @@ def g_derivs(PR, cx, cy, D, order):
     return g, gu, gv, Huu, Huv, Hvv
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _tan_len(D, a, b):
     return norm3(D[1, 0] * a + D[2, 0] * b, D[1, 1] * a + D[2, 1] * b, D[1, 2] * a + D[2, 2] * b)
 
@@ -115,7 +115,7 @@ def _off_poles(S, PR, cx, cy, f, u, v, W):
     return bu, bv
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _up_curvature(Huu, Huv, Hvv, D, radius):
     disc = math.sqrt(max(0.25 * (Huu - Hvv) ** 2 + Huv * Huv, 0.0))
     lam = 0.5 * (Huu + Hvv) + disc
@@ -129,7 +129,7 @@ def _up_curvature(Huu, Huv, Hvv, D, radius):
     return eu, ev, quad if isfin(quad) else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _copy(dst, src):
     for i in range(6):
         for d in range(3):
@@ -326,7 +326,7 @@ def tip_solve(S, cx, cy, f, u, v, W, iters=30):
 
 
 # ----------------------------------------------------------------------------- trimming edges
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def edge_g(PR, cx, cy, Ed, order):
     """``g = z - h(rho)`` along an edge and (order >= 1, 2) its derivatives; returns g, rho, g1, r1, g2."""
     dx, dy = Ed[0, 0] - cx, Ed[0, 1] - cy
@@ -345,7 +345,7 @@ def edge_g(PR, cx, cy, Ed, order):
     return g, rho, g1, r1, Ed[2, 2] - h2 * r1 * r1 - h1 * r2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _newton_max(t, lo, hi, d1, d2):
     """One safeguarded Newton step towards a maximum of a function of ``t`` with derivatives ``d1``, ``d2``:
     the bracket ``[lo, hi]`` shrinks by the sign of ``d1``, Newton where the function is concave and the step
