@@ -6,11 +6,12 @@ ball of radius R over the plan point q rests at the highest ``g(p) = p_z + sqrt(
 over the part's points p within R of q in plan. Here:
 
 1. every face is sampled about ``spacing`` mm apart inside its trimming, every trimming curve (and an
-   untrimmed face's parameter box) ``edge_spacing`` mm apart;
+   untrimmed face's parameter box) and every crease (an iso-parameter line where the surface is only C0,
+   inside the trimming) ``edge_spacing`` mm apart;
 2. per grid point, the best sample of each face and of each edge within R in plan;
 3. each face's best sample climbs to its local maximum by Newton's method on the exact surface (exact first
    and second derivatives, steps accepted only uphill), kept when it ends inside the trimming and the disc;
-   each edge's best sample by golden section between its two neighbours on the edge;
+   each edge's (and crease's) best sample by golden section between its two neighbours on the edge;
 4. the height is the largest of all of these and of every sample (so never below a point of the part).
 """
 
@@ -40,6 +41,23 @@ def _edges(face):
     return out
 
 
+def _creases(face):
+    """The face's C0 iso-parameter lines (interior knots of multiplicity at least the degree) as ``uv(t)``
+    on [0, 1] across the whole parameter box (the samples outside the trimming are dropped)."""
+    s = face.surface
+    u0, u1, v0, v1 = face.uv_bounds
+    out = []
+    for knots, mults, p, fixed_u in ((s.knots_u, s.mults_u, s.degree_u, True),
+                                     (s.knots_v, s.mults_v, s.degree_v, False)):  # fmt: skip
+        vals, counts = np.asarray(knots, float), np.asarray(mults)
+        for k in vals[1:-1][counts[1:-1] >= p]:
+            if fixed_u and u0 < k < u1:
+                out.append(lambda t, k=k: np.column_stack([np.full(np.size(t), k), v0 + (v1 - v0) * np.asarray(t)]))
+            elif not fixed_u and v0 < k < v1:
+                out.append(lambda t, k=k: np.column_stack([u0 + (u1 - u0) * np.asarray(t), np.full(np.size(t), k)]))
+    return out
+
+
 class BallReference:
     """The part sampled once; :meth:`heights` for any grid of plan points."""
 
@@ -54,20 +72,23 @@ class BallReference:
             V.append(v)
         self.P, self.F, self.U, self.V = (np.concatenate(x) for x in (P, F, U, V))
         E, EI, ET, self.edge_fn, self.edge_face, self.edge_dt = [], [], [], [], [], []
+        self.crease: list[bool] = []
         for i, f in enumerate(self.faces):
-            for fn in _edges(f):
+            for fn, crease in [(fn, False) for fn in _edges(f)] + [(fn, True) for fn in _creases(f)]:
                 t = np.linspace(0, 1, 65)
                 uv = fn(t)
                 L = float(np.linalg.norm(np.diff(f.surface.evaluate(uv[:, 0], uv[:, 1]), axis=0), axis=1).sum())
                 n = max(2, int(math.ceil(L / edge_spacing)) + 1)
                 t = np.linspace(0, 1, n)
                 uv = fn(t)
-                E.append(f.surface.evaluate(uv[:, 0], uv[:, 1]))
-                EI.append(np.full(n, len(self.edge_fn)))
-                ET.append(t)
+                keep = f.contains_uv(uv[:, 0], uv[:, 1]) if crease and f.is_trimmed else np.ones(n, bool)
+                E.append(f.surface.evaluate(uv[keep, 0], uv[keep, 1]))
+                EI.append(np.full(int(keep.sum()), len(self.edge_fn)))
+                ET.append(t[keep])
                 self.edge_fn.append(fn)
                 self.edge_face.append(i)
                 self.edge_dt.append(1.0 / (n - 1))
+                self.crease.append(crease)
         self.E, self.EI, self.ET = np.concatenate(E), np.concatenate(EI), np.concatenate(ET)
         self.tree = cKDTree(self.P[:, :2])
         self.etree = cKDTree(self.E[:, :2])
@@ -153,7 +174,11 @@ class BallReference:
             c, d = np.where(left, c2, d), np.where(left, c, d2)
             gnew = g(np.where(left, c, d))
             gc, gd = np.where(left, gnew, gd), np.where(left, gc, gnew)
-        return np.maximum(gc, gd)
+        best, t = np.maximum(gc, gd), np.where(gc >= gd, c, d)
+        if self.crease[e] and f.is_trimmed:  # a crease's point counts only inside the trimming
+            uv = fn(t)
+            best = np.where(f.contains_uv(uv[:, 0], uv[:, 1]), best, -np.inf)
+        return best
 
     def heights(self, xy, R: float, chunk: int = 2000, pairs: int = 4_000_000) -> np.ndarray:
         """Tip heights of a ball of radius ``R`` over the plan points ``xy`` (NaN where no face is within R), in

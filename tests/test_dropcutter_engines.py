@@ -300,3 +300,27 @@ def test_crossing_profile_segments_get_no_pieces():
     """Two segments crossing inside a piece (the lowest one changes there): no pieces, the search runs."""
     segs = np.array([[0.0, 0.0, 0.0, 5.0, 1.0, 0.0], [0.0, 0.0, 1.0, 5.0, 0.0, 0.0]])  # they cross at rho = 2.5
     assert compiled._pieces(segs, 5.0).shape == (0, 7)
+
+
+@pytest.mark.parametrize("engine", ["numpy", pytest.param("compiled", marks=needs_numba)])
+def test_a_ball_on_a_c0_crease_rests_on_the_crease(engine):
+    """A roof as one B-spline face only C0 along its ridge (degree 1 across it, a single knot there): the ridge
+    ``z = 10 + 0.2 x`` at y = 0, the sides falling 0.5 per mm. Over points near the ridge the ball rests on it:
+    tip = 10 + 0.2 cx + sqrt(1.04 (R^2 - cy^2)) - R (the highest point of the ridge in the disc), which no
+    stationary point of either side gives; checked against a brute force over 0.005 mm samples too."""
+    poles = np.array([[[x, y, 10 + 0.2 * x - 0.5 * abs(y)] for y in (-20.0, 0.0, 20.0)] for x in (-20.0, 20.0)])
+    roof = ms.BSplineSurface(1, 1, [0, 1], [2, 2], [0, 0.5, 1], [2, 1, 2], poles)
+    R = 5.0
+    xy = np.array([[cx, cy] for cx in (-3.0, 0.0, 2.5) for cy in (0.0, 0.3, -0.7, 1.1)])
+    r = ms.drop_cutter([roof], ms.BallEndMill(2 * R), xy, engine=engine)
+    closed = 10 + 0.2 * xy[:, 0] + np.sqrt(1.04 * (R**2 - xy[:, 1] ** 2)) - R
+    assert np.abs(r.height - closed).max() < 1e-9
+    assert set(r.kind.tolist()) == {int(Contact.EDGE)}
+    g = np.arange(-6.0, 6.0, 0.005)
+    X, Y = np.meshgrid(g, g)
+    for (cx, cy), h in zip(xy, r.height):
+        x, y = X + cx, Y + cy
+        d2 = (x - cx) ** 2 + (y - cy) ** 2
+        z = 10 + 0.2 * x - 0.5 * np.abs(y)
+        brute = np.max(np.where(d2 <= R * R, z + np.sqrt(np.maximum(R * R - d2, 0)) - R, -np.inf))
+        assert brute <= h + 1e-12 and h - brute < 1e-3  # the samples never above, and close below

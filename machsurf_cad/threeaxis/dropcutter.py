@@ -17,8 +17,9 @@ The maximum is reached at one of these contacts, each found by a local solve on 
   trust region; it also finds flat spots under a flat bottom, ``h' = 0``);
 * ``RIM``: the profile's outer circle ``rho = R`` on a face (Newton on the Lagrange system of
   ``max S_z`` subject to ``|S_xy - c| = R``): walls, steep faces, a flat end mill's edge;
-* ``EDGE``: on a trimming edge or at a vertex (golden-section search along the edge's exact curve, cut
-  back to the circle where the maximum lies outside it);
+* ``EDGE``: on a trimming edge or at a vertex, or on a crease (an iso-parameter line where a face is only
+  C0: a peak there is no stationary point of either side); a safeguarded Newton search along the edge's
+  exact curve, cut back to the circle where the maximum lies outside it;
 * ``TIP``: the point below a pointed tip (profiles with ``h'(0) > 0``);
 * ``SAMPLE``: a seed sample itself, when no refinement beats it (counted in the report).
 
@@ -76,7 +77,7 @@ class Contact(IntEnum):
     RIM = 2
     """The profile's outer circle on a face (walls, steep faces)."""
     EDGE = 3
-    """A trimming edge or vertex of a face."""
+    """A trimming edge or vertex of a face, or a crease of it (an iso-parameter line where it is only C0)."""
     TIP = 4
     """The point below a pointed tip."""
     SAMPLE = 5

@@ -2,8 +2,10 @@
 
 A :class:`FaceSet` holds the part's faces rotated so that the tool axis is +z (the rotation is exact:
 B-spline poles rotate), a trim-aware grid of samples on each face and samples along every trimming
-edge (the parameter box's sides for an untrimmed face). The samples only seed the exact contact
-search of :mod:`machsurf_cad.threeaxis.dropcutter`; no result is read off them.
+edge (the parameter box's sides for an untrimmed face) and every crease (an iso-parameter line at a knot
+where the surface is only C0, inside the trimming: ``z - h`` can peak there with no stationary point on
+either side, so the crease is searched as an edge is). The samples only seed the exact contact search of
+:mod:`machsurf_cad.threeaxis.dropcutter`; no result is read off them.
 """
 
 from __future__ import annotations
@@ -55,6 +57,65 @@ def _box_edges(face: Face) -> list[BSplineCurve]:
         line_segment([u1, v1], [u0, v1]),
         line_segment([u0, v1], [u0, v0]),
     ]
+
+
+def _creases(face: Face) -> list[BSplineCurve]:
+    """The face's creases: its iso-parameter lines at interior knots of multiplicity at least the degree
+    (the surface only C0 there, so ``z - h`` can peak on the line with no stationary point on either side),
+    as uv segments, cut to where the line lies inside the trimmed face (ends found to 1e-12 of the
+    parameter range by bisection on the trimming test). The drop-cutter searches them as it does edges."""
+    s = face.surface
+    u0, u1, v0, v1 = face.uv_bounds
+    out: list[BSplineCurve] = []
+    for knots, mults, p, along in ((s.knots_u, s.mults_u, s.degree_u, 0), (s.knots_v, s.mults_v, s.degree_v, 1)):
+        vals, counts = np.asarray(knots, float), np.asarray(mults)
+        lo, hi = (v0, v1) if along == 0 else (u0, u1)
+        for k in vals[1:-1][counts[1:-1] >= p]:
+            if not ((u0 < k < u1) if along == 0 else (v0 < k < v1)):
+                continue
+
+            def at(t, k=k, along=along):
+                t = np.asarray(t, float)
+                return (np.full_like(t, k), t) if along == 0 else (t, np.full_like(t, k))
+
+            for a, b in _inside_runs(face, at, lo, hi):
+                out.append(line_segment(np.column_stack(at(np.array([a])))[0], np.column_stack(at(np.array([b])))[0]))
+    return out
+
+
+def _inside_runs(face: Face, at, lo: float, hi: float, n: int = 257) -> list[tuple[float, float]]:
+    """Parameter intervals of ``[lo, hi]`` whose points ``at(t)`` lie in the trimmed face (all of it for an
+    untrimmed face); each end bisected to 1e-12 of the range between a point inside and one outside."""
+    if not face.is_trimmed:
+        return [(lo, hi)]
+    t = np.linspace(lo, hi, n)
+    ok = face.contains_uv(*at(t))
+    runs = []
+    i = 0
+    while i < n:
+        if not ok[i]:
+            i += 1
+            continue
+        j = i
+        while j + 1 < n and ok[j + 1]:
+            j += 1
+        a = t[i] if i == 0 else _bisect(face, at, t[i - 1], t[i], lo, hi)
+        b = t[j] if j == n - 1 else _bisect(face, at, t[j + 1], t[j], lo, hi)
+        if b > a:
+            runs.append((a, b))
+        i = j + 1
+    return runs
+
+
+def _bisect(face: Face, at, out_t: float, in_t: float, lo: float, hi: float) -> float:
+    """The last parameter inside between ``in_t`` (inside) and ``out_t`` (outside)."""
+    while abs(out_t - in_t) > 1e-12 * (hi - lo):
+        mid = 0.5 * (out_t + in_t)
+        if face.contains_uv(*at(np.array([mid])))[0]:
+            in_t = mid
+        else:
+            out_t = mid
+    return in_t
 
 
 def _length_3d(s: BSplineSurface, c: BSplineCurve) -> float:
@@ -266,6 +327,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         RISE.append(delta * np.minimum(1.0, slope[keep] + kappa * delta))
         FLAT.append(np.maximum(slope[keep] - kappa * delta, 0.0))
         curves = [c for loop in face.loops for c in loop] if face.is_trimmed else _box_edges(face)
+        curves += _creases(face)
         for c in curves:
             n = int(max(4, math.ceil(_length_3d(s, c) / spacing) + 1))
             t = np.linspace(*c.bounds, n)
