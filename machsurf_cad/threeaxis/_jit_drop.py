@@ -23,7 +23,7 @@ from ._jit_solve import ON_CIRCLE, edge_search, enters_face, face_newton, into_d
 
 FACE, RIM, EDGE, TIP, SAMPLE = 1, 2, 3, 4, 5
 
-KERNEL_SOURCES = "b36433761311f4a0"
+KERNEL_SOURCES = "a41f3555defc66dd"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 
@@ -71,7 +71,7 @@ def _solve(kind, j, cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk):
             _add(best, bp, g, RIM, f, D[0, 0], D[0, 1], D[0, 2])
     else:
         k = j - SM[3]
-        g = edge_search(S, E, PR, cx, cy, SM[4][k], SM[5][k], SM[6][k], W)
+        g = edge_search(S, E, PR, cx, cy, SM[4][k], SM[5][k], SM[6][k], W, SM[18], k)
         Ed = W[3]
         _add(best, bp, g, EDGE, f, Ed[0, 0], Ed[0, 1], Ed[0, 2])
 

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+import numpy as np
+from numba import njit, prange
 
 from ._jit_geom import clamp_uv, edge_derivs, hyp, inside, isfin, nmax, nmin, norm3, nsign, prof, surf
 
@@ -361,23 +362,50 @@ def _newton_max(t, lo, hi, d1, d2):
     return t_new, lo, hi, abs(t_new - t) <= 1e-15 * max(abs(t), 1.0)
 
 
-@njit(cache=True)
-def edge_search(S, E, PR, cx, cy, e, t0, dt, W, iters=40):
-    """``_edge_search`` on one seed: returns ``g`` (``-inf`` where no point is in the disc), the point in
-    ``W[3][0]``."""
-    Ed, cu, wk = W[3], W[4], W[5]
-    R = PR[1][0]
+WINDOW = 17
+"""Samples of the edge search's window (two sample spacings either side of its seed)."""
+
+
+@njit(cache=True, inline="always")
+def _window(E, e, t0, dt, ts):
+    """The edge search's window around ``t0``: its ``WINDOW`` parameters into ``ts``."""
     loop = E[0][e, 6] == 1  # a closed edge's window runs across its seam
     a = t0 - 2 * dt if loop else max(t0 - 2 * dt, E[1][e, 0])
     b = t0 + 2 * dt if loop else min(t0 + 2 * dt, E[1][e, 1])
-    n = 17
+    for k in range(WINDOW):
+        ts[k] = a + (b - a) * (k / (WINDOW - 1))
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def edge_windows(S, E, eid, et, edt, out):
+    """The points of every edge sample's search window (``out[s, k]``): they do not depend on the query, so
+    :func:`edge_search` reads them instead of evaluating the edge (the same numbers)."""
+    for s in prange(eid.shape[0]):
+        Ed, cu, wk = np.empty((9, 3)), np.empty((3, 3)), np.empty(480)
+        ts = np.empty(WINDOW)
+        _window(E, eid[s], et[s], edt[s], ts)
+        for k in range(WINDOW):
+            edge_derivs(S, E, eid[s], ts[k], 0, Ed, cu, wk)
+            out[s, k, 0], out[s, k, 1], out[s, k, 2] = Ed[0, 0], Ed[0, 1], Ed[0, 2]
+
+
+@njit(cache=True)
+def edge_search(S, E, PR, cx, cy, e, t0, dt, W, EW, s, iters=40):
+    """``_edge_search`` on one seed (edge sample ``s``; ``EW`` its window's points from :func:`edge_windows`,
+    or empty): returns ``g`` (``-inf`` where no point is in the disc), the point in ``W[3][0]``."""
+    Ed, cu, wk = W[3], W[4], W[5]
+    R = PR[1][0]
+    n = WINDOW
     ts = wk[400:417]
     gs = wk[420:437]  # the samples' values, -inf outside the disc
     rs = wk[440:457]  # and their distances from the axis
+    _window(E, e, t0, dt, ts)
     kbest = 0
     for k in range(n):
-        ts[k] = a + (b - a) * (k / (n - 1))
-        edge_derivs(S, E, e, ts[k], 0, Ed, cu, wk)
+        if EW.shape[0] > 0:
+            Ed[0, 0], Ed[0, 1], Ed[0, 2] = EW[s, k, 0], EW[s, k, 1], EW[s, k, 2]
+        else:
+            edge_derivs(S, E, e, ts[k], 0, Ed, cu, wk)
         g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
         gs[k] = g if rho <= R else -math.inf
         rs[k] = rho

@@ -279,12 +279,25 @@ def _grid(xyz: np.ndarray, reach: float):
     return np.array([lo[0], lo[1], cs]), np.array([nx, ny], np.int64), start, items
 
 
+MAX_WINDOW_BYTES = 64 * 2**20
+"""The edge search windows' points are kept when they take at most this much memory (else evaluated)."""
+
+
 def _packed(fs: FaceSet):
     """The face set's arrays for the kernel (cached on the face set)."""
+    from ._jit_solve import WINDOW, edge_windows
+
     cache = fs.__dict__.setdefault("_compiled", {})
     if "fs" not in cache:
         S, T = _surfaces(fs)
-        cache["fs"] = (S, _curves(fs), T, _pool(fs))
+        E = _curves(fs)
+        pool = _pool(fs)
+        n_e = fs.edge_id.shape[0]
+        EW = np.empty((0, WINDOW, 3))
+        if 0 < n_e * WINDOW * 24 <= MAX_WINDOW_BYTES:
+            EW = np.empty((n_e, WINDOW, 3))
+            edge_windows(S, E, pool[4], pool[5], pool[6], EW)
+        cache["fs"] = (S, E, T, (*pool, EW))
     return cache["fs"]
 
 
