@@ -29,13 +29,14 @@ cache (keyed by this file's stamp) compiles the kernel again (checked by a test)
 
 
 @njit(cache=True)
-def _add(best, bp, g, kind, f, x, y, z):
-    """Keep the highest value (a bare sample ranks 1e-12 relative below a solved contact of equal value)."""
+def _add(best, bp, g, kind, f, x, y, z, e=-1):
+    """Keep the highest value (a bare sample ranks 1e-12 relative below a solved contact of equal value);
+    ``best`` = (rank, height, kind, face, found, edge or -1)."""
     if not isfin(g):
         return
     rank = g - (1e-12 * (1 + abs(g)) if kind == SAMPLE else 0.0)
     if best[4] == 0.0 or rank > best[0]:
-        best[0], best[1], best[2], best[3], best[4] = rank, g, kind, f, 1.0
+        best[0], best[1], best[2], best[3], best[4], best[5] = rank, g, kind, f, 1.0, e
         bp[0], bp[1], bp[2] = x, y, z
 
 
@@ -73,7 +74,7 @@ def _solve(kind, j, cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk):
         k = j - SM[3]
         g = edge_search(S, E, PR, cx, cy, SM[4][k], SM[5][k], SM[6][k], W, SM[18], k)
         Ed = W[3]
-        _add(best, bp, g, EDGE, f, Ed[0, 0], Ed[0, 1], Ed[0, 2])
+        _add(best, bp, g, EDGE, f, Ed[0, 0], Ed[0, 1], Ed[0, 2], SM[4][k])
 
 
 @njit(cache=True)
@@ -358,8 +359,8 @@ def _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, tried0, feas,
 
 @njit(cache=True)
 def _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed, is_e, ek, n_eg):
-    """``_more_edge_rounds``: the untried edge sample of highest bound per group, away from the best contact,
-    while a bound beats the best height."""
+    """``_more_edge_rounds``: the untried edge sample of highest bound per group, away from the best contact
+    on its own edge, while a bound beats the best height."""
     xyz, n_int, ecov = SM[0], SM[3], SM[10]
     m = idx.shape[0]
     tried = eseed.copy()
@@ -371,7 +372,8 @@ def _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed,
             if tried[k] or not is_e[k] or not (e_ub[k] > low + 1e-7):
                 continue
             j = idx[k]
-            near = best[4] > 0 and norm3(xyz[j, 0] - bp[0], xyz[j, 1] - bp[1], xyz[j, 2] - bp[2]) <= 2 * ecov[j - n_int]
+            near = best[4] > 0 and best[5] == SM[4][j - n_int]
+            near = near and norm3(xyz[j, 0] - bp[0], xyz[j, 1] - bp[1], xyz[j, 2] - bp[2]) <= 2 * ecov[j - n_int]
             if not near:
                 sel[k] = True
                 any_ = True
@@ -432,7 +434,7 @@ def _group_cells(g, which, low, cx, cy, idx, rr, gk, PR, SM, K, CB):
 def drop_batch(C, S, E, T, PR, SM, G, K, kinks, height, kind, face, point):
     """Heights of the query points ``C`` (n, 2) into the output arrays, in parallel."""
     for q in prange(C.shape[0]):
-        best = np.zeros(5)
+        best = np.zeros(6)
         bp = np.zeros(3)
         _query(C[q, 0], C[q, 1], S, E, T, PR, SM, G, K, kinks, best, bp)
         if best[4] > 0:

@@ -225,18 +225,20 @@ def _best_per(key, val, tie=None):
 
 
 class _Candidates:
-    """Contact candidates of a chunk: query, value (tip height), kind, face, point."""
+    """Contact candidates of a chunk: query, value (tip height), kind, face, point, edge (-1: none)."""
 
     def __init__(self):
         self.parts: list = []
 
-    def add(self, q, g, kind, fid, P, ok=None):
+    def add(self, q, g, kind, fid, P, ok=None, eid=None):
         if ok is None:
             ok = np.isfinite(g)
-        self.parts.append((q[ok], g[ok], np.full(int(ok.sum()), kind), fid[ok], P[ok]))
+        e = np.full(int(ok.sum()), -1) if eid is None else eid[ok]
+        self.parts.append((q[ok], g[ok], np.full(int(ok.sum()), kind), fid[ok], P[ok], e))
 
-    def best(self, m: int):
-        q, v, k, f, p = (np.concatenate([pt[i] for pt in self.parts]) for i in range(5))
+    def best(self, m: int, edge: bool = False):
+        """Per query the best candidate's height, kind, face and point (and its edge, with ``edge``)."""
+        q, v, k, f, p, e = (np.concatenate([pt[i] for pt in self.parts]) for i in range(6))
         # the highest value; among equal values a solved contact before a bare sample
         v_rank = v - np.where(k == Contact.SAMPLE, 1e-12 * (1 + np.abs(v)), 0.0)
         win = _best_per(q, v_rank)
@@ -244,8 +246,10 @@ class _Candidates:
         kind = np.zeros(m, np.int8)
         face = np.full(m, -1)
         point = np.full((m, 3), np.nan)
+        on_edge = np.full(m, -1)
         height[q[win]], kind[q[win]], face[q[win]], point[q[win]] = v[win], k[win], f[win], p[win]
-        return height, kind, face, point
+        on_edge[q[win]] = e[win]
+        return (height, kind, face, point, on_edge) if edge else (height, kind, face, point)
 
 
 def _start(fs, sj):
@@ -297,7 +301,7 @@ def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str, kink: int | None = 
     else:
         eid = fs.edge_id[ke]
         g, P = _edge_search(fs, prof, c, eid, fs.edge_t[ke], fs.edge_dt[ke])
-        cand.add(q, g, Contact.EDGE, fs.edge_face[eid], P)
+        cand.add(q, g, Contact.EDGE, fs.edge_face[eid], P, eid=eid)
 
 
 def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
@@ -430,16 +434,20 @@ def _more_edge_rounds(fs, prof, C, cand, m, pairs, ed, e2, e_ub, e_cov, ekey) ->
     """Further rounds of edge searches: an edge seed is the best sample of its group, and an edge can have
     another local maximum in the same group (a hole's circle under a flat bottom wider than the hole: the
     bottom's rim reaches the circle on two sides, the higher side only in a sliver between samples): the
-    untried edge sample of highest bound per group, away from the best contact, until no bound beats it."""
+    untried edge sample of highest bound per group, away from the best contact on its own edge, until no bound
+    beats it. (A sample of another edge near the best contact is searched: two faces' edges meet there, or a
+    crease ends on a trimming edge, and the higher of them may be the other one.)"""
     qi, sj, xyz = pairs
     tried = np.zeros(qi.size, bool)
     tried[e2] = True
     pool = ed[np.isfinite(e_ub[ed])]
+    n_int = fs.sample_xyz.shape[0]
     for _ in range(_EXTRA_ROUNDS):
-        h_b, _, _, p_b = cand.best(m)
+        h_b, _, _, p_b, e_b = cand.best(m, edge=True)
         low = np.nan_to_num(h_b, nan=-np.inf)
         p = pool[~tried[pool] & (e_ub[pool] > low[qi[pool]] + _BOUND_MARGIN_MM)]
         near = np.linalg.norm(xyz[p] - p_b[qi[p]], axis=1) <= 2 * e_cov[p]  # NaN (nothing found yet): far
+        near &= fs.edge_id[sj[p] - n_int] == e_b[qi[p]]
         p = p[~near]
         if p.size == 0:
             break
