@@ -160,8 +160,8 @@ def _brute_force(faces, cutter, xy, coarse=0.5, fine=0.02, edge_step=0.002):
     "spec",
     [
         "ball:D=10",
-        "bull:D=10,r=2",
-        pytest.param("flat:D=10", marks=pytest.mark.slow),  # the slow tier (CI runs it too)
+        pytest.param("bull:D=10,r=2", marks=pytest.mark.slow),  # the slow tier (CI runs it too)
+        pytest.param("flat:D=10", marks=pytest.mark.slow),
         pytest.param("cone:D=6,angle=10,L=20", marks=pytest.mark.slow),
     ],
 )
