@@ -85,7 +85,9 @@ def _creases(face: Face) -> list[BSplineCurve]:
 
 def _inside_runs(face: Face, at, lo: float, hi: float, n: int = 257) -> list[tuple[float, float]]:
     """Parameter intervals of ``[lo, hi]`` whose points ``at(t)`` lie in the trimmed face (all of it for an
-    untrimmed face); each end bisected to 1e-12 of the range between a point inside and one outside."""
+    untrimmed face), from ``n`` samples of the line (a run between two neighbouring samples, both outside, is
+    not found: there the face's own solves remain); each end bisected to 1e-12 of the range between a point
+    inside and one outside."""
     if not face.is_trimmed:
         return [(lo, hi)]
     t = np.linspace(lo, hi, n)
