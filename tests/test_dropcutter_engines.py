@@ -324,3 +324,23 @@ def test_a_ball_on_a_c0_crease_rests_on_the_crease(engine):
         z = 10 + 0.2 * x - 0.5 * np.abs(y)
         brute = np.max(np.where(d2 <= R * R, z + np.sqrt(np.maximum(R * R - d2, 0)) - R, -np.inf))
         assert brute <= h + 1e-12 and h - brute < 1e-3  # the samples never above, and close below
+
+
+@needs_numba
+def test_edge_windows_kept_or_evaluated_give_the_same_heights(parts, monkeypatch):
+    """The edge search reads its windows' points computed once per face set; a face set too large to keep
+    them (``MAX_WINDOW_BYTES``) evaluates them per search: the same heights, contacts and kinds, bit for bit."""
+    from machsurf_cad.threeaxis.dropcutter import default_seed_spacing
+    from machsurf_cad.threeaxis.faceset import face_set
+
+    cutter = ms.parse_cutter("flat:D=10")
+    out = []
+    for limit in (compiled.MAX_WINDOW_BYTES, 0):
+        monkeypatch.setattr(compiled, "MAX_WINDOW_BYTES", limit)
+        fs = face_set(parts["freeform_block.step"], spacing=default_seed_spacing(cutter))
+        assert (compiled._packed(fs)[3][-1].shape[0] > 0) == (limit > 0)
+        out.append(ms.drop_cutter(None, cutter, _grid(fs, 25), face_set=fs, engine="compiled"))
+    a, b = out
+    assert a.n_cached == b.n_cached == 0  # both solved, none read from the other's heights
+    assert np.array_equal(a.height, b.height, equal_nan=True) and np.array_equal(a.kind, b.kind)
+    assert np.array_equal(a.contact, b.contact, equal_nan=True)
