@@ -344,3 +344,22 @@ def test_edge_windows_kept_or_evaluated_give_the_same_heights(parts, monkeypatch
     assert a.n_cached == b.n_cached == 0  # both solved, none read from the other's heights
     assert np.array_equal(a.height, b.height, equal_nan=True) and np.array_equal(a.kind, b.kind)
     assert np.array_equal(a.contact, b.contact, equal_nan=True)
+
+
+def test_creases_are_cut_to_the_trimming():
+    """The roof's ridge (v = 0.5) inside a slanted quadrilateral trimming loop: one crease from u = 0.2 to
+    0.7, where the loop's sides cross it (closed form), and the ball still rests on it there."""
+    from machsurf_cad.geometry.builders import line_segment
+    from machsurf_cad.geometry.face import Face
+    from machsurf_cad.threeaxis.faceset import _creases
+
+    poles = np.array([[[x, y, 10 + 0.2 * x - 0.5 * abs(y)] for y in (-20.0, 0.0, 20.0)] for x in (-20.0, 20.0)])
+    roof = ms.BSplineSurface(1, 1, [0, 1], [2, 2], [0, 0.5, 1], [2, 1, 2], poles)
+    c = [(0.1, 0.3), (0.8, 0.2), (0.6, 0.8), (0.3, 0.7)]
+    face = Face(roof, (tuple(line_segment(c[i], c[(i + 1) % 4]) for i in range(4)),), "trimmed roof")
+    (crease,) = _creases(face)
+    ends = crease.evaluate(np.array(crease.bounds))
+    assert np.abs(ends - [[0.2, 0.5], [0.7, 0.5]]).max() < 1e-9
+    R, xy = 5.0, np.array([[-3.0, 0.3]])  # u = 0.425: the ridge's highest point in the disc lies inside the loop
+    r = ms.drop_cutter([face], ms.BallEndMill(2 * R), xy)
+    assert abs(r.height[0] - (10 + 0.2 * -3.0 + np.sqrt(1.04 * (R**2 - 0.3**2)) - R)) < 1e-9

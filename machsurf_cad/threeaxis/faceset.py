@@ -59,64 +59,76 @@ def _box_edges(face: Face) -> list[BSplineCurve]:
     ]
 
 
-def _creases(face: Face) -> list[BSplineCurve]:
+def _creases(face: Face, n: int = 257) -> list[BSplineCurve]:
     """The face's creases: its iso-parameter lines at interior knots of multiplicity at least the degree
     (the surface only C0 there, so ``z - h`` can peak on the line with no stationary point on either side),
-    as uv segments, cut to where the line lies inside the trimmed face (ends found to 1e-12 of the
-    parameter range by bisection on the trimming test). The drop-cutter searches them as it does edges."""
+    as uv segments, cut to where the line lies inside the trimmed face: ``n`` samples per line (a run inside
+    between two neighbouring samples, both outside, is not found: there the face's own solves remain), each
+    run's ends refined to about 1e-11 of the line by :func:`_last_inside`. The drop-cutter searches them as
+    it does edges. All lines of the face share each trimming test."""
     s = face.surface
     u0, u1, v0, v1 = face.uv_bounds
-    out: list[BSplineCurve] = []
+    lines = []  # (knot, 0: u fixed / 1: v fixed, lo, hi)
     for knots, mults, p, along in ((s.knots_u, s.mults_u, s.degree_u, 0), (s.knots_v, s.mults_v, s.degree_v, 1)):
         vals, counts = np.asarray(knots, float), np.asarray(mults)
-        lo, hi = (v0, v1) if along == 0 else (u0, u1)
         for k in vals[1:-1][counts[1:-1] >= p]:
-            if not ((u0 < k < u1) if along == 0 else (v0 < k < v1)):
-                continue
-
-            def at(t, k=k, along=along):
-                t = np.asarray(t, float)
-                return (np.full_like(t, k), t) if along == 0 else (t, np.full_like(t, k))
-
-            for a, b in _inside_runs(face, at, lo, hi):
-                out.append(line_segment(np.column_stack(at(np.array([a])))[0], np.column_stack(at(np.array([b])))[0]))
+            if (u0 < k < u1) if along == 0 else (v0 < k < v1):
+                lines.append((float(k), along, *((v0, v1) if along == 0 else (u0, u1))))
+    if not lines:
+        return []
+    L = np.array(lines, float)
+    runs: list[tuple[int, float, float]] = []
+    if not face.is_trimmed:
+        runs = [(i, L[i, 2], L[i, 3]) for i in range(len(L))]
+    else:
+        t = L[:, 2:3] + (L[:, 3:4] - L[:, 2:3]) * np.linspace(0.0, 1.0, n)
+        ok = face.contains_uv(*_iso_uv(L, np.arange(len(L))[:, None], t)).reshape(t.shape)
+        found = []  # (line, start or stop index, outside t, inside t)
+        spans = []
+        for i in range(len(L)):
+            starts = np.flatnonzero(ok[i] & ~np.r_[False, ok[i, :-1]])
+            stops = np.flatnonzero(ok[i] & ~np.r_[ok[i, 1:], False])
+            spans.append((starts, stops))
+            found += [(i, a, t[i, a - 1], t[i, a]) for a in starts if a > 0]
+            found += [(i, b, t[i, b + 1], t[i, b]) for b in stops if b < n - 1]
+        ends = {}
+        if found:
+            F = np.array(found, float)
+            for (i, a, _, _), x in zip(found, _last_inside(face, L, F[:, 0].astype(int), F[:, 2], F[:, 3])):
+                ends[(i, a)] = x
+        for i, (starts, stops) in enumerate(spans):
+            for a, b in zip(starts, stops):
+                ta = t[i, a] if a == 0 else ends[(i, a)]
+                tb = t[i, b] if b == n - 1 else ends[(i, b)]
+                if tb > ta:
+                    runs.append((i, float(ta), float(tb)))
+    out = []
+    for i, ta, tb in runs:
+        u, v = _iso_uv(L, np.array([i, i]), np.array([ta, tb]))
+        out.append(line_segment([u[0], v[0]], [u[1], v[1]]))
     return out
 
 
-def _inside_runs(face: Face, at, lo: float, hi: float, n: int = 257) -> list[tuple[float, float]]:
-    """Parameter intervals of ``[lo, hi]`` whose points ``at(t)`` lie in the trimmed face (all of it for an
-    untrimmed face), from ``n`` samples of the line (a run between two neighbouring samples, both outside, is
-    not found: there the face's own solves remain); each end bisected to 1e-12 of the range between a point
-    inside and one outside."""
-    if not face.is_trimmed:
-        return [(lo, hi)]
-    t = np.linspace(lo, hi, n)
-    ok = face.contains_uv(*at(t))
-    runs = []
-    i = 0
-    while i < n:
-        if not ok[i]:
-            i += 1
-            continue
-        j = i
-        while j + 1 < n and ok[j + 1]:
-            j += 1
-        a = t[i] if i == 0 else _bisect(face, at, t[i - 1], t[i], lo, hi)
-        b = t[j] if j == n - 1 else _bisect(face, at, t[j + 1], t[j], lo, hi)
-        if b > a:
-            runs.append((a, b))
-        i = j + 1
-    return runs
+def _iso_uv(L: np.ndarray, line, t):
+    """``(u, v)`` of parameters ``t`` on iso-lines ``line`` (rows of ``L``: knot, fixed, lo, hi), flattened."""
+    line, t = np.broadcast_arrays(np.asarray(line), np.asarray(t, float))
+    k, fixed_v = L[line, 0], L[line, 1] == 1
+    return np.where(fixed_v, t, k).ravel(), np.where(fixed_v, k, t).ravel()
 
 
-def _bisect(face: Face, at, out_t: float, in_t: float, lo: float, hi: float) -> float:
-    """The last parameter inside between ``in_t`` (inside) and ``out_t`` (outside)."""
-    while abs(out_t - in_t) > 1e-12 * (hi - lo):
-        mid = 0.5 * (out_t + in_t)
-        if face.contains_uv(*at(np.array([mid])))[0]:
-            in_t = mid
-        else:
-            out_t = mid
+def _last_inside(face: Face, L, line, out_t, in_t, m: int = 65, rounds: int = 5) -> np.ndarray:
+    """Per iso-line ``line`` with a parameter ``out_t`` outside the trimmed face and ``in_t`` inside, the last
+    parameter inside between them: ``rounds`` rounds of ``m`` points between the current ends, one trimming
+    test per round for all of them."""
+    out_t, in_t = np.array(out_t, float), np.array(in_t, float)
+    f = np.linspace(0.0, 1.0, m)
+    rows = np.arange(in_t.size)
+    for _ in range(rounds):
+        ts = in_t[:, None] + (out_t - in_t)[:, None] * f  # from inside (f = 0) towards outside (f = 1)
+        ok = face.contains_uv(*_iso_uv(L, line[:, None], ts)).reshape(ts.shape)
+        ok[:, 0] = True
+        k = np.where(ok.all(axis=1), m - 2, np.argmin(ok, axis=1) - 1)  # the last inside before the first out
+        in_t, out_t = ts[rows, k], ts[rows, k + 1]
     return in_t
 
 
