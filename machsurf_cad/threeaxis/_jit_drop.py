@@ -23,7 +23,7 @@ from ._jit_solve import ON_CIRCLE, edge_search, enters_face, face_newton, into_d
 
 FACE, RIM, EDGE, TIP, SAMPLE = 1, 2, 3, 4, 5
 
-KERNEL_SOURCES = "a41f3555defc66dd"
+KERNEL_SOURCES = "ae5367f25275c2a6"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 

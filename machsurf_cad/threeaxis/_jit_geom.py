@@ -289,8 +289,17 @@ def _angle_in(ang, a0, a1):
 @njit(cache=True)
 def lower_height(segs, rho):
     """``h, h', h''`` of the lowest profile segment at ``rho`` (:func:`~machsurf_cad.cutter_profiles.lower_height`)."""
+    h, h1, h2, _, _ = lowest_segment(segs, rho)
+    return h, h1, h2
+
+
+@njit(cache=True)
+def lowest_segment(segs, rho):
+    """:func:`lower_height` with the row of ``segs`` it takes and the arc's branch (-1 lower, 1 upper, 0 a
+    line; row -1 where no segment reaches ``rho``)."""
     rho = abs(rho)
     h, h1, h2 = math.inf, 0.0, 0.0
+    who, branch = -1, 0.0
     for s in range(segs.shape[0]):
         if segs[s, 0] == 0.0:
             r0, z0, r1, z1 = segs[s, 1], segs[s, 2], segs[s, 3], segs[s, 4]
@@ -301,6 +310,7 @@ def lower_height(segs, rho):
                 z = z0 + (rho - r0) / (r1 - r0) * (z1 - z0)
                 if z < h:
                     h, h1, h2 = z, (z1 - z0) / (r1 - r0), 0.0
+                    who, branch = s, 0.0
             continue
         rc, zc, r, a0, a1 = segs[s, 1], segs[s, 2], segs[s, 3], segs[s, 4], segs[s, 5]
         dx = rho - rc
@@ -314,7 +324,8 @@ def lower_height(segs, rho):
                 h = z
                 h1 = min(max(-sgn * dx / safe, -1e8), 1e8)
                 h2 = min(max(-sgn * r * r / safe**3, -1e8), 1e8)
-    return h, h1, h2
+                who, branch = s, sgn
+    return h, h1, h2, who, branch
 
 
 @njit(cache=True, inline="always")

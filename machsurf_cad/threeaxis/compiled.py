@@ -192,37 +192,13 @@ def _profile(prof):
     return segs, consts, _pieces(segs, prof.R)
 
 
-def _lowest_segment(segs: np.ndarray, rho: float) -> tuple[int, float]:
-    """The row of ``segs`` that ``lower_height`` takes at ``rho`` and its arc branch (-1 lower, 1 upper)."""
-    from ._jit_geom import _angle_in
-
-    h, who = math.inf, (-1, 0.0)
-    for s, (typ, a, b, c, d, e) in enumerate(segs):
-        if typ == 0.0:
-            if abs(c - a) < 1e-15 or not (min(a, c) - 1e-12 <= rho <= max(a, c) + 1e-12):
-                continue
-            z = b + (rho - a) / (c - a) * (d - b)
-            if z < h:
-                h, who = z, (s, 0.0)
-            continue
-        dx = rho - a
-        if abs(dx) > c + 1e-12:
-            continue
-        root = math.sqrt(max(c * c - dx * dx, 0.0))
-        for sgn in (-1.0, 1.0):
-            z = b + sgn * root
-            if z < h and _angle_in(math.degrees(math.atan2(z - b, dx)), d, e):
-                h, who = z, (s, sgn)
-    return who
-
-
 def _pieces(segs: np.ndarray, R: float) -> np.ndarray:
     """The profile's lower surface as pieces of ``[0, R]`` on each of which one segment (one arc branch) is
     the lowest: rows ``lo, hi, kind (0 line, 1 arc, -1 none), r0, z0, r1, z1`` (lines) or ``rho_c, z_c, r,
     branch`` (arcs), for :func:`._jit_geom.piece_height`. Ends: every segment's ends in ``rho`` and its arcs'
     extremes. Checked against ``lower_height`` on 500 points of every piece (to the bit); a profile where
     they differ anywhere (segments crossing inside a piece) gets no pieces: ``lower_height`` runs everywhere."""
-    from ._jit_geom import lower_height, piece_height
+    from ._jit_geom import lower_height, lowest_segment, piece_height
 
     ends = [0.0, R]
     for typ, a, _b, c, d, e in segs:
@@ -235,7 +211,7 @@ def _pieces(segs: np.ndarray, R: float) -> np.ndarray:
     for lo, hi in zip(cuts[:-1], cuts[1:]):
         if hi - lo <= 4e-9:
             continue
-        s, sgn = _lowest_segment(segs, 0.5 * (lo + hi))
+        s, sgn = lowest_segment(segs, 0.5 * (lo + hi))[3:]
         if s < 0:
             rows.append((lo, hi, -1.0, 0.0, 0.0, 0.0, 0.0))
         elif segs[s, 0] == 0.0:
