@@ -25,9 +25,7 @@ least that depth.
 
 from __future__ import annotations
 
-import functools
 import math
-import os
 import warnings
 from collections import OrderedDict
 from dataclasses import dataclass, replace
@@ -38,7 +36,7 @@ from scipy.spatial import cKDTree
 
 from .buried import buried
 from .cam.toolpath import Move, ToolPath
-from .chunking import check_chunks, split_map, threaded_split_map
+from .coarsepass import coarse_pass
 from .errors import InputError
 from .geometry.bspline import BSplineSurface
 from .geometry.face import Face
@@ -253,90 +251,6 @@ def _placements(tp: ToolPath, step_mm: float, step_deg: float, jumps=None):
     return np.concatenate(tips), np.concatenate(axes), np.concatenate(owner)
 
 
-def _blocks(tree, centers, reach: float, count: bool, chunk: int = 256, pairs: int = 4_000_000):
-    """Slices of the placements, ``chunk`` at most; with ``count`` (a clearance of tens of mm puts much of the
-    part in every placement's window) cut smaller where their samples within ``reach`` would pass
-    ``pairs``."""
-    for start in range(0, centers.shape[0], chunk):
-        stop = min(centers.shape[0], start + chunk)
-        if not count:
-            yield slice(start, stop)
-            continue
-        counts = np.asarray(tree.query_ball_point(centers[start:stop], reach, workers=-1, return_length=True))
-        if counts.sum() <= pairs:
-            yield slice(start, stop)
-            continue
-        a, total = 0, 0
-        for k, n in enumerate(counts.tolist()):
-            if total + n > pairs and k > a:  # a placement over the budget alone goes on its own
-                yield slice(start + a, start + k)
-                a, total = k, 0
-            total += n
-        yield slice(start + a, stop)
-
-
-def _coarse(c, tree, P, h, tolerance, T, A, progress=None, clear=0.0):
-    """The sampled pass over placements ``(T, A)``: per placement the smallest signed distance of a part
-    sample to the cutting part, to shank and holder, and that sample; the samples inside the cutting
-    part with their depth (indices, depths). Samples up to ``clear`` mm beyond the body are seen (a
-    clearance of several mm asked for a rapid is measured, not read as clear). Module level: chunks of
-    placements travel to workers."""
-    m = T.shape[0]
-    L_cut = float(c.length)
-    r_cut = float(c.profile_points(16)[:, 0].max())
-    L_all, r_all = c.body_length(), c.max_radius()
-    has_holder = bool(c.body_parts())
-    pad = h + tolerance + max(0.0, float(clear))
-    reach = math.hypot(L_all / 2, r_all) + pad
-    cut_d = np.full(m, np.inf)
-    hold_d = np.full(m, np.inf)
-    seed = np.full(m, -1)
-    hold_seed = np.full(m, -1)
-    d_idx: list = []
-    d_val: list = []
-    for sl in _blocks(tree, T + A * (L_all / 2), reach, count=clear > max(2.0, 4.0 * h)):
-        centers = T[sl] + A[sl] * (L_all / 2)
-        lists = tree.query_ball_point(centers, reach, workers=-1)
-        counts = np.fromiter((len(x) for x in lists), int, len(lists))
-        if counts.sum() == 0:
-            continue
-        pl = np.repeat(np.arange(sl.start, sl.stop), counts)
-        pi = np.concatenate([np.asarray(x, int) for x in lists if x])
-        rel = P[pi] - T[pl]
-        z = np.einsum("ij,ij->i", rel, A[pl])
-        rho = np.linalg.norm(rel - z[:, None] * A[pl], axis=1)
-        near = (z > -pad) & (z < L_cut + pad) & (rho < r_cut + pad)
-        sd = np.full(pi.size, np.inf)
-        sd[near] = c.cutting_distance_rz(rho[near], z[near])
-        inside = sd < 0
-        d_idx.append(pi[inside])
-        d_val.append(-sd[inside])
-        # per placement (pairs are grouped by placement): the smallest distance and its sample
-        nz = counts > 0
-        starts = np.r_[0, np.cumsum(counts[nz])[:-1]]
-        mins = np.minimum.reduceat(sd, starts)
-        first = np.flatnonzero(sd == np.repeat(mins, counts[nz]))
-        grp = np.searchsorted(starts, first, side="right") - 1
-        _, take = np.unique(grp, return_index=True)
-        owners = np.arange(sl.start, sl.stop)[nz]
-        better = mins < cut_d[owners]
-        cut_d[owners[better]] = mins[better]
-        seed[owners[better]] = pi[first[take]][better]
-        if has_holder:  # the smallest distance to shank and holder, and its sample
-            hd = c.holder_distance_rz(rho, z)
-            hmins = np.minimum.reduceat(hd, starts)
-            hfirst = np.flatnonzero(hd == np.repeat(hmins, counts[nz]))
-            _, htake = np.unique(np.searchsorted(starts, hfirst, side="right") - 1, return_index=True)
-            hbetter = hmins < hold_d[owners]
-            hold_d[owners[hbetter]] = hmins[hbetter]
-            hold_seed[owners[hbetter]] = pi[hfirst[htake]][hbetter]
-        if progress is not None:
-            progress(sl.stop, m, "tool placements")
-    idx = np.concatenate(d_idx) if d_idx else np.empty(0, int)
-    val = np.concatenate(d_val) if d_val else np.empty(0)
-    return cut_d, hold_d, seed, idx, val, hold_seed
-
-
 _RECENT: OrderedDict = OrderedDict()
 _MAX_RECENT = 2
 _SAMPLED: OrderedDict = OrderedDict()
@@ -350,6 +264,8 @@ def _memo_key(fk: str, toolpath, tool, params, map_chunks) -> str:
 
     if not fk or map_chunks is not None:
         return ""
+    if toolpath is None:  # the sampled pass's placements: their own bits are their key
+        return content_key(fk, repr(tool), params)
     tp = toolpath
     return content_key(fk, np.asarray(tp.tip), np.asarray(tp.axis), np.asarray(tp.move), repr(tool), params)
 
@@ -453,10 +369,8 @@ def verify(
     rho_motion = motion_radius(c)
     step = min(1.0, math.sqrt(4.0 * rho_motion * gouge_tolerance)) if step is None else positive("step", step)
     angle_step = positive("angle_step", angle_step, "deg")
-    faces = _faces(part)
-    from .contentkey import faces_key
-
-    fk = faces_key(faces)  # once: the check's memo, the part's samples and sizes are all keyed by it
+    given = _faces(part)
+    faces, perm, fk = _canonical(given)  # the check's memo, the part's samples and sizes are keyed by fk
     h = positive("spacing", spacing) if spacing is not None else _auto_spacing(faces, c, max_samples, fk)
     if jumps is not None:
         jumps = np.asarray(jumps, bool).reshape(-1)
@@ -470,13 +384,14 @@ def verify(
         res = _RECENT[key]
         for w in res.warnings:
             warnings.warn(w, stacklevel=2)
-        return replace(res, toolpath=toolpath)
+        return _in_order(replace(res, toolpath=toolpath), perm, given)
     smp, tree = _sampled(faces, fk, h, max_samples)
     T, A, owner = _placements(toolpath, step, angle_step, jumps)
     m = T.shape[0]
     t1 = time.perf_counter()
-    cut_d, hold_d, seed, hold_seed, depth = _coarse_pass(
-        c, tree, smp.P, h, gouge_tolerance, T, A, chunks, map_chunks, progress, clear=clear
+    coarse_key = _memo_key(fk, None, c, (gouge_tolerance, clear, h, max_samples), map_chunks)
+    cut_d, hold_d, seed, hold_seed, depth = coarse_pass(
+        c, tree, smp.P, h, gouge_tolerance, T, A, chunks, map_chunks, progress, clear=clear, memo_key=coarse_key
     )
     t2 = time.perf_counter()
     best_face, best_xyz = _refine_close(faces, c, smp, T, A, seed, cut_d, gouge_tolerance, h)
@@ -519,7 +434,32 @@ def verify(
         _RECENT[key] = res
         while len(_RECENT) > _MAX_RECENT:
             _RECENT.popitem(last=False)
-    return res
+    return _in_order(res, perm, given)
+
+
+def _canonical(faces: list[Face]):
+    """The faces in the order of their content keys, that order (``perm[i]``: the given index of the
+    i-th), and the key of them all: a check's figures, memo and samples do not depend on the order the
+    faces come in (a raster's own check on its machined faces then the rest, and the check of the whole
+    part before writing, are one check). Faces that cannot be keyed keep their order (key empty)."""
+    from .contentkey import content_key, faces_key
+
+    keys = [faces_key([f]) for f in faces]
+    if not all(keys):
+        return faces, np.arange(len(faces)), ""
+    perm = np.array(sorted(range(len(faces)), key=keys.__getitem__), dtype=np.int64)
+    return [faces[i] for i in perm], perm, content_key(tuple(keys[i] for i in perm))
+
+
+def _in_order(res: VerifyResult, perm: np.ndarray, given: list[Face]) -> VerifyResult:
+    """``res`` (faces in :func:`_canonical` order) with its face indices and names in the given order."""
+    wf = np.asarray(res.worst_face)
+    return replace(
+        res,
+        worst_face=np.where(wf >= 0, perm[np.maximum(wf, 0)], -1),
+        sample_face=perm[np.asarray(res.sample_face)],
+        face_names=tuple(f.name or f"face_{i}" for i, f in enumerate(given)),
+    )
 
 
 class _Samples(NamedTuple):
@@ -574,22 +514,6 @@ def _sample_part(faces: list[Face], h: float, max_samples: int) -> _Samples:
     if P.shape[0] == 0:
         raise InputError("the part's faces have no sample inside their trimmed regions")
     return _Samples(P, F, SU, SV, dus, dvs)
-
-
-def _coarse_pass(c, tree, P, h, gouge_tolerance, T, A, chunks, map_chunks, progress, threaded_from=4096, clear=0.0):
-    """The sampled pass (:func:`_coarse`) over the placements in chunks; per sample the deepest depth. From
-    ``threaded_from`` placements in one chunk it runs in a thread per core: same result, each placement's
-    figures being its own."""
-    one = check_chunks(chunks) == 1
-    work = functools.partial(_coarse, c, tree, P, h, gouge_tolerance, clear=clear)
-    if one and map_chunks is None and T.shape[0] >= threaded_from and (os.cpu_count() or 1) > 1:
-        parts = threaded_split_map(work, [T, A], progress, "tool placements")
-    else:
-        parts = split_map(functools.partial(work, progress=progress if one else None), [T, A], chunks, map_chunks)
-    cut_d, hold_d, seed, d_idx, d_val, hold_seed = (np.concatenate([q[k] for q in parts]) for k in range(6))
-    depth = np.zeros(P.shape[0])
-    np.maximum.at(depth, d_idx, d_val)
-    return cut_d, hold_d, seed, hold_seed, depth
 
 
 def _refine_close(faces, c, smp: _Samples, T, A, seed, cut_d, gouge_tolerance, h):

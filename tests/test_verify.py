@@ -445,6 +445,7 @@ def test_the_threaded_sampled_pass_gives_the_single_pass_figures():
     seeds and sample depths as in one piece (bit for bit)."""
 
     from machsurf_cad import gougecheck as g
+    from machsurf_cad.coarsepass import coarse_pass
     from machsurf_cad.examples import example
 
     face = ms.Face(example("bezier5", "surface"), name="bezier5")
@@ -459,8 +460,67 @@ def test_the_threaded_sampled_pass_gives_the_single_pass_figures():
     A /= np.linalg.norm(A, axis=1, keepdims=True)
     c = ms.parse_cutter("bull:D=10,r=2")
     args = (c, tree, smp.P, 1.0, 0.01, T, A, 1, None, None)
-    one = g._coarse_pass(*args, threaded_from=10**9)
-    many = g._coarse_pass(*args)
+    one = coarse_pass(*args, threaded_from=10**9)
+    many = coarse_pass(*args)
     for a, b in zip(one, many):
         np.testing.assert_array_equal(a, b)
     assert np.isfinite(one[0]).sum() > 1000 and (one[4] > 0).any()  # placements near the face, some inside it
+
+
+def test_a_path_checked_again_after_a_change_measures_only_its_new_placements_with_the_same_figures():
+    """The sampled pass keeps the last checks' placements by their exact bits: a path whose moves were
+    split (a raster's gouging moves refined) is checked again on its new placements only, and every figure
+    equals a check from scratch bit for bit."""
+    from machsurf_cad import coarsepass, gougecheck
+    from machsurf_cad.examples import example
+
+    face = ms.Face(example("bezier5", "surface"), name="bezier5")
+    s = np.linspace(0.1, 0.9, 40)
+    uv = np.array([[u, v] for v in (0.3, 0.6) for u in s])
+    d = face.surface.derivatives(uv[:, 0], uv[:, 1], 1)
+    nrm = np.cross(d.su, d.sv)
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True) * np.sign(nrm[:, 2:3])
+    tips = d.point + nrm * 5.0 - [0, 0, 5.0] - nrm * 0.02  # the ball's centre 0.02 mm too close
+    axes = np.tile([0.0, 0, 1], (tips.shape[0], 1))
+    tool = ms.BallEndMill(10)
+    tp = ms.ToolPath.from_passes([tips[:40], tips[40:]], [axes[:40], axes[40:]], cutter=tool)
+    split = np.insert(tp.tip, [7, 30], [(tp.tip[6] + tp.tip[7]) / 2, (tp.tip[29] + tp.tip[30]) / 2], axis=0)
+    tp2 = ms.ToolPath(split, np.insert(tp.axis, [7, 30], tp.axis[[7, 30]], axis=0),
+                      np.insert(tp.move, [7, 30], ms.Move.CUT),
+                      np.insert(tp.pass_index, [7, 30], tp.pass_index[[7, 30]]), cutter=tool)  # fmt: skip
+    counts = []
+
+    def seen(done, total, msg):
+        counts.append(total)
+
+    for memo in (gougecheck._RECENT, gougecheck._SAMPLED, coarsepass._LAST):
+        memo.clear()
+    first = ms.verify([face], tp, gouge_tolerance=0.01)
+    again = ms.verify([face], tp2, gouge_tolerance=0.01, progress=seen)
+    assert 0 < max(counts) <= 12 and first.n_placements > 200  # the two split moves' placements only
+    for memo in (gougecheck._RECENT, gougecheck._SAMPLED, coarsepass._LAST):
+        memo.clear()
+    fresh = ms.verify([face], tp2, gouge_tolerance=0.01)
+    for name in ("cut_distance", "holder_distance", "worst_face", "worst_xyz", "status", "sample_depth"):
+        np.testing.assert_array_equal(getattr(again, name), getattr(fresh, name))
+    assert fresh.max_gouge > 0.015 and (fresh.sample_depth > 0).any()
+
+
+def test_the_check_does_not_depend_on_the_order_of_the_faces():
+    """The faces are checked in the order of their content: the same faces in another order give the same
+    figures with the face indices of that order, answered from the first check."""
+    from machsurf_cad import gougecheck
+
+    gougecheck._RECENT.clear()
+    faces = [ms.Face(ms.builders.plane_patch(), name="floor"),
+             ms.Face(ms.builders.plane_patch(origin=(0, 0, 3.0)), name="shelf")]  # fmt: skip
+    tips = np.array([[x, 50.0, 2.9] for x in np.linspace(20, 80, 31)])  # 0.1 mm into the shelf, clear of the floor
+    tp = ms.ToolPath.from_passes([tips], [np.tile([0.0, 0.0, 1.0], (31, 1))], cutter=ms.BallEndMill(6))
+    a = ms.verify(faces, tp, gouge_tolerance=0.01)
+    b = ms.verify(faces[::-1], tp, gouge_tolerance=0.01)
+    assert b.time_s == a.time_s  # one check
+    np.testing.assert_array_equal(a.cut_distance, b.cut_distance)
+    assert a.face_names == ("floor", "shelf") and b.face_names == ("shelf", "floor")
+    assert set(a.worst_face[a.status != 0]) == {1} and set(b.worst_face[b.status != 0]) == {0}
+    assert a.face_names[a.worst_face[5]] == b.face_names[b.worst_face[5]] == "shelf"
+    np.testing.assert_array_equal(np.array(a.face_names)[a.sample_face], np.array(b.face_names)[b.sample_face])
