@@ -327,7 +327,31 @@ def test_flank_command_bad_input(tmp_path):
     assert r.returncode == 1 and "not a ruled surface" in r.stderr
     r = run("flank", "--example", "hypar", "--tool", "ball:D=10", "-o", tmp_path / "d")
     assert r.returncode == 1 and "cylindrical" in r.stderr
-    assert not any((tmp_path / x).exists() for x in "abcd")
+    # a clearance larger than the part: a unit mistake, as for the other commands (the example hypar is
+    # 100 x 100 x 20 mm: its poles' box 141.4 mm across)
+    r = run("flank", "--example", "hypar", "--whole", "--clearance", "5000", "-o", tmp_path / "e")
+    assert r.returncode == 1 and "clearance 5000 mm is larger than the part" in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert not any((tmp_path / x).exists() for x in "abcde")
+
+
+def test_a_holder_narrower_than_its_shank_is_refused_and_the_body_applies_to_one_faces_path(tmp_path):
+    """--shank/--holder give the whole tool to every path's check, the 5-axis and 3+2 paths of one face
+    included (tilt away clears the holder too); a holder narrower than what it holds is one line."""
+    r = run("machining-surface", "--example", "bezier5", "--tool", "ball:D=6", "--toolpath",
+            "--shank", "D=6,L=20", "--holder", "D=4,L=30", "-o", tmp_path / "a")  # fmt: skip
+    assert r.returncode == 1 and "--holder D=4 mm is narrower than the shank it holds (D=6 mm)" in r.stderr
+    r = run("machining-surface", "--example", "bezier5", "--tool", "ball:D=6", "--shank", "D=6,L=20",
+            "-o", tmp_path / "b")  # fmt: skip
+    assert r.returncode == 1 and "--shank applies to a tool path: add --toolpath" in r.stderr
+    r = run("machining-surface", "--example", "bezier5", "--tool", "ball:D=6", "--axes", "3", "--toolpath",
+            "--stepover", "6", "--shank", "D=6,L=20", "--holder", "D=30,L=40", "-o", tmp_path / "c")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    rep = json.loads((tmp_path / "c" / "report.json").read_text())
+    assert rep["tool"]["shank"] == [6.0, 20.0] and rep["tool"]["holder"] == [30.0, 40.0]
+    # the check measured the holder: 40 mm of D30 standing 18 + 20 mm above the tip over a face that rises
+    # less than that under it
+    assert rep["verify"]["clean"] and 0.0 < rep["verify"]["min_clearance_mm"] < 40.0
 
 
 @needs_pyvista

@@ -30,6 +30,39 @@ def shank(text: str | None, what: str):
     return Shank(kw["D"], kw["L"])
 
 
+def cutter_with_body(tool: str, shank_text: str | None, holder_text: str | None):
+    """The cutter of ``tool`` with the shank and holder texts (``D=..,L=..``); a holder narrower than the
+    shank it grips is refused."""
+    import dataclasses
+
+    from ..toolspec import parse_cutter
+
+    cutter = parse_cutter(tool)
+    if not (shank_text or holder_text):
+        return cutter
+    s, h = shank(shank_text, "shank"), shank(holder_text, "holder")
+    grip = s.diameter if s is not None else cutter.D
+    if h is not None and h.diameter < grip:
+        raise InputError(
+            f"--holder D={h.diameter:g} mm is narrower than the {'shank' if s is not None else 'tool'} it holds "
+            f"(D={grip:g} mm): give the holder's own diameter"
+        )
+    return dataclasses.replace(cutter, shank=s, holder=h)  # type: ignore[type-var]
+
+
+def check_clearance(clearance: float, faces) -> None:
+    """Refuse a clearance larger than the part itself (its poles' bounding box diagonal): a unit mistake,
+    and links that high make the path and its check needlessly long."""
+    from ..machining.toolpath import part_sphere
+
+    size = 2.0 * part_sphere(faces, 0.0)[1]
+    if clearance > max(size, 1.0):
+        raise InputError(
+            f"clearance {clearance:g} mm is larger than the part ({size:.4g} mm across its bounding box): "
+            "check the units (mm)"
+        )
+
+
 def part_faces(part: str, faces: str = "all"):
     """Faces of a STEP part: ``all`` or a comma list of indices."""
     from ..occ import read_step_faces

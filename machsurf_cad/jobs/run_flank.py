@@ -45,14 +45,18 @@ def _write_rule_errors(path, profiles: dict) -> str:
 
 def run_flank(spec: FlankJob, out, say: Say, progress=None) -> JobOutcome:
     from ..flank_milling import flank
+    from .inputs import check_clearance
 
     surf, desc = _ruled_input(spec)
+    if spec.whole and not spec.part:
+        check_clearance(spec.clearance, [_example_face(spec.example)])
     check = None
     if spec.part and spec.whole:
         from ..threeaxis.select import select_faces
         from .inputs import body_faces, part_faces
 
         faces = part_faces(spec.part)
+        check_clearance(spec.clearance, faces)
         if str(spec.check_faces).strip().lower() == "body":  # the solid the face bounds: its others are other parts
             check = [f for f in body_faces(faces, spec.face) if f.index != spec.face] or None
         elif str(spec.check_faces).strip().lower() == "rest":

@@ -13,14 +13,14 @@ from .specs import MachiningSurfaceJob
 
 def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=None) -> JobOutcome:
     from ..machining import machining_surface
-    from ..toolspec import parse_cutter
+    from .inputs import check_clearance, cutter_with_body
 
     if spec.faces is not None:
         from .run_threeaxis import run_three_axis
 
         return run_three_axis(spec.to_mill3(), out, say, progress)
     t0 = time.perf_counter()
-    cutter = parse_cutter(spec.tool)
+    cutter = cutter_with_body(spec.tool, spec.shank, spec.holder)
     face, desc = face_input(spec.part, spec.example, spec.face)
     from ..geometry.meshsize import check_mesh_size, default_deflection
 
@@ -44,7 +44,7 @@ def run_machining_surface(spec: MachiningSurfaceJob, out, say: Say, progress=Non
         return faces_of_part
 
     if spec.toolpath:
-        _check_clearance(spec.clearance, part())  # before any work
+        check_clearance(spec.clearance, part())  # before any work
     axis_field, tilt_rep = _tilt_away(say, spec, face, cutter, part) if spec.tilt_away else (None, None)
     ms = machining_surface(
         face,
@@ -286,17 +286,3 @@ def _tilt_away(say: Say, spec: MachiningSurfaceJob, face, cutter, part):
             f"({at}), uv box {box} (report: tilt_away.regions_clear_nowhere)"
         )
     return field, rep
-
-
-def _check_clearance(clearance: float, faces) -> None:
-    """Refuse a clearance larger than the part itself (its poles' bounding box diagonal): a unit mistake,
-    and links that high make the path and its check needlessly long."""
-    from ..errors import InputError
-    from ..machining.toolpath import part_sphere
-
-    size = 2.0 * part_sphere(faces, 0.0)[1]
-    if clearance > max(size, 1.0):
-        raise InputError(
-            f"clearance {clearance:g} mm is larger than the part ({size:.4g} mm across its bounding box): "
-            "check the units (mm)"
-        )

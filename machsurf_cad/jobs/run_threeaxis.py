@@ -27,28 +27,17 @@ def _part(spec: Mill3Job):
     return part_faces(spec.part), str(spec.part)
 
 
-def _tool(spec: Mill3Job):
-    from ..toolspec import parse_cutter
-
-    cutter = parse_cutter(spec.tool)
-    if spec.shank or spec.holder:
-        import dataclasses
-
-        from .inputs import shank as _shank
-
-        shank, holder = _shank(spec.shank, "shank"), _shank(spec.holder, "holder")
-        cutter = dataclasses.replace(cutter, shank=shank, holder=holder)  # type: ignore[type-var]
-    return cutter
-
-
 def run_three_axis(spec: Mill3Job, out, say: Say, progress=None) -> JobOutcome:
     from ..threeaxis.wholepart import machined_and_checked
 
     t0 = time.perf_counter()
-    cutter = _tool(spec)
+    from .inputs import check_clearance, cutter_with_body
+
+    cutter = cutter_with_body(spec.tool, spec.shank, spec.holder)
     faces, desc = _part(spec)
     axis = tuple(float(a) for a in (spec.axis if spec.axis is not None else (0.0, 0.0, 1.0)))
     machined, checked = machined_and_checked(faces, spec.faces, spec.check_faces, axis)
+    check_clearance(spec.clearance, faces)
     rep: dict = {
         "nominal": desc,
         "tool": cutter.spec(),

@@ -240,6 +240,7 @@ class MachiningSurfaceJob(_Post, JobSpec):
                     ("--plunge-feed", self.plunge_feed, 300.0), ("--spindle", self.spindle, 10000.0),
                     ("--tool-number", self.tool_number, 1), ("--simulate", self.simulate, False),
                     ("--simulate-resolution", self.simulate_resolution, None),
+                    ("--shank", self.shank, None), ("--holder", self.holder, None),
                 ) if value != default
             ]  # fmt: skip
             if path_only:
@@ -254,8 +255,6 @@ class MachiningSurfaceJob(_Post, JobSpec):
                     ("--pattern", self.pattern, "raster"), ("--angle", self.angle, 0.0),
                     ("--direction", self.direction, "zigzag"), ("--stepdown", self.stepdown, None),
                     ("--grid-step", self.grid_step, None), ("--cl-surface", self.cl_surface, False),
-                    ("--shank", self.shank, None),
-                    ("--holder", self.holder, None),
                 ) if value != default
             ]  # fmt: skip
             if given:

@@ -140,6 +140,12 @@ def mill3(
     -------
     Mill3Result
 
+    Raises
+    ------
+    InputError
+        Bad arguments, or a tool along the axis that touches none of the machined faces (other faces in
+        front of them): nothing to machine, before any planning.
+
     Examples
     --------
     >>> import machsurf_cad as ms
@@ -161,6 +167,15 @@ def mill3(
                 "edges; use --pattern waterline (or another --axis)"
             )
     mf, cf = [part[i] for i in machined], [part[i] for i in checked]
+    both = machined + checked
+    reach = reachable_area([part[i] for i in both], range(len(machined)), tool, axis=axis)
+    for r in reach:
+        r["face"] = machined[r["face"]]
+    if reach and not any(r["touched_mm2"] > 0.0 for r in reach):
+        raise InputError(
+            f"the tool along {list(axis)} touches none of face(s) {', '.join(str(i) for i in machined)}: other "
+            "faces stand in front of them: nothing to machine along this axis"
+        )
     step = 2.0 if stepover is None else float(stepover)
     common = dict(check_faces=cf, chordal_tolerance=chordal_tolerance, clearance=clearance, axis=axis,
                   gouge_tolerance=gouge_tolerance, progress=progress)  # fmt: skip
@@ -170,8 +185,4 @@ def mill3(
     else:
         tp = waterline(mf, tool, stepdown=stepdown or step, grid_step=grid_step, **common)
     pc = check_toolpath(tp, part, gouge_tolerance=gouge_tolerance, on_gouge=on_gouge, clearance=clearance)
-    both = machined + checked
-    reach = reachable_area([part[i] for i in both], range(len(machined)), tool, axis=axis)
-    for r in reach:
-        r["face"] = machined[r["face"]]
     return Mill3Result(tp, pc, tuple(machined), tuple(checked), axis, tuple(reach))  # type: ignore[arg-type]
