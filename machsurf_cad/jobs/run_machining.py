@@ -272,7 +272,9 @@ def _tilt_away(say: Say, spec: MachiningSurfaceJob, face, cutter, part):
     say(
         f"tilt away within lead {lead:g}..{rep['max_lead_deg']:g} deg, tilt +-{rep['max_tilt_deg']:g} deg on all "
         f"{len(part())} faces: {rep['lattice_points_tilted']} of {rep['lattice_points']} lattice points tilted (axis "
-        f"turned up to {rep['axis_change_max_deg']:.3g} deg, at most {rep['axis_turn_max_deg_per_mm']:.3g} deg/mm), "
+        f"turned up to {rep['axis_change_max_deg']:.3g} deg, at most {rep['axis_turn_max_deg_per_mm']:.3g} deg/mm "
+        f"against a bound of {rep['axis_turn_bound_deg_per_mm']:.3g}: {rep['max_turn_deg_per_mm']:.3g} asked, or the "
+        f"nominal axis's own turn where the face curves faster, {rep['nominal_axis_turn_max_deg_per_mm']:.3g}), "
         f"{rep['lattice_points_clear_nowhere']} clear with no orientation (cut out of the path)"
     )
     regions = rep["regions_clear_nowhere"]

@@ -168,7 +168,9 @@ def clear_axis_field(
         face, cutter, feed, raw, nominal_axes, choice, inside, check_faces, gouge_tolerance, us, vs,
         (max_turn, lead_min, max_lead, limit),
     )  # fmt: skip
-    turn = _turn_max(smooth, face.surface.derivatives_grid(us, vs, 0).point, inside & (choice >= 0))
+    points = face.surface.derivatives_grid(us, vs, 0).point
+    turn = _turn_max(smooth, points, inside & (choice >= 0))
+    own = _turn_max(nominal_axes, points, inside & (choice >= 0))  # the bound where the face turns it faster
     change = _angle_deg(smooth, nominal_axes)[inside]
     tilted = inside & (choice > 0)
     nowhere = inside & (choice < 0)
@@ -188,6 +190,8 @@ def clear_axis_field(
         **_regions(face, nowhere, us, vs),
         "axis_change_max_deg": float(change.max(initial=0.0)),
         "axis_turn_max_deg_per_mm": turn,
+        "nominal_axis_turn_max_deg_per_mm": own,
+        "axis_turn_bound_deg_per_mm": float(max(max_turn, own)),
         "lattice_points_not_clear_smoothed": not_clear,
     }
     from ..geometry.builders import interpolate_grid
