@@ -514,7 +514,10 @@ def test_ctrl_c_and_sigterm_during_start_up(tmp_path, delay):
         (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--angle", "nan"], "finite number"),
         (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--feed", "900"], "--feed applies to"),
         (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--lead-rate", "3"], "--lead auto"),
-        (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--shank", "D=10,L=40"], "add --toolpath"),
+        (
+            ["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--shank", "D=10,L=40"],
+            "add --toolpath",
+        ),
         (["machining-surface", "--example", "bezier5", "--tool", "ball:D=10", "--tolerance", "inf"], "finite number"),
     ],
 )
