@@ -21,6 +21,7 @@ same way.
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import replace
 
@@ -504,29 +505,104 @@ def rapids_kept_clear(toolpath: ToolPath, part, cutter, clearance: float, surfac
     measured from the whole tool, holder included, not from the tip. Rapids between two positions on the
     clearance ``surface`` (:func:`surface_for`) keep it by construction and are not measured; the others
     are, by one tool-body check with placements ``step`` mm apart (between two the tool can come closer by
-    ``step^2 / (8 R)``). ``info`` adds ``n_rapids_at_feed`` and ``rapid_distance_min_mm`` (the least
-    distance measured over the rapids left; None when every rapid is on the surface)."""
-    mv = np.asarray(toolpath.move).copy()
+    ``step^2 / (8 R)``). Along a fixed axis the rapids and the long retracts and approaches of the links
+    (the tool straight up from a pass's end, or down onto the next) are measured in ``step`` mm pieces and
+    split: at the plunge feed only where the whole tool is within ``clearance`` of the part, rapid
+    elsewhere (:func:`_split`).
+    ``info`` adds ``n_rapids_at_feed``, ``rapid_distance_min_mm`` (the least distance measured over the
+    rapids left; None when every rapid is on the surface) and ``n_links_split``."""
+    mv = np.asarray(toolpath.move)
     X = toolpath.tip
     on = _on_surface(X, surface)
-    k = np.nonzero((mv == Move.RAPID) & ~(on & np.roll(on, 1)))[0]
+    k = np.flatnonzero((mv == Move.RAPID) & ~(on & np.roll(on, 1)))
     k = k[k > 0]
-    info = dict(toolpath.info, n_rapids_at_feed=0, rapid_distance_min_mm=None)
-    if k.size:
-        rows = np.column_stack([k - 1, k]).ravel()  # each move on its own: its start, then the motion
-        moves = ToolPath(X[rows], toolpath.axis[rows], np.full(rows.size, Move.RAPID),
-                         np.repeat(np.arange(k.size), 2), cutter=cutter)  # fmt: skip
-        with warnings.catch_warnings():  # rapids far from the part are the point, not a wrong part
-            warnings.simplefilter("ignore")
-            res = verify(part, moves, cutter, clearance=clearance, step=step, jumps=np.arange(rows.size) % 2 == 0)
-        d = np.minimum(res.cut_distance, res.holder_distance).reshape(-1, 2).min(axis=1)
-        slow = d < clearance * (1.0 - 1e-9)
-        mv[k[slow]] = Move.RETRACT  # a feed move that does not cut (an approach is a cutting position's)
-        left = d[~slow]
-        info.update(n_rapids_at_feed=int(slow.sum()), rapid_distance_min_mm=float(left.min()) if left.size else None)
-    if info["rapid_distance_min_mm"] is not None and not np.isfinite(info["rapid_distance_min_mm"]):
-        info["rapid_distance_min_mm"] = None  # nothing of the part within the measured reach
-    return replace(toolpath, move=mv, info=info)
+    a = toolpath.axis
+    fixed = a.shape[0] > 0 and np.abs(a - a[0]).max() <= 1e-12
+    if fixed:  # long straight retracts and approaches of a link (not a pass's own moves)
+        ln = np.r_[0.0, np.linalg.norm(np.diff(X, axis=0), axis=1)]
+        prev = np.r_[Move.CUT, mv[:-1]]
+        link = (mv == Move.RETRACT) | ((mv == Move.APPROACH) & ((prev == Move.RAPID) | (prev == Move.RETRACT)))
+        k = np.union1d(k, np.flatnonzero(link & (ln > 2.0 * clearance + step)))
+    info = dict(toolpath.info, n_rapids_at_feed=0, rapid_distance_min_mm=None, n_links_split=0)
+    if not k.size:
+        return replace(toolpath, info=info)
+    split = fixed  # a turning axis's rapids stay whole (the written path keeps the checked path's positions)
+    pieces = [max(1, math.ceil(np.linalg.norm(X[i] - X[i - 1]) / step)) if split else 1 for i in k]
+    pts = [X[i - 1] + np.linspace(0.0, 1.0, n + 1)[:, None] * (X[i] - X[i - 1]) for i, n in zip(k, pieces)]
+    starts = np.cumsum([0] + [p.shape[0] for p in pts])[:-1]
+    P = np.concatenate(pts)
+    A = np.repeat(np.concatenate([toolpath.axis[i][None] for i in k]), [p.shape[0] for p in pts], axis=0)
+    jumps = np.zeros(P.shape[0], bool)
+    jumps[starts] = True
+    moves = ToolPath(P, A, np.full(P.shape[0], Move.RAPID), np.repeat(np.arange(k.size), [p.shape[0] for p in pts]),
+                     cutter=cutter)  # fmt: skip
+    with warnings.catch_warnings():  # rapids far from the part are the point, not a wrong part
+        warnings.simplefilter("ignore")
+        res = verify(part, moves, cutter, clearance=clearance, step=step, jumps=jumps)
+    d = np.minimum(res.cut_distance, res.holder_distance)  # at each piece's end (a piece is one placement)
+    out, n_slow, n_split, left = _split(toolpath, k, pts, starts, d, clearance * (1.0 - 1e-9))
+    info.update(n_rapids_at_feed=n_slow, n_links_split=n_split)
+    if left.size and np.isfinite(left.min()):  # nothing of the part within the measured reach: None
+        info["rapid_distance_min_mm"] = float(left.min())
+    return replace(out, info=info)
+
+
+def _split(tp: ToolPath, k, pts, starts, d, clearance: float):
+    """``tp`` with each move ``k[j]`` (its points ``pts[j]``, their distances to the part from ``starts[j]``
+    in ``d``) cut where its pieces change between near the part (either end closer than ``clearance``: a
+    feed move that does not cut, :attr:`Move.RETRACT`; an approach's last stretch stays
+    :attr:`Move.APPROACH`) and clear (a rapid). Returns the path, the rapids made feed moves (whole or in
+    part), the moves split and the distances of the rapid pieces left."""
+    mv = np.asarray(tp.move)
+    tips, axes, moves, owner = [], [], [], []
+    n_slow = n_split = 0
+    left = []
+    last = 0
+    for j, i in enumerate(k):
+        tips.append(tp.tip[last:i])
+        axes.append(tp.axis[last:i])
+        moves.append(mv[last:i])
+        owner.append(np.arange(last, i))
+        m = pts[j].shape[0] - 1
+        at = d[starts[j] : starts[j] + 1 + m]  # the move's start, then each piece's end
+        slow = (at[1:] < clearance) | (at[:-1] < clearance)
+        left.append(np.minimum(at[1:], at[:-1])[~slow])
+        ends = np.r_[np.flatnonzero(slow[1:] != slow[:-1]), m - 1]  # last piece of each run
+        kinds = np.where(slow[ends], Move.RETRACT, Move.RAPID)
+        if mv[i] == Move.APPROACH:
+            kinds[-1] = Move.APPROACH  # onto the pass (near the part by construction, whatever was measured)
+        elif mv[i] == Move.RETRACT and slow.all():
+            kinds[:] = Move.RETRACT
+        n_slow += int(mv[i] == Move.RAPID and slow.any())
+        n_split += int(ends.size > 1)
+        tips.append(pts[j][ends + 1])
+        axes.append(np.repeat(tp.axis[i][None], ends.size, axis=0))
+        moves.append(kinds.astype(mv.dtype))
+        owner.append(np.r_[np.full(ends.size - 1, -1), i])
+        last = i + 1
+    tips.append(tp.tip[last:])
+    axes.append(tp.axis[last:])
+    moves.append(mv[last:])
+    owner.append(np.arange(last, tp.n_positions))
+    own = np.concatenate(owner)
+    # an inserted position belongs to the pass and takes the carried values of the move's end position
+    nxt = np.minimum.accumulate(np.where(own >= 0, own, tp.n_positions)[::-1])[::-1]
+    src = np.where(own >= 0, own, nxt)
+    cc = None if tp.cc is None else np.where((own >= 0)[:, None], tp.cc[src], np.nan)
+    feed = None if tp.feed is None else np.where(own >= 0, tp.feed[src], np.nan)
+    extras = {key: _carried(np.asarray(val), src, own >= 0) for key, val in tp.extras.items()}
+    out = ToolPath(np.concatenate(tips), np.concatenate(axes), np.concatenate(moves), tp.pass_index[src], cc, feed,
+                   tp.cutter, tp.name, extras, tp.info)  # fmt: skip
+    return out, n_slow, n_split, np.concatenate(left) if left else np.empty(0)
+
+
+def _carried(val: np.ndarray, src: np.ndarray, kept: np.ndarray) -> np.ndarray:
+    """A per-position array at the positions ``src``; where not ``kept`` (a link's inserted position) -1
+    for integers and NaN for floats."""
+    out = val[src].copy()
+    if not kept.all():
+        out[~kept] = -1 if np.issubdtype(out.dtype, np.integer) else np.nan
+    return out
 
 
 __all__ = ["link_runs", "rapids_kept_clear", "surface_for"]

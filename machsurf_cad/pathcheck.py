@@ -66,6 +66,9 @@ class PathCheck(Result):
                 "n_rapids_at_feed": info.get("n_rapids_at_feed", 0),
                 "rapid_distance_min_mm": info.get("rapid_distance_min_mm"),
                 "link_length_mm": self.toolpath.link_length(),
+                "n_links_split": info.get("n_links_split", 0),
+                "link_length_at_feed_mm": _length(self.toolpath, (Move.RETRACT, Move.APPROACH)),
+                "rapid_length_mm": _length(self.toolpath, (Move.RAPID,)),
             }
         if self.recheck is not None and self.toolpath is not None:
             rep["trimmed"] = {
@@ -152,6 +155,12 @@ def _relinked(toolpath, res, part, tool, gouge_tolerance, clearance, clear, surf
         )
     except InputError:  # no run can be reached and left
         return None
+
+
+def _length(tp: ToolPath, kinds) -> float:
+    """Length (mm) of the moves of ``kinds`` (the move into each position)."""
+    seg = np.linalg.norm(np.diff(tp.tip, axis=0), axis=1)
+    return float(seg[np.isin(tp.move[1:], kinds)].sum())
 
 
 def check_toolpath(

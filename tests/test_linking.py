@@ -238,7 +238,9 @@ def test_rapids_keep_the_clearance_from_the_holder():
     """Rapid distances are the whole tool's, holder included (issue 28, item 1). A ball D6 with a holder D20
     from 10 mm above its tip cuts the floor beside the bridge: at x = -13 the holder passes 3 mm from the
     bridge's edge while the cutting part is 10 mm away, so the moves up to the plane over the part and back
-    down (4 of them) are made at the plunge feed; at x = -17 (7 mm) they stay rapids, and the least rapid
+    down (4 of them) are made at the plunge feed where the holder is within 5 mm of the bridge: their first
+    (last) 1 mm, up to a tip 6 mm high, where the holder's rim is 3 mm beside and 4 mm above the bridge's
+    edge (5 mm, closed form), rapid beyond; at x = -17 (7 mm) they stay rapids, and the least rapid
     distance is the floor's 5 mm under the retract point. Every rapid left keeps 5 mm by the closed form,
     every move sampled every 0.1 mm."""
     floor = builders.plane_patch((-40, -30, 0), (100, 0, 0), (0, 60, 0), name="floor")
@@ -264,7 +266,10 @@ def test_rapids_keep_the_clearance_from_the_holder():
         if at_feed:  # the feed moves are the ones the holder takes within 5 mm of the bridge
             slow = np.flatnonzero((tp.move[1:] != Move.RAPID) & (tp.move[1:] != Move.CUT)) + 1
             assert any(_body_to_bridge(tp.tip[i], body) < 5.0 for i in slow)
-            assert tp.info["rapid_distance_min_mm"] is None  # the rapids left are all over the plane
+            assert tp.info["n_links_split"] == 4
+            z = [sorted((tp.tip[i - 1, 2], tp.tip[i, 2])) for i in slow if tp.move[i] == Move.RETRACT]
+            assert sum(1 for a, b in z if abs(a - 5.0) < 1e-9 and abs(b - 6.0) < 1e-9) == 4  # z 5 -> 6, or back
+            assert 5.0 <= tp.info["rapid_distance_min_mm"] < 5.03  # the rapid pieces from 6 mm up
         else:  # measured on the part's samples: over the true 5 mm by less than the sampling's 0.03 mm
             assert 5.0 <= tp.info["rapid_distance_min_mm"] < 5.03
 
@@ -312,3 +317,26 @@ def test_rapids_made_feed_moves_read_back_from_apt(tmp_path):
     back = ms.read_apt(ms.write_apt(tmp_path / "linked.apt", tp))
     np.testing.assert_array_equal(back.move, tp.move)
     np.testing.assert_array_equal(back.pass_index[back.move == Move.APPROACH], [0, 1, 2])
+
+
+def test_long_retracts_run_at_the_plunge_feed_only_within_the_clearance():
+    """A one-way raster on a floor beside a shelf 30 mm up: every line ends with a retract to the plane 5 mm
+    over the shelf (35 mm) and starts with the approach down from it. At the plunge feed only where the
+    whole tool is within the 5 mm clearance of the part: the ball's tip within 5 mm of the floor (closed
+    form), so each is split into 5 mm at feed and 30 mm rapid; every rapid left keeps 5 mm (closed form:
+    the ball's lowest point over the floor, the shelf 40 mm away in plan)."""
+    floor = ms.Face(builders.plane_patch((0, 0, 0), (60, 0, 0), (0, 40, 0)), name="floor")
+    shelf = ms.Face(builders.plane_patch((100, 0, 30), (20, 0, 0), (0, 40, 0)), name="shelf")
+    r = ms.mill3([floor, shelf], "ball:D=6", faces="0", stepover=10.0, direction="one-way", clearance=5.0)
+    assert r.verdict == "clean"
+    tp, rapids = r.toolpath, r.check.report()["rapids"]
+    n_lines = int(np.sum(tp.move == Move.APPROACH))
+    assert n_lines == 5 and rapids["n_links_split"] == 2 * n_lines
+    assert rapids["link_length_at_feed_mm"] == pytest.approx(2 * 5.0 * n_lines, abs=1e-9)
+    seg = np.linalg.norm(np.diff(tp.tip, axis=0), axis=1)
+    slow = np.isin(tp.move[1:], (Move.RETRACT, Move.APPROACH))
+    assert np.allclose(seg[slow], 5.0) and np.allclose(np.sort(tp.tip[1:][slow, 2]), np.r_[[0.0] * 5, [5.0] * 5])
+    fast = np.flatnonzero(tp.move == Move.RAPID)
+    fast = fast[fast > 0]
+    assert min(tp.tip[fast, 2].min(), tp.tip[fast - 1, 2].min()) >= 5.0 - 1e-9  # the ball 5 mm over the floor
+    assert tp.tip[fast, 0].max() <= 60.0 + 1e-9  # 40 mm from the shelf in plan: far more than 5

@@ -119,7 +119,7 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
         _draw_check(st, tp, pc.check, rep, tolerance)
     if pc.toolpath is not None:
         write_toolpath(st, pc.toolpath, spec, stem)
-        _say_rapids(say, pc.toolpath.info, pc.link_clearance)
+        _say_rapids(say, rep.get("rapids"), pc.toolpath.info, pc.link_clearance)
     if pc.verdict == "trimmed":
         cut, again = pc.toolpath, pc.recheck
         assert cut is not None and again is not None
@@ -153,15 +153,20 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
     return rep, (EXIT_TOLERANCE if pc.toolpath is None else EXIT_OK), pc.toolpath
 
 
-def _say_rapids(say: Say, info, clearance: float) -> None:
-    """The rapids' line: how many were made feed moves, and the least distance the others keep."""
-    if "n_rapids_at_feed" not in info:
+def _say_rapids(say: Say, rapids: dict | None, info, clearance: float) -> None:
+    """The rapids' line: how many were made feed moves, the least distance the others keep, and the links'
+    lengths at the plunge feed and rapid."""
+    if "n_rapids_at_feed" not in info or not rapids:
         return
     least = info.get("rapid_distance_min_mm")
     keep = "all over the clearance surface" if least is None else f"the least {least:.4g} mm from the part"
+    split = rapids.get("n_links_split", 0)
     say(
         f"rapids: {info['n_rapids_at_feed']} made at the plunge feed, where the whole tool (holder included) "
         f"comes within the clearance {clearance:g} mm of the part; the rest rapid, {keep}"
+        + (f"; {split} link move(s) split there" if split else "")
+        + f"; links {rapids['link_length_at_feed_mm']:.4g} mm at the plunge feed, "
+        + f"{rapids['rapid_length_mm']:.4g} mm rapid"
     )
 
 
