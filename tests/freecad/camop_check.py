@@ -79,6 +79,7 @@ def main(result):
     rest = [f for i, f in enumerate(faces) if i != top]
     tp = ms.raster([faces[top]], ms.parse_cutter(op.CutterUsed), check_faces=rest, stepover=4.0,
                    chordal_tolerance=0.005, clearance=5.0, gouge_tolerance=0.01)  # the defaults  # fmt: skip
+    tp = ms.check_toolpath(tp, faces, gouge_tolerance=0.01, clearance=5.0).toolpath  # what is written: checked
     csv_path = fcscript.out_file("cam.csv")
     ms.write_csv(csv_path, tp)
     rows = [r for r in csv.DictReader(open(csv_path)) if r["move"] != "rapid"]
