@@ -119,6 +119,8 @@ class _Memo(NamedTuple):
 
 _LAST: OrderedDict = OrderedDict()
 _MAX_LAST = 2
+MEMO_PLACEMENTS = 2_000_000
+"""Most placements a check keeps for the next one (about 100 bytes each: 200 MB)."""
 _MIX = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9, 0xD6E8FEB86659FD93,
                  0xFF51AFD7ED558CCD, 0xC4CEB9FE1A85EC53], dtype=np.uint64)  # fmt: skip
 
@@ -187,7 +189,7 @@ def coarse_pass(c, tree, P, h, gouge_tolerance, T, A, chunks=1, map_chunks=None,
         pl = np.concatenate([np.repeat(hit, cnt), new[pl_new]])
         idx = np.concatenate([o_idx[take], idx_new])
         val = np.concatenate([o_val[take], val_new])
-    if memo_key:
+    if memo_key and T.shape[0] <= MEMO_PLACEMENTS:
         srt = np.argsort(pl, kind="stable")
         _LAST[memo_key] = _Memo(memo_key, rows, hashes, np.argsort(hashes, kind="stable"), figures,
                                 (pl[srt], idx[srt], val[srt]))  # fmt: skip
