@@ -340,3 +340,23 @@ def test_long_retracts_run_at_the_plunge_feed_only_within_the_clearance():
     fast = fast[fast > 0]
     assert min(tp.tip[fast, 2].min(), tp.tip[fast - 1, 2].min()) >= 5.0 - 1e-9  # the ball 5 mm over the floor
     assert tp.tip[fast, 0].max() <= 60.0 + 1e-9  # 40 mm from the shelf in plan: far more than 5
+
+
+def test_a_link_stretch_at_the_plunge_feed_between_two_rapids_reads_back_as_a_link(tmp_path):
+    """A split retract (feed near the part, rapid, feed again past a wall, rapid over) written to APT reads
+    back with the same move kinds and passes: feed moves between two rapids, none at the cutting feed, are a
+    link's stretch (retracts), not a pass of their own."""
+    x = np.linspace(0.0, 20.0, 11)
+    cut0 = np.column_stack([x, np.zeros(11), np.zeros(11)])
+    cut1 = np.column_stack([x[::-1], np.full(11, 10.0), np.zeros(11)])
+    tips = np.vstack([[0, 0, 30.0], cut0, [[20, 0, 5], [20, 0, 12], [20, 0, 14], [20, 0, 30], [20, 10, 30],
+                                           [20, 10, 5]], cut1, [[0, 10, 5], [0, 10, 30]]])  # fmt: skip
+    M = Move
+    mv = np.r_[M.RAPID, M.APPROACH, [M.CUT] * 10, M.RETRACT, M.RAPID, M.RETRACT, M.RAPID, M.RAPID, M.RAPID,
+               M.APPROACH, [M.CUT] * 10, M.RETRACT, M.RAPID]  # fmt: skip
+    passes = np.r_[[0] * 18, [1] * 13]
+    tp = ms.ToolPath(tips, np.tile([0.0, 0, 1], (tips.shape[0], 1)), mv, passes, cutter=BallEndMill(6))
+    back = ms.read_apt(ms.write_apt(tmp_path / "split.apt", tp))
+    np.testing.assert_array_equal(back.move, tp.move)
+    cutting = (tp.move == Move.CUT) | (tp.move == Move.APPROACH)  # (a link's rapids open the next pass)
+    np.testing.assert_array_equal(back.pass_index[cutting], tp.pass_index[cutting])

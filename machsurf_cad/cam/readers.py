@@ -227,6 +227,9 @@ def _passes(mv: np.ndarray, fd: np.ndarray) -> np.ndarray:
     pidx = np.zeros(mv.size, np.int64)
     k, cur, seen_feed = 0, 0, False
     n = mv.size
+    f_all = fd[(mv != Move.RAPID) & np.isfinite(fd)]
+    vals, counts = np.unique(f_all, return_counts=True)
+    cutting = vals[counts == counts.max()].max() if vals.size else np.nan  # the file's cutting feed
     while k < n:
         if mv[k] == Move.RAPID:
             if seen_feed:
@@ -239,6 +242,11 @@ def _passes(mv: np.ndarray, fd: np.ndarray) -> np.ndarray:
         while j < n and mv[j] != Move.RAPID:
             j += 1
         run = np.arange(k, j)  # feed moves k..j-1
+        if 0 < k and j < n and np.isfinite(cutting) and np.all(fd[run] != cutting):
+            mv[run] = Move.RETRACT  # between two rapids and none at the cutting feed: a link's stretch near the part
+            pidx[run] = cur
+            k = j
+            continue
         seen_feed = True
         if run.size >= 2 and k > 0 and fd[run[0]] != fd[run[1]]:
             mv[run[0]] = Move.APPROACH
@@ -270,7 +278,9 @@ def read_apt(path: str | Path, *, name: str | None = None) -> ToolPath:
     from the previous one is the retract (our files write them at the plunge feed); inside a
     run, moves at another feed than the cutting one (its interior's most common) are a link
     made at feed: the last, onto a pass, its approach, the others retracts; the rest are cuts.
-    Passes are counted at each rapid that follows feed moves and at each such approach.
+    Passes are counted at each rapid that follows feed moves and at each such approach; feed moves between
+    two rapids none of which is at the file's cutting feed (its most common) are a link's stretch near the
+    part (retracts, no pass).
 
     Parameters
     ----------

@@ -154,19 +154,17 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
 
 
 def _say_rapids(say: Say, rapids: dict | None, info, clearance: float) -> None:
-    """The rapids' line: how many were made feed moves, the least distance the others keep, and the links'
-    lengths at the plunge feed and rapid."""
+    """The links' line: their lengths at the plunge feed (where the whole tool comes within the clearance)
+    and rapid, the rapids slowed and the moves split there, and the least distance the rapids keep."""
     if "n_rapids_at_feed" not in info or not rapids:
         return
     least = info.get("rapid_distance_min_mm")
     keep = "all over the clearance surface" if least is None else f"the least {least:.4g} mm from the part"
-    split = rapids.get("n_links_split", 0)
     say(
-        f"rapids: {info['n_rapids_at_feed']} made at the plunge feed, where the whole tool (holder included) "
-        f"comes within the clearance {clearance:g} mm of the part; the rest rapid, {keep}"
-        + (f"; {split} link move(s) split there" if split else "")
-        + f"; links {rapids['link_length_at_feed_mm']:.4g} mm at the plunge feed, "
-        + f"{rapids['rapid_length_mm']:.4g} mm rapid"
+        f"links: {rapids['link_length_at_feed_mm']:.4g} mm at the plunge feed, where the whole tool (holder "
+        f"included) comes within the clearance {clearance:g} mm of the part ({info['n_rapids_at_feed']} rapid(s) "
+        f"slowed, {rapids.get('n_links_split', 0)} link move(s) split there); {rapids['rapid_length_mm']:.4g} mm "
+        f"rapid, {keep}"
     )
 
 
