@@ -733,3 +733,8 @@ def test_mill3_refuses_faces_the_tool_touches_nowhere_before_planning():
         ms.mill3([floor, lid], "ball:D=6", faces="0", stepover=10.0)
     r = ms.mill3([floor, lid], "ball:D=6", faces="1", stepover=20.0)  # the lid itself is machined
     assert r.verdict == "clean" and r.reach_summary()["reachable_fraction"] > 0.9
+    # a wall standing on the floor: no dropped tool rests on it, but its side reaches it: a waterline runs
+    wall = ms.Face(ms.builders.plane_patch((20, 10, 0), (0, 0, 20), (20, 0, 0)), name="wall")  # faces +y
+    w = ms.mill3([wall, floor], "ball:D=6", faces="0", pattern="waterline", stepdown=5.0)
+    assert w.reach_summary()["touched_fraction"] == 0.0 and w.reach_summary()["reachable_fraction"] > 0.8
+    assert w.verdict == "clean" and w.toolpath.n_cut > 0

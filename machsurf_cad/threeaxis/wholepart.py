@@ -171,7 +171,7 @@ def mill3(
     reach = reachable_area([part[i] for i in both], range(len(machined)), tool, axis=axis)
     for r in reach:
         r["face"] = machined[r["face"]]
-    if reach and not any(r["touched_mm2"] > 0.0 for r in reach):
+    if reach and not any(r["reachable_mm2"] > 0.0 for r in reach):  # (a wall is reached, not touched by a drop)
         raise InputError(
             f"the tool along {list(axis)} touches none of face(s) {', '.join(str(i) for i in machined)}: other "
             "faces stand in front of them: nothing to machine along this axis"
