@@ -723,13 +723,13 @@ def test_hostile_points_equal_the_brute_force_in_both_engines(part, spec, xy):
     assert heights[0] >= bf - 1e-9 and heights[0] - bf < 1e-5  # the brute force: a lower bound within its sampling
 
 
-def test_mill3_refuses_faces_the_tool_touches_nowhere_before_planning():
+def test_mill3_refuses_faces_the_tool_reaches_nowhere_before_planning():
     """A floor under a lid that covers it, machined along +Z: the tool touches none of it (the lid stands in
     front), so there is nothing to machine: one line, before any path is planned (a path over the lid
     would machine the lid, not the face asked for)."""
     floor = ms.Face(ms.builders.plane_patch(), name="floor")  # z = 0, 100 x 100
     lid = ms.Face(ms.builders.plane_patch(origin=(-20, -20, 10.0), du=(140, 0, 0), dv=(0, 140, 0)), name="lid")
-    with pytest.raises(ms.InputError, match="touches none of face\\(s\\) 0: other faces stand in front"):
+    with pytest.raises(ms.InputError, match="reaches none of face\\(s\\) 0: other faces stand in front"):
         ms.mill3([floor, lid], "ball:D=6", faces="0", stepover=10.0)
     r = ms.mill3([floor, lid], "ball:D=6", faces="1", stepover=20.0)  # the lid itself is machined
     assert r.verdict == "clean" and r.reach_summary()["reachable_fraction"] > 0.9

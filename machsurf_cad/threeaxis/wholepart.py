@@ -173,7 +173,7 @@ def mill3(
         r["face"] = machined[r["face"]]
     if reach and not any(r["reachable_mm2"] > 0.0 for r in reach):  # (a wall is reached, not touched by a drop)
         raise InputError(
-            f"the tool along {list(axis)} touches none of face(s) {', '.join(str(i) for i in machined)}: other "
+            f"the tool along {list(axis)} reaches none of face(s) {', '.join(str(i) for i in machined)}: other "
             "faces stand in front of them: nothing to machine along this axis"
         )
     step = 2.0 if stepover is None else float(stepover)
