@@ -526,8 +526,8 @@ def rapids_kept_clear(toolpath: ToolPath, part, cutter, clearance: float, surfac
     info = dict(toolpath.info, n_rapids_at_feed=0, rapid_distance_min_mm=None, n_links_split=0)
     if not k.size:
         return replace(toolpath, info=info)
-    split = fixed  # a turning axis's rapids stay whole (the written path keeps the checked path's positions)
-    pieces = [max(1, math.ceil(np.linalg.norm(X[i] - X[i - 1]) / step)) if split else 1 for i in k]
+    # a turning axis's rapids stay whole (the written path keeps the checked path's positions)
+    pieces = [max(1, math.ceil(np.linalg.norm(X[i] - X[i - 1]) / step)) if fixed else 1 for i in k]
     pts = [X[i - 1] + np.linspace(0.0, 1.0, n + 1)[:, None] * (X[i] - X[i - 1]) for i, n in zip(k, pieces)]
     starts = np.cumsum([0] + [p.shape[0] for p in pts])[:-1]
     P = np.concatenate(pts)
@@ -553,20 +553,14 @@ def _split(tp: ToolPath, k, pts, starts, d, clearance: float):
     feed move that does not cut, :attr:`Move.RETRACT`; an approach's last stretch stays
     :attr:`Move.APPROACH`) and clear (a rapid). Returns the path, the rapids made feed moves (whole or in
     part), the moves split and the distances of the rapid pieces left."""
-    mv = np.asarray(tp.move)
-    tips, axes, moves, owner = [], [], [], []
+    mv = np.asarray(tp.move).copy()
+    at, tips, kinds_in, left = [], [], [], []
     n_slow = n_split = 0
-    left = []
-    last = 0
     for j, i in enumerate(k):
-        tips.append(tp.tip[last:i])
-        axes.append(tp.axis[last:i])
-        moves.append(mv[last:i])
-        owner.append(np.arange(last, i))
         m = pts[j].shape[0] - 1
-        at = d[starts[j] : starts[j] + 1 + m]  # the move's start, then each piece's end
-        slow = (at[1:] < clearance) | (at[:-1] < clearance)
-        left.append(np.minimum(at[1:], at[:-1])[~slow])
+        dist = d[starts[j] : starts[j] + 1 + m]  # the move's start, then each piece's end
+        slow = (dist[1:] < clearance) | (dist[:-1] < clearance)
+        left.append(np.minimum(dist[1:], dist[:-1])[~slow])
         ends = np.r_[np.flatnonzero(slow[1:] != slow[:-1]), m - 1]  # last piece of each run
         kinds = np.where(slow[ends], Move.RETRACT, Move.RAPID)
         if mv[i] == Move.APPROACH:
@@ -575,34 +569,26 @@ def _split(tp: ToolPath, k, pts, starts, d, clearance: float):
             kinds[:] = Move.RETRACT
         n_slow += int(mv[i] == Move.RAPID and slow.any())
         n_split += int(ends.size > 1)
-        tips.append(pts[j][ends + 1])
-        axes.append(np.repeat(tp.axis[i][None], ends.size, axis=0))
-        moves.append(kinds.astype(mv.dtype))
-        owner.append(np.r_[np.full(ends.size - 1, -1), i])
-        last = i + 1
-    tips.append(tp.tip[last:])
-    axes.append(tp.axis[last:])
-    moves.append(mv[last:])
-    owner.append(np.arange(last, tp.n_positions))
-    own = np.concatenate(owner)
-    # an inserted position belongs to the pass and takes the carried values of the move's end position
-    nxt = np.minimum.accumulate(np.where(own >= 0, own, tp.n_positions)[::-1])[::-1]
-    src = np.where(own >= 0, own, nxt)
-    cc = None if tp.cc is None else np.where((own >= 0)[:, None], tp.cc[src], np.nan)
-    feed = None if tp.feed is None else np.where(own >= 0, tp.feed[src], np.nan)
-    extras = {key: _carried(np.asarray(val), src, own >= 0) for key, val in tp.extras.items()}
-    out = ToolPath(np.concatenate(tips), np.concatenate(axes), np.concatenate(moves), tp.pass_index[src], cc, feed,
-                   tp.cutter, tp.name, extras, tp.info)  # fmt: skip
+        at.append(np.full(ends.size - 1, i))  # the runs' ends before the move's own end, inserted before it
+        tips.append(pts[j][ends[:-1] + 1])
+        kinds_in.append(kinds[:-1])
+        mv[i] = kinds[-1]
+    a = np.concatenate(at).astype(np.int64)
+    # an inserted position is a link's: the pass and axis of the move's end, no contact, the default feed
+    out = ToolPath(
+        np.insert(tp.tip, a, np.concatenate(tips), axis=0),
+        np.insert(tp.axis, a, tp.axis[a], axis=0),
+        np.insert(mv, a, np.concatenate(kinds_in).astype(mv.dtype)),
+        np.insert(tp.pass_index, a, tp.pass_index[a]),
+        None if tp.cc is None else np.insert(tp.cc, a, np.nan, axis=0),
+        None if tp.feed is None else np.insert(tp.feed, a, np.nan),
+        tp.cutter,
+        tp.name,
+        {key: np.insert(val, a, -1 if np.issubdtype(val.dtype, np.integer) else np.nan, axis=0)
+         for key, val in tp.extras.items()},
+        tp.info,
+    )  # fmt: skip
     return out, n_slow, n_split, np.concatenate(left) if left else np.empty(0)
-
-
-def _carried(val: np.ndarray, src: np.ndarray, kept: np.ndarray) -> np.ndarray:
-    """A per-position array at the positions ``src``; where not ``kept`` (a link's inserted position) -1
-    for integers and NaN for floats."""
-    out = val[src].copy()
-    if not kept.all():
-        out[~kept] = -1 if np.issubdtype(out.dtype, np.integer) else np.nan
-    return out
 
 
 __all__ = ["link_runs", "rapids_kept_clear", "surface_for"]

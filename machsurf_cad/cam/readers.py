@@ -222,14 +222,18 @@ def _tldata(rest: str, where: str, scale: float) -> list[float]:
     return [d, r, d / 2 - r, r, 0.0, 0.0, h]
 
 
+def _most_common(f: np.ndarray) -> float:
+    """The most common of the feeds ``f`` (a tie to the faster; NaN for none)."""
+    vals, counts = np.unique(f, return_counts=True)
+    return float(vals[counts == counts.max()].max()) if vals.size else math.nan
+
+
 def _passes(mv: np.ndarray, fd: np.ndarray) -> np.ndarray:
     """Pass index per position (a new pass at each rapid after feed moves); approach and retract marked."""
     pidx = np.zeros(mv.size, np.int64)
     k, cur, seen_feed = 0, 0, False
     n = mv.size
-    f_all = fd[(mv != Move.RAPID) & np.isfinite(fd)]
-    vals, counts = np.unique(f_all, return_counts=True)
-    cutting = vals[counts == counts.max()].max() if vals.size else np.nan  # the file's cutting feed
+    cutting = _most_common(fd[(mv != Move.RAPID) & np.isfinite(fd)])  # the file's cutting feed
     while k < n:
         if mv[k] == Move.RAPID:
             if seen_feed:
@@ -256,10 +260,8 @@ def _passes(mv: np.ndarray, fd: np.ndarray) -> np.ndarray:
         # onto the next pass, is its approach (a new pass after cutting), the others retracts
         new = np.zeros(run.size, np.int64)
         f = fd[run]
-        vals, counts = np.unique(f[1:-1], return_counts=True)  # the cutting feed: the interior's most common
         if run.size >= 3 and np.unique(f).size >= 2 and np.isfinite(f).all():
-            cut_feed = vals[counts == counts.max()].max()  # a tie to the faster
-            cut = f == cut_feed
+            cut = f == _most_common(f[1:-1])  # the cutting feed: the interior's most common
             for i in np.flatnonzero(~cut):
                 onto = i + 1 < run.size and cut[i + 1]
                 mv[run[i]] = Move.APPROACH if onto else Move.RETRACT

@@ -119,7 +119,7 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
         _draw_check(st, tp, pc.check, rep, tolerance)
     if pc.toolpath is not None:
         write_toolpath(st, pc.toolpath, spec, stem)
-        _say_rapids(say, rep.get("rapids"), pc.toolpath.info, pc.link_clearance)
+        _say_rapids(say, rep.get("rapids"), "n_rapids_at_feed" in pc.toolpath.info)
     if pc.verdict == "trimmed":
         cut, again = pc.toolpath, pc.recheck
         assert cut is not None and again is not None
@@ -153,18 +153,19 @@ def _write_checked(st: Staging, say: Say, tp, faces, spec, *, tolerance: float, 
     return rep, (EXIT_TOLERANCE if pc.toolpath is None else EXIT_OK), pc.toolpath
 
 
-def _say_rapids(say: Say, rapids: dict | None, info, clearance: float) -> None:
-    """The links' line: their lengths at the plunge feed (where the whole tool comes within the clearance)
-    and rapid, the rapids slowed and the moves split there, and the least distance the rapids keep."""
-    if "n_rapids_at_feed" not in info or not rapids:
+def _say_rapids(say: Say, rapids: dict | None, measured: bool) -> None:
+    """The links' line from the report's ``rapids`` (when the written path's rapids were ``measured``):
+    their lengths at the plunge feed (where the whole tool comes within the clearance) and rapid, the rapids
+    slowed and the moves split there, and the least distance the rapids keep."""
+    if not (measured and rapids):
         return
-    least = info.get("rapid_distance_min_mm")
+    least = rapids["rapid_distance_min_mm"]
     keep = "all over the clearance surface" if least is None else f"the least {least:.4g} mm from the part"
     say(
         f"links: {rapids['link_length_at_feed_mm']:.4g} mm at the plunge feed, where the whole tool (holder "
-        f"included) comes within the clearance {clearance:g} mm of the part ({info['n_rapids_at_feed']} rapid(s) "
-        f"slowed, {rapids.get('n_links_split', 0)} link move(s) split there); {rapids['rapid_length_mm']:.4g} mm "
-        f"rapid, {keep}"
+        f"included) comes within the clearance {rapids['clearance_mm']:g} mm of the part "
+        f"({rapids['n_rapids_at_feed']} rapid(s) slowed, {rapids['n_links_split']} link move(s) split there); "
+        f"{rapids['rapid_length_mm']:.4g} mm rapid, {keep}"
     )
 
 

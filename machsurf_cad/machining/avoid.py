@@ -164,13 +164,10 @@ def clear_axis_field(
     raw = axes.copy()
     lead_min = 0.0 if ball else lead
     max_turn = min(max_turn, 0.5 * np.degrees(1.0 / cutter.D))  # S2 is D up the axis: 1 / D rad/mm folds it
-    smooth, not_clear = _smoothed(
+    smooth, not_clear, turn, own = _smoothed(
         face, cutter, feed, raw, nominal_axes, choice, inside, check_faces, gouge_tolerance, us, vs,
         (max_turn, lead_min, max_lead, limit),
     )  # fmt: skip
-    points = face.surface.derivatives_grid(us, vs, 0).point
-    turn = _turn_max(smooth, points, inside & (choice >= 0))
-    own = _turn_max(nominal_axes, points, inside & (choice >= 0))  # the bound where the face turns it faster
     change = _angle_deg(smooth, nominal_axes)[inside]
     tilted = inside & (choice > 0)
     nowhere = inside & (choice < 0)
@@ -240,7 +237,8 @@ def _smoothed(face, cutter, feed, raw, nominal, choice, inside, check_faces, gou
     The field is blurred further where it still turns faster than ``rate``, or than the nominal axes where the
     face is curved tighter (tilted regions leaning different ways meeting); the points no orientation clears,
     cut out of the path, do not count. The smoothed placements of the lattice points that had a clear
-    orientation are checked again."""
+    orientation are checked again. Returns the smoothed axes, the lattice points they do not clear, their
+    largest turn and the nominal axes' (degrees per mm)."""
     from scipy.ndimage import distance_transform_edt, gaussian_filter
 
     from .autolead import lipschitz_envelope
@@ -267,7 +265,8 @@ def _smoothed(face, cutter, feed, raw, nominal, choice, inside, check_faces, gou
         direction /= np.maximum(np.linalg.norm(direction, axis=-1, keepdims=True), 1e-12)
         w = w_nom + env[..., None] * direction
     kept = inside & (choice >= 0)  # the points no orientation clears are cut out: their turn does not count
-    bound = max(rate, _turn_max(nominal, frame.point, kept))  # a face curved tighter turns the nominal faster
+    own = _turn_max(nominal, frame.point, kept)
+    bound = max(rate, own)  # a face curved tighter turns the nominal faster
     for _ in range(40):  # where tilted regions leaning different ways meet: blurred until the turn is in bound
         m = np.linalg.norm(w, axis=-1)
         scale = np.clip(m, lo, hi) / np.maximum(m, 1e-300)
@@ -284,7 +283,7 @@ def _smoothed(face, cutter, feed, raw, nominal, choice, inside, check_faces, gou
 
     A = axes[idx[:, 0], idx[:, 1]]
     ok = _clear(check_faces, cutter, tips[idx[:, 0], idx[:, 1]], A, gouge_tolerance) & ~beyond(A, limits[3])
-    return smooth, int((~ok).sum())
+    return smooth, int((~ok).sum()), _turn_max(smooth, frame.point, kept), own
 
 
 def _turn_max(axes, points, inside) -> float:
