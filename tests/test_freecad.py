@@ -65,28 +65,39 @@ def _home(tmp_path):
 
 
 def _run(cmd, tmp_path, script, timeout=600, **extra_env):
+    """``script`` run by FreeCAD (``cmd``) with its own $HOME; its result dict (``ok`` asserted). A script that
+    has not finished 30 s before ``timeout`` dumps every thread's Python stack (fcscript's watchdog) and exits:
+    the failure then says where it stood, and what FreeCAD printed."""
     assert None not in cmd, f"missing program in {cmd} (CI installs freecad and xvfb)"
     out = tmp_path / "result.json"
+    hang = tmp_path / "hang_traceback.txt"
     env = dict(
         os.environ,
         HOME=str(_home(tmp_path)),
         MACHSURF_FC_OUT=str(out),
         MACHSURF_ROOT=str(ROOT),
+        MACHSURF_FC_WATCHDOG_S=str(max(timeout - 30, 10)),
         QTWEBENGINE_DISABLE_SANDBOX="1",
         NUMBA_CACHE_DIR=str(NUMBA_CACHE),
         **extra_env,
     )
     env.pop("PYTHONPATH", None)  # FreeCAD's Python must not pick up the venv's packages
-    subprocess.run(
-        cmd + [str(ROOT / "tests" / "freecad" / script)],
-        cwd=tmp_path,
-        env=env,
-        timeout=timeout,
-        stdin=subprocess.DEVNULL,
-        capture_output=True,
-        text=True,
-    )
-    assert out.is_file(), "the FreeCAD script wrote no result"
+    try:
+        proc = subprocess.run(
+            cmd + [str(ROOT / "tests" / "freecad" / script)],
+            cwd=tmp_path,
+            env=env,
+            timeout=timeout,
+            stdin=subprocess.DEVNULL,
+            capture_output=True,
+            text=True,
+        )
+        printed = (proc.stdout or "")[-2000:] + (proc.stderr or "")[-2000:]
+    except subprocess.TimeoutExpired as e:
+        printed = f"timed out after {timeout} s; " + str(e.stderr or "")[-2000:]
+    if not out.is_file():
+        stacks = hang.read_text()[-6000:] if hang.is_file() else "(no watchdog dump)"
+        pytest.fail(f"the FreeCAD script wrote no result; its threads' stacks:\n{stacks}\nprinted:\n{printed}")
     res = json.loads(out.read_text())
     assert res["ok"], res.get("error")
     return res

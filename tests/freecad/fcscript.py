@@ -16,6 +16,11 @@ def run(main) -> None:
     """``main(result)`` with ``result`` a dict (``ok`` set when main returns, the traceback when it raises),
     written as JSON to MACHSURF_FC_OUT; then FreeCAD exits."""
     result = {"ok": False}
+    limit = float(os.environ.get("MACHSURF_FC_WATCHDOG_S", "0") or 0)
+    if limit > 0:  # a hang ends with every thread's stack in hang_traceback.txt (the test prints it)
+        import faulthandler
+
+        faulthandler.dump_traceback_later(limit, exit=True, file=open(out_file("hang_traceback.txt"), "w"))
     try:
         main(result)
         result["ok"] = True
