@@ -23,7 +23,12 @@ from ._jit_solve import ON_CIRCLE, edge_search, enters_face, face_newton, into_d
 
 FACE, RIM, EDGE, TIP, SAMPLE = 1, 2, 3, 4, 5
 
-KERNEL_SOURCES = "ae5367f25275c2a6"
+BOUND_TIE = 1e-10
+"""Phase 2 solves a seed only when its group's bound is above the best height by more than this (mm): a bound
+that only ties the best (a flat end on a horizontal floor: the floor's edges and rim at the floor's height)
+cannot raise it by more (the numpy path's ``_BOUND_TIE_MM``)."""
+
+KERNEL_SOURCES = "6696cebe1be43090"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 
@@ -38,6 +43,13 @@ def _add(best, bp, g, kind, f, x, y, z, e=-1):
     if best[4] == 0.0 or rank > best[0]:
         best[0], best[1], best[2], best[3], best[4], best[5] = rank, g, kind, f, 1.0, e
         bp[0], bp[1], bp[2] = x, y, z
+
+
+@njit(cache=True, inline="always")
+def _beats(best, g):
+    """Whether a solved contact of value ``g`` would enter ``best`` (:func:`_add`): the trimming and circle
+    tests of a contact that cannot are skipped."""
+    return isfin(g) and (best[4] == 0.0 or g > best[0])
 
 
 @njit(cache=True)
@@ -58,17 +70,17 @@ def _solve(kind, j, cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk):
         for s in range(n_starts):
             us, vs = (ua, va) if s == 0 else into_disc(S, sp, R, cx, cy, f, u0, v0, W, True)
             u, v, g = face_newton(S, PR, sp, cx, cy, f, us, vs, W)
-            if isfin(g) and inside(S, T, f, u, v) and enters_face(S, T, R, cx, cy, f, u, v, W):
+            if _beats(best, g) and inside(S, T, f, u, v) and enters_face(S, T, R, cx, cy, f, u, v, W):
                 _add(best, bp, g, FACE, f, D[0, 0], D[0, 1], D[0, 2])
         u0, v0 = ua, va
         if K[4] > 0:
             u, v, ok = tip_solve(S, cx, cy, f, u0, v0, W)
             g = D[0, 2] - K[7]
-            if ok and inside(S, T, f, u, v):
+            if ok and _beats(best, g) and inside(S, T, f, u, v):
                 _add(best, bp, g, TIP, f, D[0, 0], D[0, 1], D[0, 2])
     elif kind == RIM:
         u, v, g = rim_ascent(S, sp, rk, hk, cx, cy, f, u0, v0, W)
-        if isfin(g) and inside(S, T, f, u, v) and enters_face(S, T, R, cx, cy, f, u, v, W):
+        if _beats(best, g) and inside(S, T, f, u, v) and enters_face(S, T, R, cx, cy, f, u, v, W):
             _add(best, bp, g, RIM, f, D[0, 0], D[0, 1], D[0, 2])
     else:
         k = j - SM[3]
@@ -295,7 +307,7 @@ def _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk,
     is_seed, rseed, eseed = seeds
     fb, rb, eb = bounds
     m = idx.shape[0]
-    low = best[1] - 1e-9 if best[4] > 0 else -math.inf
+    low = best[1] + BOUND_TIE if best[4] > 0 else -math.inf
     solved = best[4] > 0 and best[2] == FACE
     c_face = best[3]
     p1x, p1y, p1z = bp[0], bp[1], bp[2]
@@ -303,26 +315,26 @@ def _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk,
     tb = np.empty(3 * m)
     nt = 0
     for k in range(m):
-        if is_seed[k] and k != f1 and fb[gk[k]] >= low:
+        if is_seed[k] and k != f1 and fb[gk[k]] > low:
             j = idx[k]
             own = solved and pf[j] == c_face
             own = own and norm3(xyz[j, 0] - p1x, xyz[j, 1] - p1y, xyz[j, 2] - p1z) <= 2 * cov[j]
             if not own:
                 tk[nt], tb[nt] = k, fb[gk[k]]
                 nt += 1
-        if rseed[k] and k != r1 and rb[gk[k]] >= low:
+        if rseed[k] and k != r1 and rb[gk[k]] > low:
             tk[nt], tb[nt] = m + k, rb[gk[k]]
             nt += 1
-        if eseed[k] and eb[ek[k]] >= low:
+        if eseed[k] and eb[ek[k]] > low:
             tk[nt], tb[nt] = 2 * m + k, eb[ek[k]]
             nt += 1
     for i in np.argsort(-tb[:nt], kind="mergesort"):
-        if best[4] > 0 and tb[i] < best[1] - 1e-9:
+        if best[4] > 0 and tb[i] <= best[1] + BOUND_TIE:
             break
         kind, k = FACE + tk[i] // m, tk[i] % m
         if kind != EDGE and best[4] > 0 and K[9] > 0:
-            low = best[1] - 1e-9
-            if _group_cells(gk[k], kind - FACE, low, cx, cy, idx, rr, gk, PR, SM, K, CB) < low:
+            low = best[1] + BOUND_TIE
+            if _group_cells(gk[k], kind - FACE, low, cx, cy, idx, rr, gk, PR, SM, K, CB) <= low:
                 continue
         _solve(kind, idx[k], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
 

@@ -16,7 +16,7 @@ from numba import njit, prange
 
 from ._jit_geom import clamp_uv, edge_derivs, hyp, inside, isfin, nmax, nmin, norm3, nsign, prof, surf
 
-ON_CIRCLE, PROBE_MM, PROBE_DIRECTIONS, PROBE_DROP = 1e-9, 1e-3, 16, 1e-12  # as in solves
+ON_CIRCLE, PROBE_MM, PROBE_DIRECTIONS, PROBE_DROP, ON_CIRCLE_MM = 1e-9, 1e-3, 16, 1e-12, 1e-12  # as in solves
 
 
 @njit(cache=True)
@@ -173,6 +173,8 @@ def face_newton(S, PR, sp, cx, cy, f, u, v, W, iters=40):
             escape = quad > abs(gu * au + gv * av) * k
             if escape:
                 du, dv = eu, ev
+        if du == 0.0 and dv == 0.0:  # a zero gradient and no upward curvature: every later step is this one
+            break
         shrink = nmin(1.0, radius / nmax(_tan_len(D, du, dv), 1e-300))
         nu, nv = clamp_uv(S, f, u + du * shrink, v + dv * shrink)
         surf(S, f, nu, nv, 2, Dn, wk)
@@ -207,6 +209,8 @@ def project_circle(S, sp, R, cx, cy, f, u, v, n, W):
         surf(S, f, u, v, 1, D, wk)
         dx, dy = D[0, 0] - cx, D[0, 1] - cy
         rho = hyp(dx, dy)
+        if abs(R - rho) <= ON_CIRCLE_MM * nmax(R, 1.0):  # on the circle: the further steps would not move
+            break
         ru = (dx * D[1, 0] + dy * D[1, 1]) / nmax(rho, 1e-300)
         rv = (dx * D[2, 0] + dy * D[2, 1]) / nmax(rho, 1e-300)
         n2 = ru * ru + rv * rv

@@ -382,11 +382,11 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     _solve(fs, prof, C, cand, qi[f1], sj[f1], "face")
     _solve(fs, prof, C, cand, qi[r1], sj[r1], "rim")
     h1, k1, c_face, p1 = cand.best(m)
-    low = np.nan_to_num(h1, nan=-np.inf) - 1e-9
+    low = np.nan_to_num(h1, nan=-np.inf) + _BOUND_TIE_MM
     solved = k1 == Contact.FACE
-    # phase 2: the seeds whose group can still beat the contact found
+    # phase 2: the seeds whose group can still beat the contact found (by more than a tie)
     f2 = f_seed[~np.isin(f_seed, f1)]
-    f2 = f2[bound_of(f2) >= low[qi[f2]]]
+    f2 = f2[bound_of(f2) > low[qi[f2]]]
     own = solved[qi[f2]] & (fid_all[f2] == c_face[qi[f2]])
     own &= np.linalg.norm(xyz[f2] - p1[qi[f2]], axis=1) <= 2 * cover[f2]
     f2 = f2[~own]
@@ -394,8 +394,8 @@ def _drop_chunk(fs: FaceSet, prof: _Profile, C: np.ndarray):
     rim_ub = np.where(np.abs(rho - prof.R) <= cover, xyz[:, 2] + fs.rise[sj] - prof.h_R, -np.inf)
     rb_keys, rb = group_max(fkey, rim_ub, np.arange(qi.size))
     r2 = r_seed[~np.isin(r_seed, r1)]
-    r2 = r2[rb[np.searchsorted(rb_keys, fkey[r2])] >= low[qi[r2]]]
-    e2 = e_seed[eb[np.searchsorted(eb_keys, ekey[e_seed])] >= low[qi[e_seed]]]
+    r2 = r2[rb[np.searchsorted(rb_keys, fkey[r2])] > low[qi[r2]]]
+    e2 = e_seed[eb[np.searchsorted(eb_keys, ekey[e_seed])] > low[qi[e_seed]]]
     _solve(fs, prof, C, cand, qi[f2], sj[f2], "face")
     _solve(fs, prof, C, cand, qi[r2], sj[r2], "rim")
     _solve(fs, prof, C, cand, qi[e2], sj[e2], "edge")
@@ -482,6 +482,9 @@ def _kink_solves(fs, prof, C, cand, pairs, fkey, cover, low) -> None:
 
 _EXTRA_ROUNDS = 4
 _BOUND_MARGIN_MM = 1e-7
+_BOUND_TIE_MM = 1e-10
+"""Phase 2 solves a seed only when its group's bound is above the best height by more than this: a bound that
+ties it (a flat end on a horizontal floor: the floor's edges and rim at its height) cannot raise it more."""
 
 
 def default_seed_spacing(cutter) -> float:

@@ -235,6 +235,8 @@ def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
         _put([u, v, g, gu, gv, *D, *H], idx[ok], [nu, nv, gn, gun, gvn, *Dn, *Hn], ok)
         radius[idx] = np.where(ok, np.maximum(radius[idx], 2 * moved), 0.25 * radius[idx])
         done = (ok & (moved < 1e-11)) | (rises & newton & (moved == 0)) | (~ok & (radius[idx] < 1e-12))
+        # a zero step (zero gradient, no upward curvature: a horizontal plane under a flat end) repeats itself
+        done |= (du == 0) & (dv == 0)
         active[idx[done]] = False
     return u, v, g, D[0]
 
@@ -260,6 +262,7 @@ def _project_circle(fs, R, c, fid, u, v, n: int = 4):
         rv = np.einsum("ij,ij->i", d, Sv[:, :2]) / np.maximum(rho, 1e-300)
         n2 = ru * ru + rv * rv
         t = np.where(n2 > 1e-300, (R - rho) / np.where(n2 > 1e-300, n2, 1.0), 0.0)
+        t = np.where(np.abs(R - rho) <= _ON_CIRCLE_MM * max(R, 1.0), 0.0, t)  # on the circle: stays there
         step = np.linalg.norm(Su * (t * ru)[:, None] + Sv * (t * rv)[:, None], axis=1)
         shrink = np.minimum(1.0, fs.spacing / np.maximum(step, 1e-300))
         shrink = np.where(np.isfinite(shrink), shrink, 0.0)
@@ -499,6 +502,9 @@ def _edge_from(fs, prof, c, eid, ts, g_s, k, iters: int):
 _ON_CIRCLE = 1e-9
 """A contact within this (relative to R) of the tool's circle is on it: it counts only where the part enters the
 open disc next to it (:func:`_enters_face`, :func:`_enters_edge`)."""
+_ON_CIRCLE_MM = 1e-12
+"""A projection onto a circle of radius R stops within this times max(R, 1 mm) of it (its further Newton steps
+would move the point by less than rounding in the coordinates)."""
 _PROBE_MM = 1e-3
 _PROBE_DIRECTIONS = 16
 _PROBE_DROP = 1e-12
