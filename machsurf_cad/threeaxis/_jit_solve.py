@@ -203,14 +203,15 @@ def face_newton(S, PR, sp, cx, cy, f, u, v, W, iters=40):
 
 @njit(cache=True)
 def project_circle(S, sp, R, cx, cy, f, u, v, n, W):
-    """``_project_circle``: minimum-norm Newton steps onto ``rho = R``."""
+    """``_project_circle``: minimum-norm Newton steps onto ``rho = R``; returns ``u, v`` and whether it stopped
+    on the circle (then ``W[0]`` holds the point and its first derivatives there)."""
     D, wk = W[0], W[5]
     for _ in range(n):
         surf(S, f, u, v, 1, D, wk)
         dx, dy = D[0, 0] - cx, D[0, 1] - cy
         rho = hyp(dx, dy)
         if abs(R - rho) <= ON_CIRCLE_MM * nmax(R, 1.0):  # on the circle: the further steps would not move
-            break
+            return u, v, True
         ru = (dx * D[1, 0] + dy * D[1, 1]) / nmax(rho, 1e-300)
         rv = (dx * D[2, 0] + dy * D[2, 1]) / nmax(rho, 1e-300)
         n2 = ru * ru + rv * rv
@@ -219,7 +220,7 @@ def project_circle(S, sp, R, cx, cy, f, u, v, n, W):
         if not isfin(shrink):
             shrink = 0.0
         u, v = clamp_uv(S, f, u + t * ru * shrink, v + t * rv * shrink)
-    return u, v
+    return u, v, False
 
 
 @njit(cache=True)
@@ -229,7 +230,7 @@ def into_disc(S, sp, R, cx, cy, f, u, v, W, deeper, iters=16):
     D, wk = W[0], W[5]
     target = R * (1 - 1e-3)
     stop = target * (1 - 1e-6) if deeper else target * (1 + 1e-9)
-    u, v = project_circle(S, sp, target, cx, cy, f, u, v, 6, W)
+    u, v, _ = project_circle(S, sp, target, cx, cy, f, u, v, 6, W)
     for _ in range(iters):
         surf(S, f, u, v, 1, D, wk)
         dx, dy = D[0, 0] - cx, D[0, 1] - cy
@@ -268,10 +269,12 @@ def rim_ascent(S, sp, R, h_R, cx, cy, f, u, v, W, iters=40):
     (``-inf`` when it is not on the circle), the point in ``W[0][0]``."""
     D, wk = W[0], W[5]
     tol = 1e-9 * max(R, 1.0)
-    u, v = project_circle(S, sp, R, cx, cy, f, u, v, 6, W)
-    surf(S, f, u, v, 0, D, wk)
+    u, v, on = project_circle(S, sp, R, cx, cy, f, u, v, 6, W)
+    if not on:  # else W[0] holds the point already (the same numbers)
+        surf(S, f, u, v, 0, D, wk)
     z = D[0, 2] if abs(hyp(D[0, 0] - cx, D[0, 1] - cy) - R) <= tol else -math.inf
     radius = 0.5 * sp
+    current = True
     for _ in range(iters):
         surf(S, f, u, v, 2, D, wk)
         pax, pay, paz = D[0, 0], D[0, 1], D[0, 2]
@@ -297,12 +300,14 @@ def rim_ascent(S, sp, R, h_R, cx, cy, f, u, v, W, iters=40):
         if not isfin(s):
             s = 0.0
         nu, nv = clamp_uv(S, f, u + s * tu, v + s * tv)
-        nu, nv = project_circle(S, sp, R, cx, cy, f, nu, nv, 3, W)
-        surf(S, f, nu, nv, 0, D, wk)
+        nu, nv, on = project_circle(S, sp, R, cx, cy, f, nu, nv, 3, W)
+        if not on:
+            surf(S, f, nu, nv, 0, D, wk)
         on = abs(hyp(D[0, 0] - cx, D[0, 1] - cy) - R) <= tol
         zn = D[0, 2] if on else -math.inf
         acc = isfin(zn) and zn >= z - 1e-13 * (1 + abs(z))
         moved = norm3(D[0, 0] - pax, D[0, 1] - pay, D[0, 2] - paz)
+        current = acc  # W[0] holds the point (u, v) after an accepted step
         if acc:
             u, v, z = nu, nv, zn
             radius = nmax(radius, 2 * moved)
@@ -310,7 +315,8 @@ def rim_ascent(S, sp, R, h_R, cx, cy, f, u, v, W, iters=40):
             radius = 0.25 * radius
         if (acc and moved < 1e-11) or (not acc and radius < 1e-12):
             break
-    surf(S, f, u, v, 0, D, wk)
+    if not current:
+        surf(S, f, u, v, 0, D, wk)
     return u, v, (z - h_R) if isfin(z) else -math.inf
 
 
