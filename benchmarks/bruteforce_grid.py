@@ -1,9 +1,10 @@
-"""The ball drop-cutter against an independent reference on 200 x 200 grids (issue 27): per part, the
-largest difference of the heights from the reference's (``tests/ball_reference.py``: dense samples refined
-on the exact faces and edges), over all points and over the points within 1 mm in plan of a trimming edge
+"""The drop-cutter against an independent reference on 200 x 200 grids (issue 27): per part, the largest
+difference of the heights from the reference's (``tests/ball_reference.py`` for the ball,
+``tests/profile_reference.py`` for the flat and the bull-nose: dense samples refined on the exact faces, the
+tool's rim and the edges), over all points and over the points within 1 mm in plan of a trimming edge
 counted apart, with both times.
 
-    python -m benchmarks.bruteforce_grid [--n 200] [--D 10] [--spacing 0.15] [PART.step ...]
+    python -m benchmarks.bruteforce_grid [--n 200] [--tool ball:D=10] [--spacing 0.15] [PART.step ...]
 
 The example parts by default; ../shared/real-parts files when named.
 """
@@ -21,31 +22,38 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def grid_row(path: Path, n: int, D: float, spacing: float = 0.15) -> dict:
+def grid_row(path: Path, n: int, tool: str = "ball:D=10", spacing: float = 0.15) -> dict:
     sys.path.insert(0, str(ROOT / "tests"))
     from ball_reference import BallReference
+    from profile_reference import ProfileReference
 
     import machsurf_cad as ms
     from machsurf_cad.occ import read_step_faces
 
     faces = read_step_faces(path)
+    cutter = ms.parse_cutter(tool)
+    kind = type(cutter).__name__
+    if kind not in ("BallEndMill", "FlatEndMill", "BullNoseEndMill"):
+        raise SystemExit(f"the references cover ball, flat and bull end mills, not {tool}")
     t = time.perf_counter()
-    ref = BallReference(faces, spacing=spacing)
+    ref = BallReference(faces, spacing=spacing) if kind == "BallEndMill" else ProfileReference(faces, spacing=spacing)
     t_sample = time.perf_counter() - t
     lo, hi = ref.P[:, :2].min(axis=0), ref.P[:, :2].max(axis=0)
     X, Y = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n), indexing="ij")
     xy = np.column_stack([X.ravel(), Y.ravel()])
     t = time.perf_counter()
-    bf = ref.heights(xy, D / 2)
+    R = cutter.radius
+    bf = ref.heights(xy, R) if kind == "BallEndMill" else ref.heights(xy, R, getattr(cutter, "corner_radius", 0.0))
     t_ref = time.perf_counter() - t
     t = time.perf_counter()
-    dc = ms.drop_cutter(faces, ms.BallEndMill(D), xy).height
+    dc = ms.drop_cutter(faces, cutter, xy).height
     t_dc = time.perf_counter() - t
     both = np.isfinite(bf) & np.isfinite(dc)
     near_trim = ref.etree.query(xy)[0] <= 1.0
     diff = dc - bf
     row = {
         "part": path.name,
+        "tool": cutter.spec(),
         "faces": len(faces),
         "points": int(xy.shape[0]),
         "points_with_height": int(both.sum()),
@@ -71,13 +79,13 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m benchmarks.bruteforce_grid")
     ap.add_argument("parts", nargs="*")
     ap.add_argument("--n", type=int, default=200)
-    ap.add_argument("--D", type=float, default=10.0)
+    ap.add_argument("--tool", default="ball:D=10", help="ball, flat or bull (e.g. bull:D=10,r=2)")
     ap.add_argument("--spacing", type=float, default=0.15, help="the reference's face samples, mm")
     args = ap.parse_args(argv)
     parts = [Path(p) for p in args.parts] or [ROOT / "example_parts" / f for f in ("freeform_block.step",
                                                                                  "mould_insert.step")]  # fmt: skip
     for p in parts:
-        print(json.dumps(grid_row(p, args.n, args.D, args.spacing)), flush=True)
+        print(json.dumps(grid_row(p, args.n, args.tool, args.spacing)), flush=True)
     return 0
 
 
