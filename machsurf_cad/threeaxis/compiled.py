@@ -189,7 +189,14 @@ def _profile(prof):
             raise TypeError(f"profile segment {type(seg).__name__} is not supported by the compiled kernel")
     consts = np.array([prof.R, prof.h_R, prof.h_min, 1.0 if prof.monotone else 0.0])
     segs = np.array(rows, float).reshape(-1, 6)
-    return segs, consts, _pieces(segs, prof.R)
+    return segs, consts, _pieces_of(segs.tobytes(), segs.shape[0], float(prof.R))
+
+
+@lru_cache(maxsize=32)
+def _pieces_of(key: bytes, n: int, R: float) -> np.ndarray:
+    """:func:`_pieces` of the segments whose bits are ``key``, once per cutter and process (4.5 ms a call: a
+    raster's 95 drop-cutter calls spent 0.43 s on it). The kernel only reads it."""
+    return _pieces(np.frombuffer(key, float).reshape(n, 6).copy(), R)
 
 
 def _pieces(segs: np.ndarray, R: float) -> np.ndarray:
