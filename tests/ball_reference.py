@@ -58,6 +58,20 @@ def _creases(face):
     return out
 
 
+def chunks(tree, etree, xy, R: float, chunk: int, pairs: int) -> list[tuple[int, int]]:
+    """``(start, end)`` runs of the plan points ``xy`` of at most ``chunk`` points and about ``pairs`` point-sample
+    pairs within ``R`` (the face samples' ``tree`` and the edge samples' ``etree``)."""
+    n = np.asarray(tree.query_ball_point(xy, R, return_length=True), float)
+    n += np.asarray(etree.query_ball_point(xy, R, return_length=True), float)
+    starts, total = [0], 0.0
+    for k, c in enumerate(n.tolist()):
+        if k > starts[-1] and (total + c > pairs or k - starts[-1] >= chunk):
+            starts.append(k)
+            total = 0.0
+        total += c
+    return list(zip(starts, starts[1:] + [xy.shape[0]]))
+
+
 class BallReference:
     """The part sampled once; :meth:`heights` for any grid of plan points."""
 
@@ -186,15 +200,7 @@ class BallReference:
         samples under one point in plan)."""
         xy = np.asarray(xy, float).reshape(-1, 2)
         out = np.full(xy.shape[0], -np.inf)
-        n = np.asarray(self.tree.query_ball_point(xy, R, return_length=True), float)
-        n += np.asarray(self.etree.query_ball_point(xy, R, return_length=True), float)
-        starts, total = [0], 0.0
-        for k, c in enumerate(n.tolist()):
-            if k > starts[-1] and (total + c > pairs or k - starts[-1] >= chunk):
-                starts.append(k)
-                total = 0.0
-            total += c
-        for a, b in zip(starts, starts[1:] + [xy.shape[0]]):
+        for a, b in chunks(self.tree, self.etree, xy, R, chunk, pairs):
             q = xy[a:b]
             h = np.full(q.shape[0], -np.inf)
             qi, si, val = self._best(self.tree, self.P, self.F, q, R)

@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from ball_reference import _creases, _edges
+from ball_reference import _creases, _edges, chunks
 from helpers import trimmed_grid
 from scipy.spatial import cKDTree
 
@@ -283,15 +283,7 @@ class ProfileReference:
             raise ValueError(f"need 0 <= r < R, got R = {R}, r = {r}")
         xy = np.asarray(xy, float).reshape(-1, 2)
         out = np.full(xy.shape[0], -np.inf)
-        n = np.asarray(self.tree.query_ball_point(xy, R, return_length=True), float)
-        n += np.asarray(self.etree.query_ball_point(xy, R, return_length=True), float)
-        starts, total = [0], 0.0
-        for k, c in enumerate(n.tolist()):
-            if k > starts[-1] and (total + c > pairs or k - starts[-1] >= chunk):
-                starts.append(k)
-                total = 0.0
-            total += c
-        for a, b in zip(starts, starts[1:] + [xy.shape[0]]):
+        for a, b in chunks(self.tree, self.etree, xy, R, chunk, pairs):
             out[a:b] = self._chunk(xy[a:b], float(R), float(r))
         return np.where(np.isfinite(out), out, np.nan)
 
