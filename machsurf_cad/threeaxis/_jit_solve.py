@@ -137,6 +137,43 @@ def _copy(dst, src):
             dst[i, d] = src[i, d]
 
 
+@njit(cache=True, inline="always")
+def _ascent_step(D, gu, gv, Huu, Huv, Hvv, radius, at_u, at_v):
+    """The face ascent's step (``_ascent_step``): Newton where ``-H`` is positive definite, else steepest ascent
+    on the surface as long as the trust radius, or along the largest upward curvature where that gains more;
+    with ``u`` (``at_u``) or ``v`` (``at_v``) held, along the other parameter only."""
+    if at_u:
+        gu, Huv, Huu = 0.0, 0.0, -(1.0 + abs(Hvv))
+    elif at_v:
+        gv, Huv, Hvv = 0.0, 0.0, -(1.0 + abs(Huu))
+    a, b, d_ = -Huu, -Huv, -Hvv
+    det = a * d_ - b * b
+    newton = (a > 0) and (det > 1e-14 * (a * a + d_ * d_ + b * b))
+    du = dv = eu = ev = 0.0
+    if newton:
+        du = (d_ * gu - b * gv) / det
+        dv = (-b * gu + a * gv) / det
+    E = D[1, 0] ** 2 + D[1, 1] ** 2 + D[1, 2] ** 2
+    F = 0.0 if at_u or at_v else D[1, 0] * D[2, 0] + D[1, 1] * D[2, 1] + D[1, 2] * D[2, 2]
+    G = D[2, 0] ** 2 + D[2, 1] ** 2 + D[2, 2] ** 2
+    dg = E * G - F * F
+    regular = (dg > 1e-10 * E * G) and (min(E, G) > 1e-14 * max(E, G))
+    if regular:
+        au, av = (G * gu - F * gv) / dg, (-F * gu + E * gv) / dg
+    else:
+        au, av = gu, gv
+    k = radius / nmax(_tan_len(D, au, av), 1e-300)
+    if not newton:
+        du, dv = au * k, av * k
+    escape = False
+    if not newton:
+        eu, ev, quad = _up_curvature(Huu, Huv, Hvv, D, radius)
+        escape = quad > abs(gu * au + gv * av) * k
+        if escape:
+            du, dv = eu, ev
+    return du, dv, newton, escape, eu, ev
+
+
 @njit(cache=True)
 def face_newton(S, PR, sp, cx, cy, f, u, v, W, iters=40):
     """``_face_newton`` on one start: returns ``u, v, g`` with the point in ``W[0][0]``."""
@@ -147,32 +184,23 @@ def face_newton(S, PR, sp, cx, cy, f, u, v, W, iters=40):
     radius = 0.5 * sp
     if not isfin(g):
         return u, v, g
+    fi, ff = S[0], S[1]
     for _ in range(iters):
-        a, b, d_ = -Huu, -Huv, -Hvv
-        det = a * d_ - b * b
-        newton = (a > 0) and (det > 1e-14 * (a * a + d_ * d_ + b * b))
-        du = dv = 0.0
-        if newton:
-            du = (d_ * gu - b * gv) / det
-            dv = (-b * gu + a * gv) / det
-        E = D[1, 0] ** 2 + D[1, 1] ** 2 + D[1, 2] ** 2
-        F = D[1, 0] * D[2, 0] + D[1, 1] * D[2, 1] + D[1, 2] * D[2, 2]
-        G = D[2, 0] ** 2 + D[2, 1] ** 2 + D[2, 2] ** 2
-        dg = E * G - F * F
-        regular = (dg > 1e-10 * E * G) and (min(E, G) > 1e-14 * max(E, G))
-        if regular:
-            au, av = (G * gu - F * gv) / dg, (-F * gu + E * gv) / dg
-        else:
-            au, av = gu, gv
-        k = radius / nmax(_tan_len(D, au, av), 1e-300)
-        if not newton:
-            du, dv = au * k, av * k
-        escape = False
-        if not newton:
-            eu, ev, quad = _up_curvature(Huu, Huv, Hvv, D, radius)
-            escape = quad > abs(gu * au + gv * av) * k
-            if escape:
-                du, dv = eu, ev
+        at_u = at_v = corner = False
+        for attempt in range(2):
+            du, dv, newton, escape, eu, ev = _ascent_step(D, gu, gv, Huu, Huv, Hvv, radius, at_u, at_v)
+            if attempt == 1 or escape:
+                break
+            # a step out of the face's box on one side runs along that side instead (projected): a clamped
+            # step crawls along it; out on both sides at a corner, no step of any length moves
+            out_u = (not fi[f, 9]) and ((u <= ff[f, 8] and du < 0) or (u >= ff[f, 9] and du > 0))
+            out_v = (not fi[f, 10]) and ((v <= ff[f, 10] and dv < 0) or (v >= ff[f, 11] and dv > 0))
+            corner = out_u and out_v
+            if out_u == out_v:
+                break
+            at_u, at_v = out_u, out_v
+        if corner:
+            break
         if du == 0.0 and dv == 0.0:  # a zero gradient and no upward curvature: every later step is this one
             break
         shrink = nmin(1.0, radius / nmax(_tan_len(D, du, dv), 1e-300))

@@ -176,6 +176,40 @@ def _put(dst, at, src, sel) -> None:
         d[at] = s[sel]
 
 
+def _ascent_step(Su, Sv, gu, gv, Huu, Huv, Hvv, radius, at_u, at_v):
+    """The face ascent's step: Newton where ``-H`` is positive definite, else steepest ascent on the surface
+    (first fundamental form) as long as the trust radius, or along the largest upward curvature where that
+    gains more (at a minimum or saddle of g, a fillet's foot or a valley, the gradient step crawls); with
+    ``u`` (``at_u``) or ``v`` (``at_v``) held, along the other parameter only. Returns ``du, dv, newton,
+    escape, eu, ev``."""
+    held = at_u | at_v
+    gu, gv = np.where(at_u, 0.0, gu), np.where(at_v, 0.0, gv)
+    Huu, Huv, Hvv = (np.where(at_u, -(1.0 + np.abs(Hvv)), Huu), np.where(held, 0.0, Huv),
+                     np.where(at_v, -(1.0 + np.abs(Huu)), Hvv))  # fmt: skip
+    a, b, d_ = -Huu, -Huv, -Hvv  # M = -H: Newton where it is positive definite
+    det = a * d_ - b * b
+    newton = (a > 0) & (det > 1e-14 * (a * a + d_ * d_ + b * b))
+    det = np.where(newton, det, 1.0)
+    du = np.where(newton, (d_ * gu - b * gv) / det, 0.0)
+    dv = np.where(newton, (-b * gu + a * gv) / det, 0.0)
+    E = np.einsum("ij,ij->i", Su, Su)
+    F = np.where(held, 0.0, np.einsum("ij,ij->i", Su, Sv))
+    G = np.einsum("ij,ij->i", Sv, Sv)
+    dg = E * G - F * F
+    # near a pole or a collapsed edge (one tangent vanishing): the parameter gradient instead
+    regular = (dg > 1e-10 * E * G) & (np.minimum(E, G) > 1e-14 * np.maximum(E, G))
+    dg = np.where(regular, dg, 1.0)
+    au = np.where(regular, (G * gu - F * gv) / dg, gu)
+    av = np.where(regular, (-F * gu + E * gv) / dg, gv)
+    alen = np.linalg.norm(Su * au[:, None] + Sv * av[:, None], axis=1)
+    k = radius / np.maximum(alen, 1e-300)
+    du = np.where(newton, du, au * k)
+    dv = np.where(newton, dv, av * k)
+    eu, ev, quad = _up_curvature(Huu, Huv, Hvv, Su, Sv, radius)
+    escape = ~newton & (quad > np.abs(gu * au + gv * av) * k)
+    return np.where(escape, eu, du), np.where(escape, ev, dv), newton, escape, eu, ev
+
+
 def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
     """Maximise ``g`` from ``(u, v)``: damped Newton (Hessian shifted to negative definite) with a trust
     region in mm; steps that do not increase ``g`` or leave the tool's disc are refused."""
@@ -188,35 +222,26 @@ def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
         idx = np.nonzero(active)[0]
         if idx.size == 0:
             break
-        Huu, Huv, Hvv = (h[idx] for h in H)
-        a, b, d_ = -Huu, -Huv, -Hvv  # M = -H: Newton where it is positive definite
-        det = a * d_ - b * b
-        newton = (a > 0) & (det > 1e-14 * (a * a + d_ * d_ + b * b))
-        det = np.where(newton, det, 1.0)
-        du = np.where(newton, (d_ * gu[idx] - b * gv[idx]) / det, 0.0)
-        dv = np.where(newton, (-b * gu[idx] + a * gv[idx]) / det, 0.0)
         Su, Sv = D[1][idx], D[2][idx]
-        # elsewhere steepest ascent on the surface (first fundamental form), as long as the trust radius
-        E = np.einsum("ij,ij->i", Su, Su)
-        F = np.einsum("ij,ij->i", Su, Sv)
-        G = np.einsum("ij,ij->i", Sv, Sv)
-        dg = E * G - F * F
-        # near a pole or a collapsed edge (one tangent vanishing): the parameter gradient instead
-        regular = (dg > 1e-10 * E * G) & (np.minimum(E, G) > 1e-14 * np.maximum(E, G))
-        dg = np.where(regular, dg, 1.0)
-        au = np.where(regular, (G * gu[idx] - F * gv[idx]) / dg, gu[idx])
-        av = np.where(regular, (-F * gu[idx] + E * gv[idx]) / dg, gv[idx])
-        alen = np.linalg.norm(Su * au[:, None] + Sv * av[:, None], axis=1)
-        k = radius[idx] / np.maximum(alen, 1e-300)
-        du = np.where(newton, du, au * k)
-        dv = np.where(newton, dv, av * k)
-        # at a minimum or saddle of g (a fillet's foot, a valley) the gradient step crawls: step along
-        # the direction of largest upward curvature instead, to whichever side rises more
-        eu, ev, quad = _up_curvature(Huu, Huv, Hvv, Su, Sv, radius[idx])
-        lin = np.abs(gu[idx] * au + gv[idx] * av) * k
-        escape = ~newton & (quad > lin)
-        du = np.where(escape, eu, du)
-        dv = np.where(escape, ev, dv)
+        Hi = tuple(h[idx] for h in H)
+        no = np.zeros(idx.size, bool)
+        du, dv, newton, escape, eu, ev = _ascent_step(Su, Sv, gu[idx], gv[idx], *Hi, radius[idx], no, no)
+        # a step out of the face's box on one side runs along that side instead (projected): a clamped step
+        # crawls along it; out on both sides at a corner, no step of any length moves
+        b_, cl = fs.bounds[fid[idx]], fs.closed[fid[idx]]
+        out_u = ~cl[:, 0] & (((u[idx] <= b_[:, 0]) & (du < 0)) | ((u[idx] >= b_[:, 1]) & (du > 0))) & ~escape
+        out_v = ~cl[:, 1] & (((v[idx] <= b_[:, 2]) & (dv < 0)) | ((v[idx] >= b_[:, 3]) & (dv > 0))) & ~escape
+        one = out_u ^ out_v
+        if one.any():
+            p_ = _ascent_step(Su, Sv, gu[idx], gv[idx], *Hi, radius[idx], out_u & one, out_v & one)
+            du, dv, newton, escape, eu, ev = (np.where(one, a_, b) for a_, b in zip(p_, (du, dv, newton, escape, eu, ev)))
+        corner = out_u & out_v
+        if corner.any():
+            active[idx[corner]] = False
+            keep = ~corner
+            idx, du, dv, newton, escape, eu, ev, Su, Sv = (x[keep] for x in (idx, du, dv, newton, escape, eu, ev, Su, Sv))
+            if idx.size == 0:
+                break
         step = np.linalg.norm(Su * du[:, None] + Sv * dv[:, None], axis=1)
         shrink = np.minimum(1.0, radius[idx] / np.maximum(step, 1e-300))
         nu, nv = _clamp_uv(fs, fid[idx], u[idx] + du * shrink, v[idx] + dv * shrink)
