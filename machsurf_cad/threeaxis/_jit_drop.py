@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ._jit_geom import borrowed, hyp, keep, inside, isfin, norm3, prof, prof_floor, surf
+from ._jit_geom import borrowed, hyp, inside, isfin, keep, norm3, prof, prof_floor, surf
 from ._jit_solve import ON_CIRCLE, edge_search, enters_face, face_newton, into_disc, rim_ascent, tip_solve
 
 FACE, RIM, EDGE, TIP, SAMPLE = 1, 2, 3, 4, 5
@@ -28,7 +28,7 @@ BOUND_TIE = 1e-10
 that only ties the best (a flat end on a horizontal floor: the floor's edges and rim at the floor's height)
 cannot raise it by more (the numpy path's ``_BOUND_TIE_MM``)."""
 
-KERNEL_SOURCES = "1225288c6da8434d"
+KERNEL_SOURCES = "8caf7ce815842e19"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 
@@ -166,9 +166,9 @@ def _candidates(cx, cy, idx, rr, PR, SM, K):
         val[k] = z - prof(PR, min(rho, R))[0]
         feas[k] = rho <= R
         dx, dy = xyz[j, 0] - cx, xyz[j, 1] - cy
-        sector = 0
+        sector = 0  # the centre, else the quadrant (as the numpy path's _seeds)
         if not (rho < 0.5 * R):
-            sector = 1 + min(max(int((math.atan2(dy, dx) + math.pi) // (math.pi / 2)), 0), 3)
+            sector = (1 if dx < 0 else 2) if dy < 0 else (3 if dx > 0 else 4)
         f = pf[j]
         if fmap[f] < 0:
             fmap[f] = nl
@@ -198,29 +198,33 @@ def _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K):
     cov, tilt = SM[7], SM[9]
     R, max_tilt = K[0], K[2]
     m = idx.shape[0]
-    seed = _group_best(ng, gk, val, feas & ~is_e, idx)
-    s2 = _group_best(ng, gk, val, feas & is_e, idx)
-    outside = np.empty(m, np.bool_)
-    near = np.empty(m, np.bool_)
-    outr = np.empty(m, np.bool_)
+    # the masks of the samples each pick runs over, in one pass (borrowed: see _query)
+    masks_ = np.empty((7, m), np.bool_)
+    M = borrowed(masks_)
     for k in range(m):
-        outside[k] = (not feas[k]) and (rr[k] - cov[idx[k]] <= R)
-        near[k] = feas[k] and rr[k] >= R - cov[idx[k]]
-        outr[k] = (not feas[k]) and rr[k] <= R + cov[idx[k]]
-    s3 = _group_best(ng, gk, negr, outside, idx)
-    is_seed = np.zeros(m, np.bool_)
+        c = cov[idx[k]]
+        f_, e_ = feas[k], is_e[k]
+        M[0, k], M[1, k] = f_ and not e_, f_ and e_
+        M[2, k] = (not f_) and (rr[k] - c <= R)  # outside the disc, within the cover
+        M[3, k] = f_ and rr[k] >= R - c  # near the rim inside
+        M[4, k] = (not f_) and rr[k] <= R + c  # near the rim outside
+        M[5, k], M[6, k] = e_ and f_, e_ and not f_
+    seed = _group_best(ng, gk, val, M[0], idx)
+    s2 = _group_best(ng, gk, val, M[1], idx)
+    s3 = _group_best(ng, gk, negr, M[2], idx)
+    out_ = np.zeros((3, m), np.bool_)
+    is_seed, rseed, eseed = out_[0], out_[1], out_[2]
     for g in range(ng):
         s = seed[g] if seed[g] >= 0 else (s2[g] if s2[g] >= 0 else s3[g])
         if s >= 0 and tilt[idx[s]] <= max_tilt + 1e-9:
             is_seed[s] = True
-    rseed = np.zeros(m, np.bool_)
-    eseed = np.zeros(m, np.bool_)
-    for mask, groups in ((rseed, _group_best(ng, gk, zz, near, idx)), (rseed, _group_best(ng, gk, negr, outr, idx)),
-                         (eseed, _group_best(n_eg, ek, val, is_e & feas, idx)),
-                         (eseed, _group_best(n_eg, ek, negr, is_e & ~feas, idx))):  # fmt: skip
+    for mask, groups in ((rseed, _group_best(ng, gk, zz, M[3], idx)), (rseed, _group_best(ng, gk, negr, M[4], idx)),
+                         (eseed, _group_best(n_eg, ek, val, M[5], idx)),
+                         (eseed, _group_best(n_eg, ek, negr, M[6], idx))):  # fmt: skip
         for s in groups:
             if s >= 0:
                 mask[s] = True
+    keep(masks_)
     return is_seed, rseed, eseed
 
 
@@ -360,11 +364,14 @@ def _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, tried0, feas,
     while a bound (and its cell's) beats the best height; returns the best height before the last round."""
     xyz, pf, cov, tilt = SM[0], SM[1], SM[7], SM[9]
     m = idx.shape[0]
-    tried = tried0.copy()
+    scratch_ = np.empty((2, m), np.bool_)  # borrowed: see _query
+    scratch = borrowed(scratch_)
+    tried, sel = scratch[0], scratch[1]
+    tried[:] = tried0
     low = -math.inf
     for _ in range(4):
         low = best[1] if best[4] > 0 else -math.inf
-        sel = np.zeros(m, np.bool_)
+        sel[:] = False
         any_ = False
         for k in range(m):
             j = idx[k]
@@ -381,6 +388,7 @@ def _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, tried0, feas,
             if s >= 0:
                 tried[s] = True
                 _solve(FACE, idx[s], cx, cy, S, E, T, PR, SM, K, W, best, bp, K[0], K[3])
+    keep(scratch_)
     return low
 
 
@@ -390,10 +398,13 @@ def _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed,
     on its own edge, while a bound beats the best height."""
     xyz, n_int, ecov = SM[0], SM[3], SM[10]
     m = idx.shape[0]
-    tried = eseed.copy()
+    scratch_ = np.empty((2, m), np.bool_)  # borrowed: see _query
+    scratch = borrowed(scratch_)
+    tried, sel = scratch[0], scratch[1]
+    tried[:] = eseed
     for _ in range(4):
         low = best[1] if best[4] > 0 else -math.inf
-        sel = np.zeros(m, np.bool_)
+        sel[:] = False
         any_ = False
         for k in range(m):
             if tried[k] or not is_e[k] or not (e_ub[k] > low + 1e-7):
@@ -410,6 +421,7 @@ def _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed,
             if s >= 0:
                 tried[s] = True
                 _solve(EDGE, idx[s], cx, cy, S, E, T, PR, SM, K, W, best, bp, K[0], K[3])
+    keep(scratch_)
 
 
 @njit(cache=True)

@@ -22,7 +22,8 @@ from numba.extending import intrinsic
 # curve table E = (ei, ef, knots, poles): ei[e] = degree, koff, nk, poff, npoles, face; ef[e] = t0, t1
 # trim table T = (tf, tl, start, items, ea, eb, px, py): per face its slabs of v (first, count; v0, height, v1),
 #   each slab's polygon edges (items, CSR by start), each edge's vertices (ea, eb) in px, py
-# profile PR = (segs, consts): segs[s] = kind (0 line, 1 arc), 5 numbers; consts = R, h_R, h_min, monotone
+# profile PR = (segs, consts, pieces): segs[s] = kind (0 line, 1 arc), 5 numbers; consts = R, h_R, h_min, monotone,
+#   lower_height at R (h, h1, h2) and at 0; pieces from compiled._pieces
 
 
 def _borrow(context, builder, ty, value):
@@ -396,7 +397,12 @@ def prof(PR, rho):
     segs, k, tb = PR
     R = k[0]
     x = nmin(rho, R)
-    h, h1, h2, ok = piece_height(tb, abs(x))
+    if x == R:  # lower_height at the rim and at the axis, computed once (compiled._profile)
+        h, h1, h2, ok = k[4], k[5], k[6], True
+    elif x == 0.0:
+        h, h1, h2, ok = k[7], k[8], k[9], True
+    else:
+        h, h1, h2, ok = piece_height(tb, abs(x))
     if not ok:
         h, h1, h2 = lower_height(segs, x)
     if rho <= R * (1 + 1e-12):

@@ -187,8 +187,13 @@ def _profile(prof):
             rows.append((1.0, seg.rho_c, seg.z_c, seg.radius, seg.start_deg, seg.end_deg))
         else:  # pragma: no cover - cutters give lines and arcs
             raise TypeError(f"profile segment {type(seg).__name__} is not supported by the compiled kernel")
-    consts = np.array([prof.R, prof.h_R, prof.h_min, 1.0 if prof.monotone else 0.0])
     segs = np.array(rows, float).reshape(-1, 6)
+    # lower_height at the disc's rim and axis, where the pieces stop short (PIECE_MARGIN) and every sample
+    # beyond the rim or within its cover of the axis would search the segments again
+    from ._jit_geom import lower_height
+
+    at_R, at_0 = lower_height(segs, float(prof.R)), lower_height(segs, 0.0)
+    consts = np.array([prof.R, prof.h_R, prof.h_min, 1.0 if prof.monotone else 0.0, *at_R, *at_0])
     return segs, consts, _pieces_of(segs.tobytes(), segs.shape[0], float(prof.R))
 
 

@@ -202,9 +202,9 @@ def _seeds(fs: FaceSet, prof: _Profile, C: np.ndarray):
     h = prof(np.minimum(rho, prof.R))[0]
     val = xyz[:, 2] - h
     feasible = rho <= prof.R
-    sector = np.where(
-        rho < 0.5 * prof.R, 0, 1 + ((np.arctan2(d[:, 1], d[:, 0]) + math.pi) // (math.pi / 2)).astype(int).clip(0, 3)
-    )
+    # the centre (sector 0), else the quadrant of the sample around the axis (1 to 4, counter-clockwise from -x-y)
+    quadrant = np.where(d[:, 1] < 0, np.where(d[:, 0] < 0, 1, 2), np.where(d[:, 0] > 0, 3, 4))
+    sector = np.where(rho < 0.5 * prof.R, 0, quadrant)
     is_edge = sj >= n_int
     group = np.where(
         is_edge, len(fs.faces) + fs.edge_id[np.maximum(sj - n_int, 0)], fs.sample_face[np.minimum(sj, n_int - 1)]

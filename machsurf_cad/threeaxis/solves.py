@@ -234,12 +234,13 @@ def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
         one = out_u ^ out_v
         if one.any():
             p_ = _ascent_step(Su, Sv, gu[idx], gv[idx], *Hi, radius[idx], out_u & one, out_v & one)
-            du, dv, newton, escape, eu, ev = (np.where(one, a_, b) for a_, b in zip(p_, (du, dv, newton, escape, eu, ev)))
+            old = (du, dv, newton, escape, eu, ev)
+            du, dv, newton, escape, eu, ev = (np.where(one, a_, b) for a_, b in zip(p_, old))
         corner = out_u & out_v
         if corner.any():
             active[idx[corner]] = False
-            keep = ~corner
-            idx, du, dv, newton, escape, eu, ev, Su, Sv = (x[keep] for x in (idx, du, dv, newton, escape, eu, ev, Su, Sv))
+            kept = (idx, du, dv, newton, escape, eu, ev, Su, Sv)
+            idx, du, dv, newton, escape, eu, ev, Su, Sv = (x[~corner] for x in kept)
             if idx.size == 0:
                 break
         step = np.linalg.norm(Su * du[:, None] + Sv * dv[:, None], axis=1)
