@@ -388,3 +388,42 @@ def test_flat_and_bull_heights_equal_an_independent_reference_to_1e6_mm_near_the
     ok = np.isfinite(bf)
     assert ok.sum() > 400
     assert np.abs(dc[ok] - bf[ok]).max() <= 1e-6
+
+
+@pytest.mark.parametrize("engine", ["numpy", pytest.param("compiled", marks=needs_numba)])
+@pytest.mark.parametrize("a, cy", [(0.05, 3.0), (0.1, 4.0), (0.1, 5.5), (0.1, 3.0), (0.2, 3.0)])
+def test_the_face_ascent_climbs_along_the_side_of_the_box_where_g_leaves_it(engine, a, cy):
+    """``z = 0.3 x + a (y - 5)^2`` on [0, 10]^2 under a ball D10 at (9, cy): g rises out of the face across
+    x = 10, so its maximum over the face lies on that side (at its end y = 0 for the last two). The ascent
+    from (8, cy - 0.5) reaches it within 1e-9 mm (an independent search along the side: 100,001 samples,
+    then a bounded scalar minimisation): a step clamped at the side used to crawl along it and stop up to
+    0.012 mm short."""
+    from scipy.optimize import minimize_scalar
+
+    from machsurf_cad.threeaxis import _jit_solve, faceset, solves
+
+    poles = np.array([[[x, y, 0.3 * x + c] for y, c in zip((0.0, 5.0, 10.0), (25 * a, -25 * a, 25 * a))]
+                      for x in (0.0, 10.0)])  # fmt: skip
+    face = ms.BSplineSurface(1, 2, [0, 1], [2, 2], [0, 1], [3, 3], poles)
+    R = 5.0
+
+    def side(y):  # g on the side x = 10: z minus the ball's lower surface at the distance from the axis
+        return 3.0 + a * (y - 5) ** 2 - (R - np.sqrt(np.maximum(R * R - 1.0 - (y - cy) ** 2, 0.0)))
+
+    ys = np.linspace(0.0, 10.0, 100_001)
+    y0 = ys[np.argmax(side(ys))]
+    lo, hi = max(y0 - 1e-4, 0.0), min(y0 + 1e-4, 10.0)
+    best = minimize_scalar(lambda y: -side(y), bounds=(lo, hi), method="bounded", options={"xatol": 1e-12})
+    exact = max(side(best.x), side(lo), side(hi))
+    fs = faceset.face_set([face], spacing=0.5)
+    prof = solves._Profile(ms.BallEndMill(2 * R))
+    if engine == "numpy":
+        u, v, g, _ = solves._face_newton(fs, prof, np.array([[9.0, cy]]), np.array([0]), np.array([0.8]),
+                                         np.array([cy / 10 - 0.05]))  # fmt: skip
+        u, g = u[0], g[0]
+    else:
+        S, _, _, _ = compiled._packed(fs)
+        W = (np.empty((6, 3)), np.empty((6, 3)), np.empty((6, 3)), np.empty((9, 3)), np.empty((3, 3)), np.empty(480))
+        u, v, g = _jit_solve.face_newton(S, compiled._profile(prof), fs.spacing, 9.0, cy, 0, 0.8, cy / 10 - 0.05, W)
+    assert u == 1.0
+    assert abs(g - exact) < 1e-9
