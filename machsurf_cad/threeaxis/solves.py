@@ -223,7 +223,7 @@ def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
         if idx.size == 0:
             break
         Su, Sv = D[1][idx], D[2][idx]
-        Hi = tuple(h[idx] for h in H)
+        Hi = (H[0][idx], H[1][idx], H[2][idx])
         no = np.zeros(idx.size, bool)
         du, dv, newton, escape, eu, ev = _ascent_step(Su, Sv, gu[idx], gv[idx], *Hi, radius[idx], no, no)
         # a step out of the face's box on one side runs along that side instead (projected): a clamped step
