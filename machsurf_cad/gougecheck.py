@@ -170,7 +170,7 @@ def _sample_face(face: Face, spacing: float):
     us, vs = np.linspace(u0, u1, nu), np.linspace(v0, v1, nv)
     U, V = np.meshgrid(us, vs, indexing="ij")
     P = s.evaluate_grid(us, vs).reshape(-1, 3)
-    keep = face.contains_uv(U.ravel(), V.ravel()) if face.is_trimmed else np.ones(U.size, bool)
+    keep = face.contains_uv_grid(us, vs).ravel() if face.is_trimmed else np.ones(U.size, bool)
     return P[keep], U.ravel()[keep], V.ravel()[keep], (u1 - u0) / (nu - 1), (v1 - v0) / (nv - 1)
 
 

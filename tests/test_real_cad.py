@@ -216,3 +216,23 @@ def test_faces_with_a_pole_machine_and_a_cone_tip_is_refused():
     cone = builders.revolve_profile(prof, 360.0)
     with pytest.raises(ms.DegenerateGeometryError, match="no limit normal"):
         ms.machining_surface(ms.Face(cone, reversed=True), "ball:D=10", axes=3, tolerance=1e-3)
+
+
+@pytest.mark.parametrize("part", ["freeform_block.step", "mould_insert.step"])
+def test_the_grid_trimming_test_classifies_every_point_as_the_point_test(part):
+    """``contains_uv_grid`` (the faces' sampling grids) against ``contains_uv`` on the same points, every
+    trimmed face of two parts, a grid reaching past the box and rows at random v (one on its edge): the same
+    mask bit for bit (points on a polygon's vertex rows included)."""
+    from machsurf_cad.occ import read_step_faces
+
+    rng = np.random.default_rng(3)
+    faces = [f for f in read_step_faces(ROOT / "example_parts" / part) if f.is_trimmed]
+    assert len(faces) >= 8
+    for face in faces:
+        u0, u1, v0, v1 = face.uv_bounds
+        us = np.linspace(u0 - 0.02 * (u1 - u0), u1, 151)
+        vs = np.sort(np.r_[v0, rng.uniform(v0, v1, 120), face.trim_polygons()[0][:5, 1]])
+        U, V = np.meshgrid(us, vs, indexing="ij")
+        grid = face.contains_uv_grid(us, vs)
+        assert grid.shape == (us.size, vs.size) and 0 < grid.sum() < grid.size
+        np.testing.assert_array_equal(grid, face.contains_uv(U.ravel(), V.ravel()).reshape(U.shape))

@@ -99,6 +99,16 @@ class Face:
         polys = self._polygons(n_per_curve) if n_per_curve is not None else self.trim_polygons(tolerance)
         return _points_in_polygons(u, v, polys)
 
+    def contains_uv_grid(self, us, vs, *, tolerance: float = TRIM_TOLERANCE) -> np.ndarray:
+        """:meth:`contains_uv` on the grid ``us x vs`` (both ascending): a boolean array ``(len(us), len(vs))``,
+        the same classification point for point, in time of the grid's size plus the loops' crossings of its
+        rows (instead of each polygon edge against every point of its rows)."""
+        us, vs = np.asarray(us, float), np.asarray(vs, float)
+        if not self.loops:
+            u0, u1, v0, v1 = self.uv_bounds
+            return ((us >= u0) & (us <= u1))[:, None] & ((vs >= v0) & (vs <= v1))[None, :]
+        return _grid_in_polygons(us, vs, self.trim_polygons(tolerance))
+
     def _polygons(self, n_per_curve: int = 64) -> list:
         """The trimming loops as closed (u, v) polygons of ``n_per_curve`` samples a curve (cached)."""
         key = ("_polys", n_per_curve)
@@ -171,6 +181,29 @@ def _points_in_polygons(u, v, polys) -> np.ndarray:
     out = np.empty(uf.size, bool)
     out[order] = flips
     return out.reshape(np.shape(u))
+
+
+def _grid_in_polygons(us, vs, polys) -> np.ndarray:
+    """:func:`_points_in_polygons` on the grid ``us x vs`` (both ascending), ``(len(us), len(vs))``: each
+    polygon edge crosses the rows with ``lo < v <= hi`` at ``x`` (the same formula), and flips the points of
+    the row with ``u < x``, the first ``searchsorted(us, x)`` of them; a row's parities are a cumulative sum
+    from its right end."""
+    x0 = np.concatenate([p[:, 0] for p in polys])
+    y0 = np.concatenate([p[:, 1] for p in polys])
+    x1 = np.concatenate([np.roll(p[:, 0], -1) for p in polys])
+    y1 = np.concatenate([np.roll(p[:, 1], -1) for p in polys])
+    lo, hi = np.minimum(y0, y1), np.maximum(y0, y1)
+    start = np.searchsorted(vs, lo, side="right")
+    end = np.searchsorted(vs, hi, side="right")
+    e = np.nonzero((end > start) & (y0 != y1))[0]
+    counts = (end - start)[e]
+    edge = np.repeat(e, counts)
+    row = np.repeat(start[e] - np.cumsum(np.r_[0, counts[:-1]]), counts) + np.arange(edge.size)
+    xint = x0[edge] + (vs[row] - y0[edge]) * (x1[edge] - x0[edge]) / (y1[edge] - y0[edge])
+    D = np.zeros((vs.size, us.size + 1), np.int64)
+    np.add.at(D, (row, np.searchsorted(us, xint, side="left")), 1)
+    inside = (np.cumsum(D[:, ::-1], axis=1)[:, ::-1][:, 1:] & 1).astype(bool)
+    return inside.T
 
 
 def close_loop(loop, rel_gap: float = 1e-3) -> tuple[list[BSplineCurve], float]:

@@ -80,8 +80,7 @@ def _face_fine(fs: FaceSet, i: int, factor: int):
     d = s.derivatives_grid(us, vs, 1)
     slope, delta, kappa = _slopes(d, us.size, vs.size)
     if face.is_trimmed:
-        U, V = np.meshgrid(us, vs, indexing="ij")
-        keep = face.contains_uv(U.ravel(), V.ravel())
+        keep = face.contains_uv_grid(us, vs).ravel()
     else:
         keep = np.ones(us.size * vs.size, bool)
     pts = [d.point.reshape(-1, 3)[keep]]

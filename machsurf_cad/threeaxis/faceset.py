@@ -333,7 +333,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         CLOSED.append(_closed(d.point))
         pts = d.point.reshape(-1, 3)
         slope, delta, kappa = _slopes(d, nu, nv)
-        keep = face.contains_uv(U.ravel(), V.ravel()) if face.is_trimmed else np.ones(U.size, bool)
+        keep = face.contains_uv_grid(us, vs).ravel() if face.is_trimmed else np.ones(U.size, bool)
         P.append(pts[keep])
         UV.append(np.stack([U.ravel()[keep], V.ravel()[keep]], axis=1))
         F.append(np.full(int(keep.sum()), i))
