@@ -157,15 +157,7 @@ def _points_in_polygons(u, v, polys) -> np.ndarray:
     vf = np.asarray(v, float).ravel()
     order = np.argsort(vf, kind="stable")
     vs, us = vf[order], uf[order]
-    x0 = np.concatenate([p[:, 0] for p in polys])
-    y0 = np.concatenate([p[:, 1] for p in polys])
-    x1 = np.concatenate([np.roll(p[:, 0], -1) for p in polys])
-    y1 = np.concatenate([np.roll(p[:, 1], -1) for p in polys])
-    lo, hi = np.minimum(y0, y1), np.maximum(y0, y1)
-    start = np.searchsorted(vs, lo, side="right")  # points with v > lo ...
-    end = np.searchsorted(vs, hi, side="right")  # ... and v <= hi: (y0 > v) != (y1 > v)
-    e = np.nonzero((end > start) & (y0 != y1))[0]
-    counts = (end - start)[e]
+    (x0, y0, x1, y1), e, start, counts = _edge_runs(polys, vs)
     flips = np.zeros(uf.size, bool)
     done = 0
     while done < e.size:  # in batches of about 4 million crossings (bounded memory)
@@ -188,22 +180,28 @@ def _grid_in_polygons(us, vs, polys) -> np.ndarray:
     polygon edge crosses the rows with ``lo < v <= hi`` at ``x`` (the same formula), and flips the points of
     the row with ``u < x``, the first ``searchsorted(us, x)`` of them; a row's parities are a cumulative sum
     from its right end."""
+    (x0, y0, x1, y1), e, start, counts = _edge_runs(polys, vs)
+    edge = np.repeat(e, counts)
+    row = np.repeat(start[e] - np.cumsum(np.r_[0, counts[:-1]]), counts) + np.arange(edge.size)
+    xint = x0[edge] + (vs[row] - y0[edge]) * (x1[edge] - x0[edge]) / (y1[edge] - y0[edge])
+    D = np.zeros((vs.size, us.size + 1), np.uint8)  # crossing counts mod 256: their parity is all that counts
+    np.add.at(D, (row, np.searchsorted(us, xint, side="left")), 1)
+    inside = (np.cumsum(D[:, ::-1], axis=1, dtype=np.uint8)[:, ::-1][:, 1:] & 1).astype(bool)
+    return inside.T
+
+
+def _edge_runs(polys, vs):
+    """The polygons' edges ``(x0, y0, x1, y1)`` and, for the ascending ``vs``, the edges ``e`` whose v range
+    ``lo < v <= hi`` holds some of them (``(y0 > v) != (y1 > v)``, horizontal edges left out): the first of
+    those values ``start[e]`` and how many ``counts``."""
     x0 = np.concatenate([p[:, 0] for p in polys])
     y0 = np.concatenate([p[:, 1] for p in polys])
     x1 = np.concatenate([np.roll(p[:, 0], -1) for p in polys])
     y1 = np.concatenate([np.roll(p[:, 1], -1) for p in polys])
-    lo, hi = np.minimum(y0, y1), np.maximum(y0, y1)
-    start = np.searchsorted(vs, lo, side="right")
-    end = np.searchsorted(vs, hi, side="right")
+    start = np.searchsorted(vs, np.minimum(y0, y1), side="right")
+    end = np.searchsorted(vs, np.maximum(y0, y1), side="right")
     e = np.nonzero((end > start) & (y0 != y1))[0]
-    counts = (end - start)[e]
-    edge = np.repeat(e, counts)
-    row = np.repeat(start[e] - np.cumsum(np.r_[0, counts[:-1]]), counts) + np.arange(edge.size)
-    xint = x0[edge] + (vs[row] - y0[edge]) * (x1[edge] - x0[edge]) / (y1[edge] - y0[edge])
-    D = np.zeros((vs.size, us.size + 1), np.int64)
-    np.add.at(D, (row, np.searchsorted(us, xint, side="left")), 1)
-    inside = (np.cumsum(D[:, ::-1], axis=1)[:, ::-1][:, 1:] & 1).astype(bool)
-    return inside.T
+    return (x0, y0, x1, y1), e, start, (end - start)[e]
 
 
 def close_loop(loop, rel_gap: float = 1e-3) -> tuple[list[BSplineCurve], float]:

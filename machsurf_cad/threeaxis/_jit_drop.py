@@ -28,7 +28,7 @@ BOUND_TIE = 1e-10
 that only ties the best (a flat end on a horizontal floor: the floor's edges and rim at the floor's height)
 cannot raise it by more (the numpy path's ``_BOUND_TIE_MM``)."""
 
-KERNEL_SOURCES = "8caf7ce815842e19"
+KERNEL_SOURCES = "090d88e3cf1aff7b"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 
@@ -231,7 +231,7 @@ def _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K):
 @njit(cache=True)
 def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
     """The tip height at one query point: ``best`` = (rank, height, kind, face, found), ``bp`` the contact."""
-    # every array passed on is borrowed (no reference counting: a fifth of the time, profiled): the
+    # every array passed on is borrowed (no reference counting: a quarter of the samples, profiled): the
     # arguments are kept alive by the caller, the arrays made here by ``keep`` at the end
     S, E, T, PR, SM, G, K, kinks, best, bp = borrowed((S, E, T, PR, SM, G, K, kinks, best, bp))
     xyz, pf = SM[0], SM[1]

@@ -42,7 +42,7 @@ def _borrow(context, builder, ty, value):
 def borrowed(typingctx, x):
     """``x`` (an array, or a tuple of arrays and numbers) without reference counts: the same data, shape and
     strides with a null meminfo, so that passing it to a function costs no atomic increment and decrement
-    (profiled: a fifth of the kernel's time, and cache-line contention between the threads). Only for arrays
+    (profiled: a quarter of the kernel's samples, and cache-line contention between the threads). Only for arrays
     the caller keeps alive (the kernel's arguments)."""
 
     def codegen(context, builder, sig, args):

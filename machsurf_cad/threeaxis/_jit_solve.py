@@ -149,7 +149,7 @@ def _ascent_step(D, gu, gv, Huu, Huv, Hvv, radius, at_u, at_v):
     a, b, d_ = -Huu, -Huv, -Hvv
     det = a * d_ - b * b
     newton = (a > 0) and (det > 1e-14 * (a * a + d_ * d_ + b * b))
-    du = dv = eu = ev = 0.0
+    du = dv = 0.0
     if newton:
         du = (d_ * gu - b * gv) / det
         dv = (-b * gu + a * gv) / det
@@ -171,7 +171,7 @@ def _ascent_step(D, gu, gv, Huu, Huv, Hvv, radius, at_u, at_v):
         escape = quad > abs(gu * au + gv * av) * k
         if escape:
             du, dv = eu, ev
-    return du, dv, newton, escape, eu, ev
+    return du, dv, newton, escape
 
 
 @njit(cache=True)
@@ -188,7 +188,7 @@ def face_newton(S, PR, sp, cx, cy, f, u, v, W, iters=40):
     for _ in range(iters):
         at_u = at_v = corner = False
         for attempt in range(2):
-            du, dv, newton, escape, eu, ev = _ascent_step(D, gu, gv, Huu, Huv, Hvv, radius, at_u, at_v)
+            du, dv, newton, escape = _ascent_step(D, gu, gv, Huu, Huv, Hvv, radius, at_u, at_v)
             if attempt == 1 or escape:
                 break
             # a step out of the face's box on one side runs along that side instead (projected): a clamped

@@ -181,7 +181,7 @@ def _ascent_step(Su, Sv, gu, gv, Huu, Huv, Hvv, radius, at_u, at_v):
     (first fundamental form) as long as the trust radius, or along the largest upward curvature where that
     gains more (at a minimum or saddle of g, a fillet's foot or a valley, the gradient step crawls); with
     ``u`` (``at_u``) or ``v`` (``at_v``) held, along the other parameter only. Returns ``du, dv, newton,
-    escape, eu, ev``."""
+    escape`` (an escape is tried to both sides)."""
     held = at_u | at_v
     gu, gv = np.where(at_u, 0.0, gu), np.where(at_v, 0.0, gv)
     Huu, Huv, Hvv = (np.where(at_u, -(1.0 + np.abs(Hvv)), Huu), np.where(held, 0.0, Huv),
@@ -207,7 +207,7 @@ def _ascent_step(Su, Sv, gu, gv, Huu, Huv, Hvv, radius, at_u, at_v):
     dv = np.where(newton, dv, av * k)
     eu, ev, quad = _up_curvature(Huu, Huv, Hvv, Su, Sv, radius)
     escape = ~newton & (quad > np.abs(gu * au + gv * av) * k)
-    return np.where(escape, eu, du), np.where(escape, ev, dv), newton, escape, eu, ev
+    return np.where(escape, eu, du), np.where(escape, ev, dv), newton, escape
 
 
 def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
@@ -225,7 +225,7 @@ def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
         Su, Sv = D[1][idx], D[2][idx]
         Hi = (H[0][idx], H[1][idx], H[2][idx])
         no = np.zeros(idx.size, bool)
-        du, dv, newton, escape, eu, ev = _ascent_step(Su, Sv, gu[idx], gv[idx], *Hi, radius[idx], no, no)
+        du, dv, newton, escape = _ascent_step(Su, Sv, gu[idx], gv[idx], *Hi, radius[idx], no, no)
         # a step out of the face's box on one side runs along that side instead (projected): a clamped step
         # crawls along it; out on both sides at a corner, no step of any length moves
         b_, cl = fs.bounds[fid[idx]], fs.closed[fid[idx]]
@@ -234,13 +234,12 @@ def _face_newton(fs, prof, c, fid, u, v, iters: int = 40):
         one = out_u ^ out_v
         if one.any():
             p_ = _ascent_step(Su, Sv, gu[idx], gv[idx], *Hi, radius[idx], out_u & one, out_v & one)
-            old = (du, dv, newton, escape, eu, ev)
-            du, dv, newton, escape, eu, ev = (np.where(one, a_, b) for a_, b in zip(p_, old))
+            du, dv, newton, escape = (np.where(one, a_, b) for a_, b in zip(p_, (du, dv, newton, escape)))
         corner = out_u & out_v
         if corner.any():
             active[idx[corner]] = False
-            kept = (idx, du, dv, newton, escape, eu, ev, Su, Sv)
-            idx, du, dv, newton, escape, eu, ev, Su, Sv = (x[~corner] for x in kept)
+            kept = (idx, du, dv, newton, escape, Su, Sv)
+            idx, du, dv, newton, escape, Su, Sv = (x[~corner] for x in kept)
             if idx.size == 0:
                 break
         step = np.linalg.norm(Su * du[:, None] + Sv * dv[:, None], axis=1)
