@@ -236,3 +236,48 @@ def test_the_grid_trimming_test_classifies_every_point_as_the_point_test(part):
         grid = face.contains_uv_grid(us, vs)
         assert grid.shape == (us.size, vs.size) and 0 < grid.sum() < grid.size
         np.testing.assert_array_equal(grid, face.contains_uv(U.ravel(), V.ravel()).reshape(U.shape))
+
+
+def _even_odd(u, v, polys):
+    """Brute-force even-odd rule: every point against every polygon edge (rows ``lo < v <= hi``, the crossing
+    at the same ``x`` as the library's)."""
+    x0 = np.concatenate([p[:, 0] for p in polys])
+    y0 = np.concatenate([p[:, 1] for p in polys])
+    x1 = np.concatenate([np.roll(p[:, 0], -1) for p in polys])
+    y1 = np.concatenate([np.roll(p[:, 1], -1) for p in polys])
+    out = np.zeros(u.size, bool)
+    for a in range(0, u.size, 100):
+        pu, pv = u[a : a + 100, None], v[a : a + 100, None]
+        crosses = (y0 < pv) != (y1 < pv)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = x0 + (pv - y0) * (x1 - x0) / (y1 - y0)
+        out[a : a + 100] = np.sum(crosses & (pu < x), axis=1) % 2 == 1
+    return out
+
+
+def test_the_point_trimming_test_equals_a_brute_force_on_rows_of_many_points():
+    """Points clipped onto the sides of the parameter box, where the block's loops run along those sides (a row
+    of many points of one v, crossed by hundreds of polygon edges: the check's refinement patches), polygon
+    vertices and NaN: ``contains_uv``'s rows sorted with their crossings, and its point-by-crossing comparison
+    (small batches force the first), equal a brute-force even-odd rule over every edge."""
+    from machsurf_cad.geometry.face import _points_in_polygons
+    from machsurf_cad.occ import read_step_faces
+
+    rng = np.random.default_rng(5)
+    off = np.linspace(-1.0, 1.0, 5)
+    OU, OV = (a.ravel() for a in np.meshgrid(off, off, indexing="ij"))
+    for face in read_step_faces(ROOT / "example_parts" / "freeform_block.step"):
+        polys = face.trim_polygons()
+        u0, u1, v0, v1 = face.uv_bounds
+        cu, cv = rng.uniform(u0, u1, 60), rng.uniform(v0, v1, 60)
+        u = np.clip(cu[:, None] + 0.1 * (u1 - u0) * OU, u0, u1).ravel()
+        v = np.clip(cv[:, None] + 0.1 * (v1 - v0) * OV, v0, v1).ravel()
+        verts = np.concatenate(polys)[:: max(1, sum(len(p) for p in polys) // 300)]
+        u = np.r_[u, verts[:, 0], np.nan, 0.5 * (u0 + u1)]
+        v = np.r_[v, verts[:, 1], 0.5 * (v0 + v1), np.nan]
+        want = _even_odd(u, v, polys)
+        assert 0 < want.sum() < want.size - 2
+        on_sides = np.isin(v, [v0, v1]).sum()
+        assert on_sides > 50  # rows of many points exercised
+        np.testing.assert_array_equal(face.contains_uv(u, v), want)
+        np.testing.assert_array_equal(_points_in_polygons(u, v, polys, batch=50), want)

@@ -148,31 +148,63 @@ class Face:
         return cache[key]
 
 
-def _points_in_polygons(u, v, polys) -> np.ndarray:
-    """Even-odd rule over several closed polygons at once (a face's outer loop and holes), vectorised:
-    the points sorted by v once; each polygon edge crosses the horizontal rays of the points in its v
-    range (a contiguous run of the sorted points), and a point's parity is the number of edges crossing
-    its ray to its right (O(E log N + crossings) time and memory, no points x edges array)."""
+def _points_in_polygons(u, v, polys, batch: int = 4_000_000) -> np.ndarray:
+    """Even-odd rule over several closed polygons at once (a face's outer loop and holes), vectorised.
+
+    The points are sorted by v once and grouped in rows of equal v. Each polygon edge crosses the
+    horizontal rays of the rows in its v range ``lo < v <= hi`` at ``x`` (computed once per edge and row),
+    and flips the points of the row with ``u < x``. A row of many points (e.g. points clipped onto a side
+    of the parameter box, where a loop runs along that side) is counted by sorting its crossings with its
+    points instead of comparing every crossing with every point. O((E + N) log N + crossings) time,
+    memory bounded by ``batch`` (edge, row) crossings or (crossing, point) comparisons at a time, no
+    points x edges array."""
     uf = np.asarray(u, float).ravel()
     vf = np.asarray(v, float).ravel()
     order = np.argsort(vf, kind="stable")
     vs, us = vf[order], uf[order]
-    (x0, y0, x1, y1), e, start, counts = _edge_runs(polys, vs)
+    new_row = np.r_[True, vs[1:] != vs[:-1]] if vs.size else np.zeros(0, bool)
+    row_first = np.nonzero(new_row)[0]  # in the sorted order
+    mult = np.diff(np.r_[row_first, vs.size])
+    row_of = np.cumsum(new_row) - 1
+    (x0, y0, x1, y1), e, start, counts = _edge_runs(polys, vs[row_first])
     flips = np.zeros(uf.size, bool)
     done = 0
-    while done < e.size:  # in batches of about 4 million crossings (bounded memory)
-        stop = done + max(1, int(np.searchsorted(np.cumsum(counts[done:]), 4_000_000)))
+    while done < e.size:  # edges in batches of at most ``batch`` (edge, row) crossings
+        stop = done + max(1, int(np.searchsorted(np.cumsum(counts[done:]), batch)))
         eb, cb = e[done:stop], counts[done:stop]
         edge = np.repeat(eb, cb)
-        first = np.repeat(start[eb] - np.cumsum(np.r_[0, cb[:-1]]), cb)
-        k = first + np.arange(edge.size)  # index of each crossed point in the sorted order
-        xint = x0[edge] + (vs[k] - y0[edge]) * (x1[edge] - x0[edge]) / (y1[edge] - y0[edge])
-        right = us[k] < xint
-        flips ^= (np.bincount(k[right], minlength=uf.size) & 1).astype(bool)
+        row = np.repeat(start[eb] - np.cumsum(np.r_[0, cb[:-1]]), cb) + np.arange(edge.size)
+        xint = x0[edge] + (vs[row_first[row]] - y0[edge]) * (x1[edge] - x0[edge]) / (y1[edge] - y0[edge])
+        m = mult[row]
+        if int(m.sum()) <= batch:  # each crossing against each point of its row
+            k = np.repeat(row_first[row] - np.cumsum(np.r_[0, m[:-1]]), m) + np.arange(int(m.sum()))
+            right = us[k] < np.repeat(xint, m)
+            flips ^= (np.bincount(k[right], minlength=uf.size) & 1).astype(bool)
+        else:  # the rows' crossings and points sorted together: per point, the crossings right of it
+            lo, hi = row_first[row.min()], row_first[row.max()] + mult[row.max()]
+            flips[lo:hi] ^= (_crossings_right(row, xint, row_of[lo:hi], us[lo:hi]) & 1).astype(bool)
         done = stop
     out = np.empty(uf.size, bool)
     out[order] = flips
     return out.reshape(np.shape(u))
+
+
+def _crossings_right(row, xint, prow, pu) -> np.ndarray:
+    """Per point (row ``prow``, abscissa ``pu``): how many crossings ``(row, xint)`` of its row have
+    ``pu < xint``, by one sort of both (a crossing at a point's own abscissa sorts before it)."""
+    n = row.size
+    kind = np.r_[np.zeros(n, np.int8), np.ones(pu.size, np.int8)]
+    order = np.lexsort((kind, np.r_[xint, pu], np.r_[row, prow]))
+    is_cross = order < n
+    seen = np.cumsum(is_cross)  # crossings up to each sorted position
+    r0 = min(int(row.min()), int(prow.min()))
+    per_row = np.bincount(row - r0, minlength=int(max(row.max(), prow.max())) - r0 + 1)
+    before_row = np.cumsum(per_row) - per_row
+    at = order[~is_cross] - n
+    r = prow[at] - r0
+    out = np.empty(pu.size, np.int64)
+    out[at] = per_row[r] - (seen[~is_cross] - before_row[r])
+    return out
 
 
 def _grid_in_polygons(us, vs, polys) -> np.ndarray:

@@ -112,7 +112,7 @@ def fine_cells(fs: FaceSet, factor: int = 4) -> FineCells:
         if mine.size == 0:
             continue
         p, rise, cov = _face_fine(fs, i, factor)
-        dist, k = cKDTree(pool_xyz[mine]).query(p)
+        dist, k = cKDTree(pool_xyz[mine]).query(p, workers=-1)
         XYZ.append(p)
         RISE.append(rise)
         COV.append(cov)
