@@ -14,6 +14,7 @@ from collections import OrderedDict
 from typing import NamedTuple
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .chunking import check_chunks, split_map, threaded_split_map
 
@@ -40,6 +41,24 @@ def _blocks(tree, centers, reach: float, count: bool, chunk: int = 256, pairs: i
         yield slice(start + a, stop)
 
 
+def _capsule_pairs(tree, T, A, length: float, radius: float, pad: float):
+    """(placement, sample) pairs, sorted, of every sample within ``pad`` of the cylinder of ``radius`` and
+    ``length`` on each placement's axis from its tip (and some further ones): the samples within spheres along
+    the axis that cover it, ``radius`` long apart (instead of one sphere around the whole body, several times
+    as many samples on a long tool)."""
+    n_s = max(1, math.ceil(length / (1.5 * max(radius, 1e-9))))
+    a = length / (2 * n_s)
+    # a point of the padded cylinder is within hypot(a + pad, radius + pad) <= hypot(a, radius) + pad * sqrt(2)
+    # of the nearest centre (a hair more: the spheres' test is in floating point)
+    reach = (math.hypot(a, radius) + pad * math.sqrt(2)) * (1 + 1e-9) + 1e-9
+    zs = a * (2 * np.arange(n_s) + 1)
+    centres = (T[:, None, :] + A[:, None, :] * zs[None, :, None]).reshape(-1, 3)
+    near = cKDTree(centres).sparse_distance_matrix(tree, reach, output_type="ndarray")
+    key = np.sort((near["i"] // n_s).astype(np.int64) * tree.n + near["j"].astype(np.int64))
+    key = key[np.r_[True, key[1:] != key[:-1]]] if key.size else key  # (np.unique: slow on many values in numpy 2.3+)
+    return key // tree.n, key % tree.n
+
+
 def coarse(c, tree, P, h, tolerance, T, A, progress=None, clear=0.0):
     """The sampled pass over placements ``(T, A)``: per placement the smallest signed distance of a part
     sample to the cutting part, to shank and holder, and that sample; the samples inside the cutting
@@ -61,13 +80,19 @@ def coarse(c, tree, P, h, tolerance, T, A, progress=None, clear=0.0):
     d_val: list = []
     d_pl: list = []
     for sl in _blocks(tree, T + A * (L_all / 2), reach, count=clear > max(2.0, 4.0 * h)):
-        centers = T[sl] + A[sl] * (L_all / 2)
-        lists = tree.query_ball_point(centers, reach, workers=-1)
-        counts = np.fromiter((len(x) for x in lists), int, len(lists))
-        if counts.sum() == 0:
-            continue
-        pl = np.repeat(np.arange(sl.start, sl.stop), counts)
-        pi = np.concatenate([np.asarray(x, int) for x in lists if x])
+        if has_holder:  # every sample in the body's bounding sphere: shank and holder get a distance however far
+            lists = tree.query_ball_point(T[sl] + A[sl] * (L_all / 2), reach, workers=-1)
+            counts = np.fromiter((len(x) for x in lists), int, len(lists))
+            if counts.sum() == 0:
+                continue
+            pl = np.repeat(np.arange(sl.start, sl.stop), counts)
+            pi = np.concatenate([np.asarray(x, int) for x in lists if x])
+        else:  # only the samples the cutting part's figures can use: those within ``pad`` of it
+            pl, pi = _capsule_pairs(tree, T[sl], A[sl], L_all, r_all, pad)
+            if pl.size == 0:
+                continue
+            counts = np.bincount(pl, minlength=sl.stop - sl.start)
+            pl = pl + sl.start
         rel = P[pi] - T[pl]
         z = np.einsum("ij,ij->i", rel, A[pl])
         rho = np.linalg.norm(rel - z[:, None] * A[pl], axis=1)

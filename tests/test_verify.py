@@ -524,3 +524,55 @@ def test_the_check_does_not_depend_on_the_order_of_the_faces():
     assert set(a.worst_face[a.status != 0]) == {1} and set(b.worst_face[b.status != 0]) == {0}
     assert a.face_names[a.worst_face[5]] == b.face_names[b.worst_face[5]] == "shelf"
     np.testing.assert_array_equal(np.array(a.face_names)[a.sample_face], np.array(b.face_names)[b.sample_face])
+
+
+@pytest.mark.parametrize("tool", ["ball:D=10", "bull:D=6,r=1,L=40", "cone:D=6,angle=10,L=20"])
+@pytest.mark.parametrize("clear", [0.0, 5.0])
+def test_the_sampled_pass_equals_a_brute_force_over_every_sample(tool, clear):
+    """The sampled pass finds a cutting tool's samples through spheres along its axis (not one sphere around
+    the whole body): per placement the smallest distance, its sample (the first of equal ones) and the samples
+    inside the tool with their depths equal the same figures taken over every sample of the part, bit for bit
+    (tilted axes, samples up to the clearance beyond the tool)."""
+    from scipy.spatial import cKDTree
+
+    from machsurf_cad.coarsepass import coarse
+
+    rng = np.random.default_rng(11)
+    c = ms.parse_cutter(tool)
+    h, tol = 0.5, 0.01
+    x, y = np.meshgrid(np.arange(-20, 20, h), np.arange(-20, 20, h))
+    P = np.column_stack([x.ravel(), y.ravel(), 2 * np.sin(x.ravel() / 4) * np.cos(y.ravel() / 5)])
+    P = np.concatenate([P, P[::7] + [0.0, 0.0, 12.0]])  # a second sheet at the height of the tool's body
+    m = 300
+    A = rng.normal([0, 0, 1], 0.4, (m, 3))
+    A /= np.linalg.norm(A, axis=1, keepdims=True)
+    T = np.column_stack([rng.uniform(-12, 12, (m, 2)), rng.uniform(-1.5, 8.0, m)])
+    # lone samples far from the part, each in a corner of the region the figures see (``pad`` beyond the tool's
+    # radius, below its tip or above its top) of a placement: the only sample that placement sees
+    pad = h + tol + clear
+    r_cut = c.profile_points(16)[:, 0].max()
+    eps = np.array([0.02, 0.1, 0.3])
+    lone = np.column_stack([100.0 + 10 * np.arange(6), np.zeros(6), np.zeros(6)])
+    P = np.concatenate([P, lone])
+    depth = np.r_[-(pad - eps), c.length + pad - eps]
+    T[:6] = lone - np.column_stack([r_cut + pad - np.r_[eps, eps], np.zeros(6), depth])
+    A[:6] = [0.0, 0.0, 1.0]
+    cut_d, _, seed, idx, val, _, pl = coarse(c, cKDTree(P), P, h, tol, T, A, clear=clear)
+    want_d, want_seed = np.full(m, np.inf), np.full(m, -1)
+    pairs = []
+    for k in range(m):
+        rel = P - T[k]
+        Ak = np.broadcast_to(A[k], rel.shape)  # the pass's own arithmetic, for equal bits
+        z = np.einsum("ij,ij->i", rel, Ak)
+        rho = np.linalg.norm(rel - z[:, None] * Ak, axis=1)
+        near = (z > -pad) & (z < c.length + pad) & (rho < c.profile_points(16)[:, 0].max() + pad)
+        sd = np.full(P.shape[0], np.inf)
+        sd[near] = c.cutting_distance_rz(rho[near], z[near])
+        if np.isfinite(sd).any():
+            want_d[k], want_seed[k] = sd.min(), int(np.argmin(sd))
+        pairs += [(k, i, -sd[i]) for i in np.flatnonzero(sd < 0)]
+    assert np.isfinite(want_d).sum() > m // 2 and len(pairs) > 100 and np.all(want_seed[:6] >= P.shape[0] - 6)
+    np.testing.assert_array_equal(cut_d, want_d)
+    np.testing.assert_array_equal(seed, want_seed)
+    got = sorted(zip(pl.tolist(), idx.tolist(), val.tolist()))
+    assert got == sorted(pairs)
