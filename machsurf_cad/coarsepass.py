@@ -16,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .arrays import unique_sorted
 from .chunking import check_chunks, split_map, threaded_split_map
 
 
@@ -54,8 +55,7 @@ def _capsule_pairs(tree, T, A, length: float, radius: float, pad: float):
     zs = a * (2 * np.arange(n_s) + 1)
     centres = (T[:, None, :] + A[:, None, :] * zs[None, :, None]).reshape(-1, 3)
     near = cKDTree(centres).sparse_distance_matrix(tree, reach, output_type="ndarray")
-    key = np.sort((near["i"] // n_s).astype(np.int64) * tree.n + near["j"].astype(np.int64))
-    key = key[np.r_[True, key[1:] != key[:-1]]] if key.size else key  # (np.unique: slow on many values in numpy 2.3+)
+    key = unique_sorted((near["i"] // n_s).astype(np.int64) * tree.n + near["j"].astype(np.int64))
     return key // tree.n, key % tree.n
 
 

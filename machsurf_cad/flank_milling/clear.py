@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..arrays import unique_sorted
 from ..errors import InputError
 from ..results import Result
 from .path import FlankPath, _aggregate
@@ -152,7 +153,7 @@ class _Body:
         ``limit`` would not clear."""
         R = self.R
         centres = tip + np.outer(np.arange(0.0, t_top + 3 * R, R), a)
-        near = np.unique(np.concatenate([np.asarray(k, int) for k in self.tree.query_ball_point(centres, 1.5 * R)]))
+        near = unique_sorted(np.concatenate([np.asarray(k, int) for k in self.tree.query_ball_point(centres, 1.5 * R)]))
         if near.size == 0:
             return -np.inf, 0.0
         d = self.P[near] - tip

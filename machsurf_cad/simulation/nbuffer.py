@@ -50,6 +50,7 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..arrays import unique_sorted
 from ..errors import InputError
 from .rays import ray_core, ray_entry, sphere_trace
 
@@ -349,7 +350,7 @@ def inside_depth(cutter, P, T, A, heights, radii, margin: float, iterations: int
     keep = rg <= best[rs] + margin
     rs, rp = rs[keep], rp[keep]
     # the intervals [j, j + 1] on each side of the candidates, each once
-    key = np.unique(np.concatenate([rs * n + rp - 1, rs * n + rp]).astype(np.int64))
+    key = unique_sorted(np.concatenate([rs * n + rp - 1, rs * n + rp]).astype(np.int64))
     js, jp = key // n, key % n
     ok = (jp >= 0) & (jp < n - 1) & (key >= 0)
     js, jp = js[ok], jp[ok]
