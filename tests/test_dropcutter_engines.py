@@ -189,7 +189,7 @@ def test_an_edge_grazing_the_disc_between_its_samples_lifts_the_tool(engine):
     assert abs(r.height[0] - expected) <= 1e-9
 
 
-@pytest.mark.parametrize("name", ["mould_insert.step", "freeform_block.step"])
+@pytest.mark.parametrize("name", ["mould_insert.step", pytest.param("freeform_block.step", marks=pytest.mark.slow)])
 def test_fine_cells_cover_every_face_point(parts, name):
     """The compiled kernel skips a neighbourhood when its cells' bounds cannot beat a contact found. That is
     exact only if every face point lies within a fine sample's cover, that fine sample's cell (its owner)
@@ -249,7 +249,9 @@ def test_a_closed_edge_is_searched_across_its_seam(engine):
     assert ms.drop_cutter([disc], tool, c, engine=engine).height[0] == pytest.approx(expect, abs=1e-9)
 
 
-@pytest.mark.parametrize("engine", ["numpy", pytest.param("compiled", marks=needs_numba)])
+@pytest.mark.parametrize(  # the numpy engine in the slow tier: the fast one compares the engines point for point
+    "engine", [pytest.param("numpy", marks=pytest.mark.slow), pytest.param("compiled", marks=needs_numba)]
+)
 def test_ball_heights_equal_an_independent_reference_to_1e6_mm_near_the_trims_too(parts, engine):
     """The ball D10 on the block (a hole, long degree-8 trimming curves): 300 random points and 200 points
     within 1 mm in plan of a trimming edge against ``tests/ball_reference.py`` (dense samples climbed to

@@ -615,7 +615,7 @@ def test_the_example_blocks_hole_edge_contact_equals_the_brute_force():
 
 
 @needs_kernel
-@pytest.mark.parametrize("engine", ["numpy", "compiled"])
+@pytest.mark.parametrize("engine", [pytest.param("numpy", marks=pytest.mark.slow), "compiled"])  # numpy: slow tier
 def test_a_second_maximum_on_one_edge_is_found(engine):
     """FreeCAD's stock 45-degree chamfer (a flat bottom D5 under a widening cone) over the block's hole,
     slightly wider than the hole: the bottom's rim meets the hole's circle on two sides, the higher side only

@@ -30,7 +30,7 @@ def _plane(alpha_deg):
 def test_flat_floor_gives_the_closed_form_step(tool, H):
     """On a flat floor every line is the closed-form step-over from the last, and the cusp is H exactly."""
     cutter = ms.parse_cutter(tool)
-    tp = ms.raster([_plane(0.0)], cutter, scallop=H, extent=(-20, 20, -20, 20))
+    tp = ms.raster([_plane(0.0)], cutter, scallop=H, extent=(-20, 20, -8, 8))  # a ball: 26 lines
     i = tp.info
     step = ms.scallop_stepover(H, cutter)
     gaps = np.diff(_line_offsets(tp))
