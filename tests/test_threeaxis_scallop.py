@@ -92,3 +92,34 @@ def test_a_wall_is_the_cutter_limit_not_a_scallop():
     assert i["scallop_planned_max_mm"] <= 0.01 * (1 + 1e-9)
     gaps = np.diff(_line_offsets(tp))
     assert np.median(gaps) == pytest.approx(step, rel=1e-6) and i["n_lines"] <= 24 / step + 3  # no collapse
+
+
+@pytest.mark.parametrize(
+    "tool", ["ball:D=10", "bull:D=10,r=2", "flat:D=6", "cone:D=6,angle=10,L=20", "drum:D=30,Rp=60,L=20"]
+)
+def test_the_swept_surface_equals_the_minimum_over_every_position(tool):
+    """The swept lower surface computes only the positions whose lower bound beats the best term found: it
+    equals the minimum over every position of the line (written here), bit for bit, on a wavy line with a
+    stretch of no part (NaN), offsets beyond the rim and NaN offsets."""
+    from machsurf_cad.threeaxis.scallop import SweptLine
+    from machsurf_cad.threeaxis.solves import _Profile
+
+    rng = np.random.default_rng(0)
+    prof = _Profile(ms.parse_cutter(tool))
+    s = np.linspace(0, 60, 241)
+    z = np.sin(s / 5) * 3 + rng.normal(0, 0.05, s.size)
+    z[100:110] = np.nan
+    line = SweptLine(prof, s, z)
+    rows = rng.integers(0, s.size, 2000)
+    t = rng.uniform(-1.1 * prof.R, 1.1 * prof.R, rows.size)
+    t[:5] = np.nan
+    zr = line.z  # the positions, refined along the line (inf where no part)
+    want = np.full(rows.size, np.inf)
+    for k in line.k:
+        j = line.refine * rows + k
+        zk = np.where((j >= 0) & (j < zr.size), zr[np.clip(j, 0, zr.size - 1)], np.inf)
+        h = prof(np.hypot(k * line.ds, t))[0]
+        want = np.minimum(want, zk + np.where(np.isfinite(h), h, np.inf))
+    got = line(rows, t)
+    assert np.isfinite(got).sum() > rows.size // 2
+    np.testing.assert_array_equal(got, want)

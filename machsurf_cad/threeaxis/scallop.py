@@ -46,15 +46,33 @@ class SweptLine:
         self.z = np.append(np.where(np.isfinite(zr), zr, np.inf), z[-1] if np.isfinite(z[-1]) else np.inf)
         self.K = int(math.ceil(prof.R / self.ds))
         self.k = np.arange(-self.K, self.K + 1)
+        # a lower bound of each position's profile term: h on [|s - s'|, R] (rho is at least |s - s'|)
+        self.floor = prof.floor(np.abs(self.k) * self.ds) - 1e-9
 
     def __call__(self, i, t):
-        """Swept lower surface at the line's sample ``i`` (array) and offset ``t`` (array, same shape)."""
+        """Swept lower surface at the line's sample ``i`` (array) and offset ``t`` (array, same shape).
+
+        Each position's term is bounded below by its height plus the profile's floor beyond ``|s - s'|``
+        (:meth:`_Profile.floor`): the term of the position of least bound is computed first, then only the
+        positions whose bound is below it (the same minimum, bit for bit, from a few terms a row where the
+        profile rises outwards)."""
         idx = self.refine * np.asarray(i)[:, None] + self.k[None, :]
         inside = (idx >= 0) & (idx < self.z.size)
         zs = np.where(inside, self.z[np.clip(idx, 0, self.z.size - 1)], np.inf)
-        rho = np.hypot(self.k[None, :] * self.ds, np.asarray(t, float)[:, None])
+        t = np.asarray(t, float)
+        bound = zs + self.floor[None, :]
+        rows = np.arange(zs.shape[0])
+        j0 = np.argmin(bound, axis=1)
+        first = self._terms(zs[rows, j0], np.hypot(self.k[j0] * self.ds, t))
+        r, c = np.nonzero(bound < first[:, None])
+        out = first.copy()
+        np.minimum.at(out, r, self._terms(zs[r, c], np.hypot(self.k[c] * self.ds, t[r])))
+        return out
+
+    def _terms(self, zs, rho):
+        """The swept surface's terms: a position's height plus the profile at ``rho`` (inf beyond the rim)."""
         h = self.prof(rho)[0]
-        return np.min(zs + np.where(np.isfinite(h), h, np.inf), axis=1)
+        return zs + np.where(np.isfinite(h), h, np.inf)
 
 
 def cusp_points(a: SweptLine, ta: float, b: SweptLine, tb: float, rows, lo, hi, iters: int = 40):
