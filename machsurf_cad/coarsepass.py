@@ -1,8 +1,9 @@
 """The sampled pass of the tool-body check (:func:`machsurf_cad.verify`): per tool placement, the part
-samples within the tool's bounding sphere (a k-d tree) measured against the body in its (rho, z)
-half-plane. Each placement's figures depend on no other placement, so the pass runs in chunks or
-threads, and the placements of the last checks are kept by their exact bits: a path checked again after
-a few of its moves changed measures only the new placements.
+samples near the tool (a k-d tree: spheres along the axis of a bare cutter, the bounding sphere of a body
+with shank or holder) measured against the body in its (rho, z) half-plane. Each placement's figures
+depend on no other placement, so the pass runs in chunks or threads, and the placements of the last
+checks are kept by their exact bits: a path checked again after a few of its moves changed measures only
+the new placements.
 """
 
 from __future__ import annotations
@@ -44,10 +45,10 @@ def _blocks(tree, centers, reach: float, count: bool, chunk: int = 256, pairs: i
 
 def _capsule_pairs(tree, T, A, length: float, radius: float, pad: float):
     """(placement, sample) pairs, sorted, of every sample within ``pad`` of the cylinder of ``radius`` and
-    ``length`` on each placement's axis from its tip (and some further ones): the samples within spheres along
-    the axis that cover it, ``radius`` long apart (instead of one sphere around the whole body, several times
-    as many samples on a long tool)."""
-    n_s = max(1, math.ceil(length / (1.5 * max(radius, 1e-9))))
+    ``length`` on each placement's axis from its tip (and some further ones): the samples within spheres
+    centred on the axis at most 1.5 ``(radius + pad)`` apart that cover it (instead of one sphere around the
+    whole body, several times as many samples on a long tool)."""
+    n_s = max(1, math.ceil(length / (1.5 * (radius + pad))))
     a = length / (2 * n_s)
     # a point of the padded cylinder is within hypot(a + pad, radius + pad) <= hypot(a, radius) + pad * sqrt(2)
     # of the nearest centre (a hair more: the spheres' test is in floating point)

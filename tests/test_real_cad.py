@@ -281,3 +281,9 @@ def test_the_point_trimming_test_equals_a_brute_force_on_rows_of_many_points():
         assert on_sides > 50  # rows of many points exercised
         np.testing.assert_array_equal(face.contains_uv(u, v), want)
         np.testing.assert_array_equal(_points_in_polygons(u, v, polys, batch=50), want)
+    # a polygon with a NaN vertex: its crossings are right of no point, in both branches
+    poly = [np.array([[0, 0], [1, 0], [np.nan, 0.5], [1, 1], [0, 1]], float)]
+    u, v = np.full(6, 0.5), np.full(6, 0.25)
+    for batch in (1, 4_000_000):
+        with np.errstate(invalid="ignore"):
+            np.testing.assert_array_equal(_points_in_polygons(u, v, poly, batch=batch), _even_odd(u, v, poly))

@@ -155,9 +155,10 @@ def _points_in_polygons(u, v, polys, batch: int = 4_000_000) -> np.ndarray:
     horizontal rays of the rows in its v range ``lo < v <= hi`` at ``x`` (computed once per edge and row),
     and flips the points of the row with ``u < x``. A row of many points (e.g. points clipped onto a side
     of the parameter box, where a loop runs along that side) is counted by sorting its crossings with its
-    points instead of comparing every crossing with every point. O((E + N) log N + crossings) time,
-    memory bounded by ``batch`` (edge, row) crossings or (crossing, point) comparisons at a time, no
-    points x edges array."""
+    points instead of comparing every crossing with every point. The edges go in batches of at most
+    ``batch`` (edge, row) crossings; a batch compares its crossings with the points of their rows when that
+    takes at most ``batch`` comparisons, else sorts them with the points of its span of rows (memory
+    O(N + batch), no points x edges array)."""
     uf = np.asarray(u, float).ravel()
     vf = np.asarray(v, float).ravel()
     order = np.argsort(vf, kind="stable")
@@ -191,8 +192,13 @@ def _points_in_polygons(u, v, polys, batch: int = 4_000_000) -> np.ndarray:
 
 def _crossings_right(row, xint, prow, pu) -> np.ndarray:
     """Per point (row ``prow``, abscissa ``pu``): how many crossings ``(row, xint)`` of its row have
-    ``pu < xint``, by one sort of both (a crossing at a point's own abscissa sorts before it)."""
+    ``pu < xint``, by one sort of both (a crossing at a point's own abscissa sorts before it; a NaN crossing,
+    from a NaN or overflowing polygon, is right of no point, as the comparison ``pu < xint`` says)."""
+    real = ~np.isnan(xint)
+    row, xint = row[real], xint[real]
     n = row.size
+    if n == 0:
+        return np.zeros(pu.size, np.int64)
     kind = np.r_[np.zeros(n, np.int8), np.ones(pu.size, np.int8)]
     order = np.lexsort((kind, np.r_[xint, pu], np.r_[row, prow]))
     is_cross = order < n

@@ -64,9 +64,12 @@ class SweptLine:
         rows = np.arange(zs.shape[0])
         j0 = np.argmin(bound, axis=1)
         first = self._terms(zs[rows, j0], np.hypot(self.k[j0] * self.ds, t))
-        r, c = np.nonzero(bound < first[:, None])
+        r, c = np.nonzero(bound < first[:, None])  # by row
         out = first.copy()
-        np.minimum.at(out, r, self._terms(zs[r, c], np.hypot(self.k[c] * self.ds, t[r])))
+        if r.size:
+            starts = np.flatnonzero(np.r_[True, r[1:] != r[:-1]])
+            terms = self._terms(zs[r, c], np.hypot(self.k[c] * self.ds, t[r]))
+            out[r[starts]] = np.minimum(out[r[starts]], np.minimum.reduceat(terms, starts))
         return out
 
     def _terms(self, zs, rho):
