@@ -72,7 +72,7 @@ def coarse(c, tree, P, h, tolerance, T, A, progress=None, clear=0.0):
     L_all, r_all = c.body_length(), c.max_radius()
     has_holder = bool(c.body_parts())
     pad = h + tolerance + max(0.0, float(clear))
-    reach = math.hypot(L_all / 2, r_all) + pad
+    reach = math.hypot(L_all / 2 + pad, r_all + pad) * (1 + 1e-9)  # the padded body's corners too
     cut_d = np.full(m, np.inf)
     hold_d = np.full(m, np.inf)
     seed = np.full(m, -1)

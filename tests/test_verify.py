@@ -526,7 +526,7 @@ def test_the_check_does_not_depend_on_the_order_of_the_faces():
     np.testing.assert_array_equal(np.array(a.face_names)[a.sample_face], np.array(b.face_names)[b.sample_face])
 
 
-@pytest.mark.parametrize("tool", ["ball:D=10", "bull:D=6,r=1,L=40", "cone:D=6,angle=10,L=20"])
+@pytest.mark.parametrize("tool", ["ball:D=10", "bull:D=6,r=1,L=40", "cone:D=6,angle=10,L=20", "with holder"])
 @pytest.mark.parametrize("clear", [0.0, 5.0])
 def test_the_sampled_pass_equals_a_brute_force_over_every_sample(tool, clear):
     """The sampled pass finds a cutting tool's samples through spheres along its axis (not one sphere around
@@ -538,7 +538,10 @@ def test_the_sampled_pass_equals_a_brute_force_over_every_sample(tool, clear):
     from machsurf_cad.coarsepass import coarse
 
     rng = np.random.default_rng(11)
-    c = ms.parse_cutter(tool)
+    if tool == "with holder":  # the bounding sphere of the whole body: the cutting part's figures all the same
+        c = ms.BullNoseEndMill(10, 2, 20, shank=ms.Shank(16, 30), holder=ms.Shank(40, 40))
+    else:
+        c = ms.parse_cutter(tool)
     h, tol = 0.5, 0.01
     x, y = np.meshgrid(np.arange(-20, 20, h), np.arange(-20, 20, h))
     P = np.column_stack([x.ravel(), y.ravel(), 2 * np.sin(x.ravel() / 4) * np.cos(y.ravel() / 5)])
