@@ -263,6 +263,7 @@ def _dask(*args):
 
 
 @needs_kernel
+@pytest.mark.slow  # the local cluster's test stays in the fast tier
 def test_external_scheduler_and_workers_survive_a_killed_worker(tmp_path):
     """``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1; one worker is killed while the
     batch runs: every job still completes (Dask moves the lost worker's jobs), with the direct figures."""

@@ -44,7 +44,7 @@ def test_ball_on_a_plane_leaves_the_closed_form_scallop(s):
     assert res.report()["max_scallop_mm"] == res.max_scallop
 
 
-@pytest.mark.parametrize("kappa_sign", [1, -1])
+@pytest.mark.parametrize("kappa_sign", [1, pytest.param(-1, marks=pytest.mark.slow)])  # concave: slow tier
 def test_ball_across_a_cylinder_circle_circle_construction(kappa_sign):
     """Passes along the axis of a cylinder of radius 30 (convex: outside; concave: inside), contacts an
     angle apart: the cusp height is the circle-circle construction, solved here by brute force."""
