@@ -389,6 +389,7 @@ def test_deviation_on_the_positions_agrees_with_the_envelope():
     assert abs(a.max_abs - 0.3468) < 1e-4 and abs(b.max_abs - a.max_abs) < 1e-9
 
 
+@pytest.mark.slow
 def test_smooth_minimax_path_bounds_the_axis_turn_and_beats_the_rule_optima():
     """Beyond the paper: minimax settings along the surface with the axis turn between rules bounded.
     The turn rate (angle between consecutive axes over the travel of the rules' middles, computed here)

@@ -403,6 +403,7 @@ def test_colour_maps_with_legends_in_the_3d_view(tmp_path):
 
 
 @pytest.mark.skipif((FREECAD is None or XVFB is None) and not IN_CI, reason="FreeCAD GUI or xvfb-run is not installed")
+@pytest.mark.slow  # the panel test types into the add-on's own fields in the fast tier
 def test_tolerances_typed_in_the_property_editor_keep_every_digit(tmp_path):
     """Issue 29 item 1: keys typed into FreeCAD's own property editor (its QuantitySpinBox rounds a length to
     2 decimals in mm when it stores it): 0.5 um and 0.0005 mm come back as 0.0005 mm on a machining surface

@@ -230,6 +230,7 @@ def test_bad_input_is_refused_with_one_line():
 
 
 @needs_kernel
+@pytest.mark.slow  # the path-writing commands' simulation stays in the fast tier
 def test_simulate_command_on_the_example_block(tmp_path):
     """A 3-axis ball path on the block's top face, simulated on all 8 faces by the command; then the same path
     moved 0.05 mm into the part along the normal: max gouge 0.050 +- 0.001 mm and exit 2."""

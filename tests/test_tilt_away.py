@@ -186,6 +186,7 @@ def _three_blades():
     return blade, [floor, blade, near, far]
 
 
+@pytest.mark.slow  # the tilted path against the brute force stays in the fast tier
 def test_a_blade_between_two_blades_in_3_plus_2():
     """The ball D6 (25 mm long) along an axis 10 deg from +Z towards the next blade: its body clears that
     blade down to the floor, and the ball reaches the blade from 3 mm up (its centre R off the floor):
