@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .arrays import unique_sorted
+from .arrays import concat_ranges, unique_sorted
 from .chunking import check_chunks, split_map, threaded_split_map
 
 
@@ -211,7 +211,7 @@ def coarse_pass(c, tree, P, h, gouge_tolerance, T, A, chunks=1, map_chunks=None,
         o_pl, o_idx, o_val = memo.pairs  # sorted by the memo's placement
         lo = np.searchsorted(o_pl, old[hit], side="left")
         cnt = np.searchsorted(o_pl, old[hit], side="right") - lo
-        take = np.repeat(lo - np.cumsum(cnt) + cnt, cnt) + np.arange(cnt.sum())
+        take = concat_ranges(lo, cnt)
         pl = np.concatenate([np.repeat(hit, cnt), new[pl_new]])
         idx = np.concatenate([o_idx[take], idx_new])
         val = np.concatenate([o_val[take], val_new])

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..arrays import concat_ranges
 from ..errors import InputError
 from .bspline import BSplineCurve, BSplineSurface
 
@@ -166,7 +167,6 @@ def _points_in_polygons(u, v, polys, batch: int = 4_000_000) -> np.ndarray:
     new_row = np.r_[True, vs[1:] != vs[:-1]] if vs.size else np.zeros(0, bool)
     row_first = np.nonzero(new_row)[0]  # in the sorted order
     mult = np.diff(np.r_[row_first, vs.size])
-    row_of = np.cumsum(new_row) - 1
     (x0, y0, x1, y1), e, start, counts = _edge_runs(polys, vs[row_first])
     flips = np.zeros(uf.size, bool)
     done = 0
@@ -174,16 +174,17 @@ def _points_in_polygons(u, v, polys, batch: int = 4_000_000) -> np.ndarray:
         stop = done + max(1, int(np.searchsorted(np.cumsum(counts[done:]), batch)))
         eb, cb = e[done:stop], counts[done:stop]
         edge = np.repeat(eb, cb)
-        row = np.repeat(start[eb] - np.cumsum(np.r_[0, cb[:-1]]), cb) + np.arange(edge.size)
+        row = concat_ranges(start[eb], cb)
         xint = x0[edge] + (vs[row_first[row]] - y0[edge]) * (x1[edge] - x0[edge]) / (y1[edge] - y0[edge])
         m = mult[row]
         if int(m.sum()) <= batch:  # each crossing against each point of its row
-            k = np.repeat(row_first[row] - np.cumsum(np.r_[0, m[:-1]]), m) + np.arange(int(m.sum()))
+            k = concat_ranges(row_first[row], m)
             right = us[k] < np.repeat(xint, m)
             flips ^= (np.bincount(k[right], minlength=uf.size) & 1).astype(bool)
         else:  # the rows' crossings and points sorted together: per point, the crossings right of it
             lo, hi = row_first[row.min()], row_first[row.max()] + mult[row.max()]
-            flips[lo:hi] ^= (_crossings_right(row, xint, row_of[lo:hi], us[lo:hi]) & 1).astype(bool)
+            row_of = row.min() - 1 + np.cumsum(new_row[lo:hi])  # the points' rows (the span starts a row)
+            flips[lo:hi] ^= (_crossings_right(row, xint, row_of, us[lo:hi]) & 1).astype(bool)
         done = stop
     out = np.empty(uf.size, bool)
     out[order] = flips
@@ -220,7 +221,7 @@ def _grid_in_polygons(us, vs, polys) -> np.ndarray:
     from its right end."""
     (x0, y0, x1, y1), e, start, counts = _edge_runs(polys, vs)
     edge = np.repeat(e, counts)
-    row = np.repeat(start[e] - np.cumsum(np.r_[0, counts[:-1]]), counts) + np.arange(edge.size)
+    row = concat_ranges(start[e], counts)
     xint = x0[edge] + (vs[row] - y0[edge]) * (x1[edge] - x0[edge]) / (y1[edge] - y0[edge])
     D = np.zeros((vs.size, us.size + 1), np.uint8)  # crossing counts mod 256: their parity is all that counts
     np.add.at(D, (row, np.searchsorted(us, xint, side="left")), 1)

@@ -15,6 +15,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..arrays import concat_ranges
 from ..cutter_profiles import ArcSegment, LineSegment
 from ..geometry.bspline import _POWER_MAX_DEGREE
 from ..geometry.face import TRIM_TOLERANCE
@@ -142,7 +143,7 @@ def _slabs(fi, loops, px, py):
         s0 = np.clip(((lo - vmin) / dv).astype(np.int64), 0, ns - 1)
         s1 = np.clip(((hi - vmin) / dv).astype(np.int64), 0, ns - 1)
         cnt = s1 - s0 + 1
-        slab = np.repeat(s0, cnt) + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
+        slab = concat_ranges(s0, cnt)
         edge = np.repeat(np.arange(a.size), cnt)
         order = np.argsort(slab, kind="stable")
         starts.append(starts[-1][-1] + np.cumsum(np.bincount(slab, minlength=ns)))
