@@ -221,6 +221,45 @@ def test_fine_cells_cover_every_face_point(parts, name):
     assert checked > 2000
 
 
+def test_the_samples_bounds_hold_on_every_face_point_and_stop_at_the_faces_top(parts):
+    """Both engines skip a neighbourhood whose ``z + rise`` (face samples, edge samples, fine samples) cannot
+    beat a contact found. ``rise`` is cut to the face's highest pole (no face point is higher): checked on
+    random points of every mould face (inside its trim) against every sample whose cover holds them, and the
+    cut is exact at the tops of the walls (its bound is the wall's height, not a sample spacing above it)."""
+    from machsurf_cad.threeaxis.cells import fine_cells
+    from machsurf_cad.threeaxis.faceset import hull_top
+
+    fs = ms.threeaxis.faceset.face_set(parts["mould_insert.step"], spacing=5 / 3)
+    c = fine_cells(fs)
+    pool = np.concatenate([fs.sample_xyz, fs.edge_xyz])
+    pool_face = np.concatenate([fs.sample_face, fs.edge_face[fs.edge_id]])
+    owner = np.repeat(np.arange(pool.shape[0]), np.diff(c.start))
+    rng = np.random.default_rng(5)
+    checked = at_top = 0
+    for i, face in enumerate(fs.faces):
+        u0, u1, v0, v1 = face.uv_bounds
+        u, v = rng.uniform(u0, u1, 300), rng.uniform(v0, v1, 300)
+        keep = face.contains_uv(u, v)
+        p = face.surface.evaluate(u[keep], v[keep])
+        top = hull_top(face.surface)
+        assert np.all(p[:, 2] <= top + 1e-12)
+        for xyz, rise, cov in ((pool[pool_face == i], fs.rise[pool_face == i], fs.cover[pool_face == i]),
+                               (c.xyz[pool_face[owner] == i], c.rise[pool_face[owner] == i],
+                                c.cover[pool_face[owner] == i])):  # fmt: skip
+            d = np.linalg.norm(p[:, None, :] - xyz[None, :, :], axis=2)
+            inside = d <= cov[None, :]
+            assert inside.any(axis=1).all()
+            bound = np.where(inside, xyz[None, :, 2] + rise[None, :], np.inf)
+            assert np.all(p[:, 2, None] <= bound + 1e-12)
+            assert np.all(xyz[:, 2] + rise <= max(top, xyz[:, 2].max()) + 1e-12)
+        checked += p.shape[0]
+        if p.shape[0] and np.ptp(p[:, 2]) > 1.0:  # a wall or a slope: its top samples' bounds stop at its top
+            hi = fs.sample_xyz[fs.sample_face == i, 2] >= top - 1e-9
+            at_top += int(hi.sum())
+            assert np.all(fs.rise[: fs.sample_xyz.shape[0]][fs.sample_face == i][hi] <= 1e-9)
+    assert checked > 4000 and at_top > 50
+
+
 @pytest.mark.parametrize("engine", ["numpy", pytest.param("compiled", marks=needs_numba)])
 def test_a_closed_edge_is_searched_across_its_seam(engine):
     """A disc of radius 5 trimmed by one circle (its seam at angle 0) from a plane rising towards -10 deg: a

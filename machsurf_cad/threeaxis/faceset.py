@@ -157,6 +157,19 @@ def _edge_rise(c: BSplineCurve, t, de, half: float) -> np.ndarray:
     return np.minimum(half, 1.1 * half * (tz + kappa * half))
 
 
+def hull_top(s: BSplineSurface) -> float:
+    """The highest z of the surface's poles: no point of the surface is higher (the convex hull property of a
+    B-spline; its weights are positive)."""
+    return float(np.asarray(s.poles)[..., 2].max())
+
+
+def capped_rise(rise: np.ndarray, z: np.ndarray, top: float) -> np.ndarray:
+    """``rise`` (how much higher than ``z`` the face gets near each sample, mm) cut to what the face's
+    :func:`hull_top` allows: the bounds of the samples at the top of a face (a wall's upper edge, a plateau's
+    rim) then stop at its height instead of rising by the sample spacing above it."""
+    return np.minimum(rise, np.maximum(top - z, 0.0))
+
+
 def _closed(P) -> tuple[bool, bool]:
     """Whether the face's parameter box closes on itself along u and along v (a full revolution: a
     cylinder, torus or revolved face whose seam is inside the face), from its sample grid."""
@@ -333,12 +346,13 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         CLOSED.append(_closed(d.point))
         pts = d.point.reshape(-1, 3)
         slope, delta, kappa = _slopes(d, nu, nv)
+        top = hull_top(s)
         keep = face.contains_uv_grid(us, vs).ravel() if face.is_trimmed else np.ones(U.size, bool)
         P.append(pts[keep])
         UV.append(np.stack([U.ravel()[keep], V.ravel()[keep]], axis=1))
         F.append(np.full(int(keep.sum()), i))
         COV.append(np.full(int(keep.sum()), delta))
-        RISE.append(delta * np.minimum(1.0, slope[keep] + kappa * delta))
+        RISE.append(capped_rise(delta * np.minimum(1.0, slope[keep] + kappa * delta), pts[keep, 2], top))
         FLAT.append(np.maximum(slope[keep] - kappa * delta, 0.0))
         curves = [c for loop in face.loops for c in loop] if face.is_trimmed else _box_edges(face)
         curves += _creases(face)
@@ -350,11 +364,11 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
             EP.append(de.point)
             e_slope = _slope(de.su, de.sv)
             ECOV.append(np.full(n, delta))
-            ERISE.append(delta * np.minimum(1.0, e_slope + kappa * delta))
+            ERISE.append(capped_rise(delta * np.minimum(1.0, e_slope + kappa * delta), de.point[:, 2], top))
             EFLAT.append(np.maximum(e_slope - kappa * delta, 0.0))
             half = 0.5 * float(np.linalg.norm(np.diff(de.point, axis=0), axis=1).max())
             EALONG.append(np.full(n, half))
-            EZ.append(_edge_rise(c, t, de, half))
+            EZ.append(capped_rise(_edge_rise(c, t, de, half), de.point[:, 2], top))
             ET.append(t)
             EUV.append(uv)
             EI.append(np.full(n, len(edges)))
