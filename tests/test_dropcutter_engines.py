@@ -144,6 +144,27 @@ def test_a_wall_exactly_R_from_the_axis_touches_the_side_and_does_not_lift_the_t
     assert np.abs(r.height - expected).max() <= 1e-9
 
 
+@pytest.mark.parametrize("engine", ["numpy", pytest.param("compiled", marks=needs_numba)])
+@pytest.mark.parametrize("tool,rc", [("ball:D=10", 5.0), ("bull:D=10,r=2", 2.0), ("flat:D=10", 0.0)])
+def test_stacked_faces_give_the_highest_one_across_the_upper_faces_edge(engine, tool, rc):
+    """A shelf z = 10 over 0 <= x <= 20 above a floor z = 9 that runs under it (a propeller's blades, one
+    above the other): the compiled kernel drops every sample that cannot reach the height a sample of the
+    shelf already lifts the tool to, ``10 - h(R)``; the floor stays, and wins where the shelf's edge has
+    gone up the profile by more than 1. Across the shelf's edge x = 20 the height is the closed form: on
+    the shelf 10, then the higher of its edge at plan distance d, 10 - h(d) (``rc`` the corner radius of
+    the D10 cutter), and the floor 9; the floor once d > R."""
+    floor = ms.builders.plane_patch((-20, -20, 9), (60, 0, 0), (0, 40, 0))
+    shelf = ms.builders.plane_patch((0, -20, 10), (20, 0, 0), (0, 40, 0))
+    x = np.r_[np.linspace(10.0, 30.0, 81), 24.99, 25.01]
+    r = ms.drop_cutter([floor, shelf], ms.parse_cutter(tool), np.column_stack([x, np.zeros_like(x)]), engine=engine)
+    d, flat = x - 20.0, 5.0 - rc
+    h = np.where(d <= flat, 0.0, rc - np.sqrt(np.maximum(rc**2 - (d - flat) ** 2, 0.0)))
+    expected = np.where(d <= 0, 10.0, np.where(d < 5.0, np.maximum(10.0 - h, 9.0), 9.0))
+    assert rc == 0 or np.sum(10.0 - h[(d > 0) & (d < 5)] < 9.0) >= 2  # there the floor is the answer
+    assert r.engine == engine
+    assert np.abs(r.height - expected).max() <= 1e-9
+
+
 def test_face_sets_and_heights_are_cached_by_content_and_tool():
     """A repeated query reuses the face set and the heights (the very same numbers); a face changed by 1 um,
     another tool or another engine never reuses them."""

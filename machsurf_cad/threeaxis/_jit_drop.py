@@ -6,9 +6,10 @@ samples within ``R + spacing`` of the axis (a plan grid instead of the k-d tree)
 bound, per (face, sector) group the best face seed, rim seeds and per (edge, sector, inside) the edge seeds;
 phase 1 solves the best face and rim seed, phase 2 every seed whose group bound still reaches the best
 height found, then up to four rounds of further face seeds and the circles where the profile's slope jumps.
-The local solves are the scalar forms in :mod:`._jit_solve`. Unlike the numpy path, a face or rim seed is
-also skipped when the fine cells (:mod:`.cells`) of its group bound it below the best height: the same
-answer with about half the local solves.
+The local solves are the scalar forms in :mod:`._jit_solve`. Unlike the numpy path, the kernel drops the
+gathered samples whose every bound is below the height a sample inside the disc already lifts the tool to
+(:func:`_prune`), and skips a face or rim seed when the fine cells (:mod:`.cells`) of its group bound it
+below the best height: the same answer with about half the local solves.
 """
 
 from __future__ import annotations
@@ -115,6 +116,34 @@ def _gather(cx, cy, rq, xyz, G):
                 rr[m] = rho
                 m += 1
     return idx[:m], rr[:m]
+
+
+@njit(cache=True)
+def _prune(idx, rr, SM, K, PR):
+    """The gathered samples without those whose every bound is below a height the tool is known to reach: a
+    sample strictly inside the disc lifts the tool to at least ``z - h(R)`` (a profile that rises to its
+    rim), and a sample whose ``z + rise`` (face or edge) less the profile's lowest point is below that, less
+    1e-9 mm, can neither bound nor seed a higher contact. The order of the rest is kept. On stacked faces
+    (a propeller's blades one above the other, a mould's floors and walls below its top) most of the
+    gathered samples go."""
+    m = idx.shape[0]
+    if m == 0 or PR[1][3] == 0.0:  # a profile that does not rise to its rim: no such height
+        return idx, rr
+    xyz, rise, erise, n_int = SM[0], SM[8], SM[17], SM[3]
+    R, h_R, h_min = K[0], K[3], PR[1][2]
+    low = -math.inf
+    for k in range(m):
+        if rr[k] < R * (1 - ON_CIRCLE):
+            low = max(low, xyz[idx[k], 2] - h_R)
+    low -= 1e-9 + h_min
+    n = 0
+    for k in range(m):
+        j = idx[k]
+        r = rise[j] if j < n_int else max(rise[j], erise[j - n_int])
+        if xyz[j, 2] + r >= low:
+            idx[n], rr[n] = j, rr[k]
+            n += 1
+    return idx[:n], rr[:n]
 
 
 @njit(cache=True)
@@ -241,6 +270,7 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
     best[4] = 0.0
     got = _gather(cx, cy, K[8], xyz, G)
     idx, rr = borrowed(got)
+    idx, rr = _prune(idx, rr, SM, K, PR)
     m = idx.shape[0]
     if m == 0:
         return
