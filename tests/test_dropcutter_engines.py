@@ -165,6 +165,49 @@ def test_stacked_faces_give_the_highest_one_across_the_upper_faces_edge(engine, 
     assert np.abs(r.height - expected).max() <= 1e-9
 
 
+@pytest.mark.parametrize("engine", ["numpy", pytest.param("compiled", marks=needs_numba)])
+def test_a_tip_below_the_reference_point_keeps_the_samples_that_can_win(engine):
+    """An APT cutter whose tip is 0.56 mm below its reference point (corner centred at (3, 2), a 10 degree
+    bottom: the profile's lowest point h_min < 0): over a floor z = 0 the tip stands at -h_min; a shelf
+    z = 1.5 whose edge is 4.96 from the axis would put it at 1.5 - h(4.96), lower, and the floor's samples,
+    which reach the shelf's height only through -h_min, must stay (they went, the tool 0.66 mm too low,
+    when the kernel's sample pruning took h_min with the wrong sign). On a floor alone with a tip 2 mm
+    below: 2 everywhere, not NaN."""
+    from machsurf_cad.threeaxis.solves import _Profile
+
+    tool = ms.parse_cutter("apt:D=10,r=2,e=3,f=2,alpha=10,beta=0,h=20")
+    prof = _Profile(tool)
+    assert prof.h_min < -0.5 and prof.monotone
+    floor = ms.builders.plane_patch((-20, -20, 0), (40, 0, 0), (0, 40, 0))
+    shelf = ms.builders.plane_patch((4.96, -20, 1.5), (20, 0, 0), (0, 40, 0))
+    r = ms.drop_cutter([floor, shelf], tool, [[0.0, 0.0]], engine=engine)
+    shelf_alone = 1.5 - (2.0 - np.sqrt(4.0 - (4.96 - 3.0) ** 2))
+    assert r.engine == engine and shelf_alone < -prof.h_min
+    assert abs(r.height[0] + prof.h_min) <= 1e-9
+    low = ms.parse_cutter("apt:D=10,r=2,e=3,f=0,alpha=0,beta=0,h=20")
+    assert np.abs(ms.drop_cutter([floor], low, [[0.0, 0.0], [3.0, 1.0]], engine=engine).height - 2.0).max() <= 1e-9
+
+
+@pytest.mark.parametrize("engine", ["numpy", pytest.param("compiled", marks=needs_numba)])
+def test_a_face_trimmed_beyond_its_knot_domain_is_not_capped_at_its_poles(engine):
+    """z = -5 (u - 2)^2 on the knot domain u in [0, 1] (poles' top z = -5), trimmed out to u = 2.9, where the
+    evaluated surface peaks at z = 0 (x = 20): its samples' bounds may not stop at the poles' top (they did,
+    and a flat D10 over the peak stood on a plane at -0.01 instead)."""
+    from machsurf_cad.geometry.bspline import BSplineSurface
+    from machsurf_cad.geometry.builders import line_segment
+    from machsurf_cad.geometry.face import Face
+    from machsurf_cad.threeaxis.faceset import hull_top
+
+    P = np.array([[[5.0 * i, 40.0 * j, z] for j in (0, 1)] for i, z in enumerate((-20.0, -10.0, -5.0))])
+    s = BSplineSurface(2, 1, [0, 1], [3, 3], [0, 1], [2, 2], P)
+    c = [(0, 0), (2.9, 0), (2.9, 1), (0, 1)]
+    ridge = Face(s, (tuple(line_segment(c[i], c[(i + 1) % 4]) for i in range(4)),), "ridge", uv_bounds=(0, 2.9, 0, 1))
+    assert hull_top(ridge) == np.inf
+    plane = ms.builders.plane_patch((15, 15, -0.01), (10, 0, 0), (0, 10, 0))
+    r = ms.drop_cutter([ridge, plane], ms.parse_cutter("flat:D=10"), [[20.0, 20.0], [19.5, 20.0]], engine=engine)
+    assert np.abs(r.height).max() <= 1e-9
+
+
 def test_face_sets_and_heights_are_cached_by_content_and_tool():
     """A repeated query reuses the face set and the heights (the very same numbers); a face changed by 1 um,
     another tool or another engine never reuses them."""
@@ -262,7 +305,8 @@ def test_the_samples_bounds_hold_on_every_face_point_and_stop_at_the_faces_top(p
         u, v = rng.uniform(u0, u1, 300), rng.uniform(v0, v1, 300)
         keep = face.contains_uv(u, v)
         p = face.surface.evaluate(u[keep], v[keep])
-        top = hull_top(face.surface)
+        top = hull_top(face)
+        assert np.isfinite(top)
         assert np.all(p[:, 2] <= top + 1e-12)
         for xyz, rise, cov in ((pool[pool_face == i], fs.rise[pool_face == i], fs.cover[pool_face == i]),
                                (c.xyz[pool_face[owner] == i], c.rise[pool_face[owner] == i],

@@ -122,10 +122,10 @@ def _gather(cx, cy, rq, xyz, G):
 def _prune(idx, rr, SM, K, PR):
     """The gathered samples without those whose every bound is below a height the tool is known to reach: a
     sample strictly inside the disc lifts the tool to at least ``z - h(R)`` (a profile that rises to its
-    rim), and a sample whose ``z + rise`` (face or edge) less the profile's lowest point is below that, less
-    1e-9 mm, can neither bound nor seed a higher contact. The order of the rest is kept. On stacked faces
-    (a propeller's blades one above the other, a mould's floors and walls below its top) most of the
-    gathered samples go."""
+    rim), and a sample whose ``z + rise`` (face or edge) less the profile's lowest point ``h_min`` (below
+    zero for a tip under the reference point) is below that, less 1e-9 mm, can neither bound nor seed a
+    higher contact. The order of the rest is kept. On stacked faces (a propeller's blades one above the
+    other, a mould's floors and walls below its top) most of the gathered samples go."""
     m = idx.shape[0]
     if m == 0 or PR[1][3] == 0.0:  # a profile that does not rise to its rim: no such height
         return idx, rr
@@ -133,9 +133,10 @@ def _prune(idx, rr, SM, K, PR):
     R, h_R, h_min = K[0], K[3], PR[1][2]
     low = -math.inf
     for k in range(m):
-        if rr[k] < R * (1 - ON_CIRCLE):
-            low = max(low, xyz[idx[k], 2] - h_R)
-    low -= 1e-9 + h_min
+        z = xyz[idx[k], 2] - h_R
+        if rr[k] < R * (1 - ON_CIRCLE) and z > low:  # (a NaN sample raises nothing)
+            low = z
+    low += h_min - 1e-9  # a sample is kept when z + rise - h_min reaches the known height (less 1e-9 mm)
     n = 0
     for k in range(m):
         j = idx[k]

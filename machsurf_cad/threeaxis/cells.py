@@ -21,7 +21,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..gougecheck import face_size
-from .faceset import FaceSet, _slope, _slopes, capped_rise, hull_top
+from .faceset import FaceSet, _slope, _slopes, capped_rise
 
 MAX_FINE_SAMPLES = 4_000_000
 """Fine samples at most (the factor falls for face sets that would need more)."""
@@ -92,7 +92,7 @@ def _face_fine(fs: FaceSet, i: int, factor: int):
         pts.append(de.point)
         slopes.append(_slope(de.su, de.sv))
     p, sl = np.concatenate(pts), np.concatenate(slopes)
-    rise = capped_rise(delta * np.minimum(1.0, sl + kappa * delta), p[:, 2], hull_top(s))
+    rise = capped_rise(delta * np.minimum(1.0, sl + kappa * delta), p[:, 2], float(fs.face_top[i]))
     return p, rise, np.full(p.shape[0], delta)
 
 

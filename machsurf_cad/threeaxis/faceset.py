@@ -157,16 +157,61 @@ def _edge_rise(c: BSplineCurve, t, de, half: float) -> np.ndarray:
     return np.minimum(half, 1.1 * half * (tz + kappa * half))
 
 
-def hull_top(s: BSplineSurface) -> float:
-    """The highest z of the surface's poles: no point of the surface is higher (the convex hull property of a
-    B-spline; its weights are positive)."""
-    return float(np.asarray(s.poles)[..., 2].max())
+def _stray(face: Face) -> np.ndarray:
+    """How far (parameter units, u then v) the face's parameter box and trimming curves reach outside its
+    surface's knot domain: 0 where a curve's poles (which hold it) lie inside, else from 1025 points along
+    the curve plus the bulge of the curve between them (an eighth of its largest second difference)."""
+    s = face.surface
+    k = np.array([s.knots_u[0], s.knots_u[-1], s.knots_v[0], s.knots_v[-1]], float)
+    out = np.zeros(2)
+
+    def reach(lo_u, hi_u, lo_v, hi_v, pad=(0.0, 0.0)):
+        out[0] = max(out[0], k[0] - lo_u + pad[0], hi_u - k[1] + pad[0])
+        out[1] = max(out[1], k[2] - lo_v + pad[1], hi_v - k[3] + pad[1])
+
+    reach(*face.uv_bounds)
+    for loop in face.loops if face.is_trimmed else ():
+        for c in loop:
+            P = np.asarray(c.poles, float).reshape(-1, 2)
+            if P[:, 0].min() >= k[0] and P[:, 0].max() <= k[1] and P[:, 1].min() >= k[2] and P[:, 1].max() <= k[3]:
+                continue
+            uv = c.evaluate(np.linspace(*c.bounds, 1025))
+            bulge = np.abs(np.diff(uv, 2, axis=0)).max(axis=0) / 8 if uv.shape[0] > 2 else np.zeros(2)
+            reach(uv[:, 0].min(), uv[:, 0].max(), uv[:, 1].min(), uv[:, 1].max(), tuple(bulge))
+    return np.where(np.isfinite(out), np.maximum(out, 0.0), np.inf)
+
+
+def hull_top(face: Face) -> float:
+    """A height no point of the face reaches above (mm, the tool frame's z): its surface's highest pole (the
+    convex hull property of a B-spline; its weights are positive), raised by twice the most z can climb
+    over the stretch (:func:`_stray`) by which its parameter box or trimming curves leave the knot domain,
+    where the surface is extrapolated. ``inf`` when that stretch is over a thousandth of the shortest knot
+    span (there the climb is not bounded so)."""
+    s = face.surface
+    Z = np.asarray(s.poles, float)[..., 2]
+    w = np.ones_like(Z) if s.weights is None else np.asarray(s.weights, float).reshape(Z.shape)
+    top = float(Z.max())
+    stray = _stray(face)
+    if not np.any(stray > 0):
+        return top
+    margin = 0.0
+    for d, knots, p in ((0, s.knots_u, s.degree_u), (1, s.knots_v, s.degree_v)):
+        if stray[d] == 0:
+            continue
+        spans = np.diff(np.asarray(knots, float))
+        short = float(spans[spans > 0].min()) if np.any(spans > 0) else 0.0
+        if not (stray[d] <= 1e-3 * short):
+            return math.inf
+        # |dz/du| <= 2 p (w_max / w_min) (z_max - z_min) / (shortest span): the rational derivative's bound
+        margin += 2.0 * (2 * p * float(w.max() / w.min()) * float(np.ptp(Z)) / short) * float(stray[d])
+    return top + margin
 
 
 def capped_rise(rise: np.ndarray, z: np.ndarray, top: float) -> np.ndarray:
     """``rise`` (how much higher than ``z`` the face gets near each sample, mm) cut to what the face's
-    :func:`hull_top` allows: the bounds of the samples at the top of a face (a wall's upper edge, a plateau's
-    rim) then stop at its height instead of rising by the sample spacing above it."""
+    :func:`hull_top` allows (nothing is cut where it is ``inf``): the bounds of the samples at the top of a
+    face (a wall's upper edge, a plateau's rim) then stop at its height instead of rising by the sample
+    spacing above it."""
     return np.minimum(rise, np.maximum(top - z, 0.0))
 
 
@@ -231,8 +276,11 @@ class FaceSet:
     cover, rise : ndarray
         Per sample (face samples, then edge samples): a radius (mm) within which of some sample every
         face point lies, and a bound on how much higher z gets within it (mm), from the sample's slope
-        and the face's largest normal turning between samples. They bound what a local solve can gain
-        over a sample, so seeds that cannot beat a known contact are skipped.
+        and the face's largest normal turning between samples, and at most up to the face's ``face_top``.
+        They bound what a local solve can gain over a sample, so seeds that cannot beat a known contact
+        are skipped.
+    face_top : ndarray (n_faces,)
+        Per face: no point of it is higher (mm, :func:`hull_top`; ``inf`` where that is not known).
     names : tuple of str
         The faces' names, as given.
     """
@@ -259,6 +307,7 @@ class FaceSet:
     edge_cover: np.ndarray = field(repr=False)
     min_tilt: np.ndarray = field(repr=False)
     edge_rise: np.ndarray = field(repr=False)
+    face_top: np.ndarray = field(repr=False)
 
     @cached_property
     def edge_loop(self) -> np.ndarray:
@@ -320,7 +369,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
     P, UV, F = [], [], []
     edges: list[BSplineCurve] = []
     EF, EP, ET, EI, EDT, EUV = [], [], [], [], [], []
-    COV, RISE, ECOV, ERISE, CLOSED, EALONG, FLAT, EFLAT, EZ = [], [], [], [], [], [], [], [], []
+    COV, RISE, ECOV, ERISE, CLOSED, EALONG, FLAT, EFLAT, EZ, TOP = [], [], [], [], [], [], [], [], [], []
     total = 0
     for i, f in enumerate(faces):
         if isinstance(f, BSplineSurface):
@@ -346,7 +395,8 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         CLOSED.append(_closed(d.point))
         pts = d.point.reshape(-1, 3)
         slope, delta, kappa = _slopes(d, nu, nv)
-        top = hull_top(s)
+        top = hull_top(face)
+        TOP.append(top)
         keep = face.contains_uv_grid(us, vs).ravel() if face.is_trimmed else np.ones(U.size, bool)
         P.append(pts[keep])
         UV.append(np.stack([U.ravel()[keep], V.ravel()[keep]], axis=1))
@@ -403,4 +453,5 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         np.concatenate(EALONG),
         np.concatenate(FLAT + EFLAT),
         np.concatenate(EZ),
+        np.array(TOP, float),
     )
