@@ -10,6 +10,7 @@ from helpers import shared_part
 import machsurf_cad as ms
 from machsurf_cad import builders
 from machsurf_cad.threeaxis import Contact, default_seed_spacing, drop_cutter
+from machsurf_cad.threeaxis.zlevel import LEVEL_MARGIN_MM
 
 BULL = ms.BullNoseEndMill(10, 2)  # R_t = 3, r = 2
 R_T, R_C = 3.0, 2.0
@@ -354,6 +355,29 @@ def test_waterline_on_the_dome_touches_at_its_levels():
     assert tp.info["n_levels"] == len(np.unique(np.round(z, 9)))
 
 
+@pytest.mark.parametrize("tool", ["flat:D=8", "ball:D=8", "bull:D=8,r=1"])
+def test_a_waterline_level_at_a_floors_height_runs_around_the_boss_on_it(tool):
+    """A 10 x 10 x 3 boss on a floor at 0.7 with step-down 1.5: the lowest level falls on the floor (3.7 - 3,
+    one rounding away from 0.7), where the tool may stand. That level's contour is one closed pass around
+    the boss's foot, all the way round (it was half of it: the floor's heights, equal to the level up to
+    rounding, made the contours), and the path verifies clean against every face."""
+    zf, H = 0.7, 3.0
+    P = ms.builders.plane_patch
+    faces = [P((-30, -30, zf), (60, 0, 0), (0, 60, 0)), P((-5, -5, zf + H), (10, 0, 0), (0, 10, 0)),
+             P((-5, -5, zf), (10, 0, 0), (0, 0, H)), P((-5, 5, zf), (10, 0, 0), (0, 0, H)),
+             P((-5, -5, zf), (0, 10, 0), (0, 0, H)), P((5, -5, zf), (0, 10, 0), (0, 0, H))]  # fmt: skip
+    tp = ms.waterline(faces, tool, stepdown=H / 2, chordal_tolerance=0.005, grid_step=1.0)
+    cut = tp.move == ms.Move.CUT
+    at = cut & (np.abs(tp.tip[:, 2] - zf) < 1e-6)
+    assert np.unique(tp.pass_index[at]).size == 1
+    angle = np.sort(np.degrees(np.arctan2(tp.tip[at, 1], tp.tip[at, 0])))
+    assert np.diff(np.r_[angle, angle[0] + 360.0]).max() < 15.0  # around the whole boss
+    d = np.hypot(np.maximum(np.abs(tp.tip[at, 0]) - 5, 0), np.maximum(np.abs(tp.tip[at, 1]) - 5, 0))
+    assert d.min() >= (np.sqrt(15.0) if tool.startswith("ball") else 4.0) - 1e-6  # off the wall and its edge
+    v = ms.verify(faces, tp, gouge_tolerance=0.005)
+    assert v.clean and v.max_gouge <= 0.005
+
+
 def test_cl_surface_of_a_flat_end_mill_with_flat_spots():
     """The case refused before: a flat end mill on the bezier5 face (horizontal spots). The height field
     is certified on unseen points; checked again here at random points against the exact drop-cutter."""
@@ -525,7 +549,8 @@ def test_gouging_moves_are_split_until_the_body_check_is_clean(mould):
 @pytest.mark.slow
 def test_waterline_on_the_mould_insert_touches_and_is_clean(mould):
     """Waterline around the boss and the narrow dip beside it (bull D10 r2): every cutting position is
-    at its exact drop-cutter height (or the foot of a wall's jump, never below the height), moves that
+    at its exact drop-cutter height (or the foot of a wall's jump, never below the height by more than the
+    contours' margin, LEVEL_MARGIN_MM = 1e-9 mm, and rounding), moves that
     stay above their level (a dip narrower than the grid) are dropped and counted, the chordal bound is
     within the tolerance, and the tool body check finds every position touching the part, none gouging."""
     tol = 0.01
@@ -538,7 +563,7 @@ def test_waterline_on_the_mould_insert_touches_and_is_clean(mould):
     assert i["n_moves_dropped_above_level"] > 0 and i["length_dropped_above_level_mm"] > 0
     cut = tp.move == ms.Move.CUT
     res = drop_cutter(mould, BULL, tp.tip[cut, :2])
-    assert np.all(tp.tip[cut, 2] >= res.height - 1e-9)
+    assert np.all(tp.tip[cut, 2] >= res.height - 1e-9 - LEVEL_MARGIN_MM)  # contours at the level + 1e-9 mm
     # each contour runs at one level
     for j in np.unique(tp.pass_index):
         z = tp.tip[(tp.pass_index == j) & (tp.move != ms.Move.RAPID) & (tp.move != ms.Move.RETRACT), 2]

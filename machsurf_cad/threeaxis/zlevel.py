@@ -17,6 +17,13 @@ from ..typing import FacesLike, ToolLike, Vector3
 from .dropcutter import machining_face_set
 from .paths import MAX_DROP_POINTS, _drop
 
+LEVEL_MARGIN_MM = 1e-9
+"""Each level's contour is traced where the exact height crosses the level plus this (mm): a horizontal
+floor exactly at a level (a level 4 mm under a top at 29 mm meets a floor at 25 mm) is where the tool may
+stand, and its heights, equal to the level up to rounding, no longer make contours of their rounding noise
+(on the mould insert they made 16 passes at 25 mm and 5 at 15 mm, different ones after any change of the
+order of operations)."""
+
 
 def _crossing(fs, cutter, a, b, fa, fb, level, iters: int = 40, tol: float = 1e-10, bracket_mm: float = 1e-6):
     """Points between ``a`` and ``b`` (rows, tool-frame plan) where the drop-cutter height equals
@@ -152,14 +159,16 @@ def waterline(
     gen = contourpy.contour_generator(xs, ys, Zf, line_type=contourpy.LineType.Separate)
     lines, lv = [], []
     for level in levels:
-        for line in gen.lines(level):
+        for line in gen.lines(level + LEVEL_MARGIN_MM):
             line = np.asarray(line, float)
             if line.ndim == 2 and line.shape[0] >= 3:
                 lines.append(line)
                 lv.append(float(level))
     if not lines:
         raise InputError("no waterline contour: the part is flat under every level")
-    pts, ccs, rise, lv = _refine_contours(fs, tool, xs, ys, Zf, lines, np.array(lv), chordal_tolerance, g)
+    pts, ccs, rise, lv = _refine_contours(fs, tool, xs, ys, Zf, lines, np.array(lv) + LEVEL_MARGIN_MM,
+                                          chordal_tolerance, g)  # fmt: skip
+    lv = levels[np.abs(levels[:, None] - np.asarray(lv)[None, :]).argmin(axis=0)]  # the levels themselves
     # moves still above their level (a feature narrower than the grid the contours were found on) are
     # dropped: the contour is cut open there, the tool retracts and plunges again (material left there)
     pts, ccs, lv, n_drop, l_drop = _split_at(pts, ccs, lv, [r > chordal_tolerance for r in rise])
