@@ -165,9 +165,9 @@ def _stray(face: Face) -> np.ndarray:
     k = np.array([s.knots_u[0], s.knots_u[-1], s.knots_v[0], s.knots_v[-1]], float)
     out = np.zeros(2)
 
-    def reach(lo_u, hi_u, lo_v, hi_v, pad=(0.0, 0.0)):
-        out[0] = max(out[0], k[0] - lo_u + pad[0], hi_u - k[1] + pad[0])
-        out[1] = max(out[1], k[2] - lo_v + pad[1], hi_v - k[3] + pad[1])
+    def reach(lo_u, hi_u, lo_v, hi_v, pad=(0.0, 0.0)):  # np.max: a NaN parameter gives NaN, then inf
+        out[0] = np.max([out[0], k[0] - lo_u + pad[0], hi_u - k[1] + pad[0]])
+        out[1] = np.max([out[1], k[2] - lo_v + pad[1], hi_v - k[3] + pad[1]])
 
     reach(*face.uv_bounds)
     for loop in face.loops if face.is_trimmed else ():
@@ -178,7 +178,7 @@ def _stray(face: Face) -> np.ndarray:
             uv = c.evaluate(np.linspace(*c.bounds, 1025))
             bulge = np.abs(np.diff(uv, 2, axis=0)).max(axis=0) / 8 if uv.shape[0] > 2 else np.zeros(2)
             reach(uv[:, 0].min(), uv[:, 0].max(), uv[:, 1].min(), uv[:, 1].max(), tuple(bulge))
-    return np.where(np.isfinite(out), np.maximum(out, 0.0), np.inf)
+    return np.where(np.isfinite(out), out, np.inf)
 
 
 def hull_top(face: Face) -> float:
