@@ -123,3 +123,102 @@ def test_the_swept_surface_equals_the_minimum_over_every_position(tool):
     got = line(rows, t)
     assert np.isfinite(got).sum() > rows.size // 2
     np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize(
+    "tool",
+    [
+        "ball:D=10",
+        "bull:D=10,r=2",
+        "flat:D=6",
+        "cone:D=6,angle=10,L=20",
+        "drum:D=30,Rp=60,L=20",
+        "apt:D=10,r=2,e=3,f=2,alpha=10,beta=0,h=20",
+    ],  # fmt: skip
+)
+def test_the_profile_height_from_its_pieces_equals_lower_height_to_the_bit(tool):
+    """``_Profile.height`` (each piece's own formula) against the profile's ``lower_height`` search over
+    every segment: equal bit for bit on a dense grid, at every piece's ends and a nanometre either side,
+    the axis, the rim, beyond it, negative radii, NaN and inf."""
+    from machsurf_cad.threeaxis.solves import _Profile
+
+    prof = _Profile(ms.parse_cutter(tool))
+    tb = prof._pieces()
+    assert tb.shape[0] >= 1 and tb[0, 0] <= 1e-9 and tb[-1, 1] >= prof.R - 1e-9  # the pieces cover [0, R]
+    ends = np.r_[tb[:, 0], tb[-1, 1]]
+    near = np.r_[ends, ends - 1e-9, ends + 1e-9, ends + 2e-9]
+    rho = np.r_[np.linspace(-1.0, 1.01 * prof.R, 100001), near, np.nan, np.inf, -np.inf]
+    with np.errstate(invalid="ignore"):
+        np.testing.assert_array_equal(prof.height(rho), prof(rho)[0])
+
+
+def test_crossing_profile_segments_have_no_pieces_and_height_searches():
+    """Two segments crossing inside a piece (the lowest one changes there): no pieces, and ``height`` is still
+    ``lower_height``'s (the lower of the two lines)."""
+    from machsurf_cad.cutter_profiles import LineSegment
+    from machsurf_cad.threeaxis.solves import _Profile
+
+    prof = _Profile(ms.BallEndMill(10))
+    prof.segs = [LineSegment(0.0, 0.0, 5.0, 1.0), LineSegment(0.0, 1.0, 5.0, 0.0)]  # they cross at rho = 2.5
+    prof.R = 5.0
+    assert prof._pieces().shape == (0, 7)
+    rho = np.linspace(0.0, 5.0, 101)
+    np.testing.assert_array_equal(prof.height(rho), np.minimum(rho / 5, 1 - rho / 5))
+
+
+def _brute_cusp(a, ta, b, tb, row, lo, hi, n=4001):
+    """The first crossing of ``a`` (at ``ta``) and ``b`` (at ``tb``) at sample ``row`` between ``lo`` and ``hi``:
+    where ``a`` stops being the lower on a dense scan, then bisected to the last bit (``a``'s surface ends at its
+    rim, inf beyond, so a crossing there is at ``b``'s height)."""
+    t = np.linspace(lo, hi, n)
+    r = np.full(n, row)
+    d = a(r, t - ta) - b(r, tb - t)
+    up = np.nonzero(~(d <= 0))[0]
+    if up.size == 0 or up[0] == 0:
+        return math.nan, math.nan
+    x0, x1 = t[up[0] - 1], t[up[0]]
+    for _ in range(100):
+        m = 0.5 * (x0 + x1)
+        if m in (x0, x1):
+            break
+        dm = a(np.array([row]), np.array([m - ta])) - b(np.array([row]), np.array([tb - m]))
+        x0, x1 = (x0, m) if not dm[0] <= 0 else (m, x1)
+    za = a(np.array([row]), np.array([x0 - ta]))[0]
+    zb = b(np.array([row]), np.array([tb - x0]))[0]
+    return x0, max(za, zb)
+
+
+@pytest.mark.parametrize("tool", ["ball:D=10", "bull:D=10,r=2"])
+def test_the_cusp_equals_a_dense_scan_between_wavy_lines(tool):
+    """Cusps between two wavy lines (false position with halving, the ends where a swept surface stops at its
+    tool's rim) against a dense scan bisected to the last bit, written here: a crossing at the same rows, at
+    the same offset and height within 1e-9 mm (a flat end's plateaus cross at steps, wherever a bracket
+    lands: not compared); where line b runs 6 mm higher, line a's swept surface is the lower up to its tool's
+    rim (``ta + R``): the cusp is there, at line b's height."""
+    from machsurf_cad.threeaxis.scallop import SweptLine, cusp_points
+    from machsurf_cad.threeaxis.solves import _Profile
+
+    rng = np.random.default_rng(3)
+    prof = _Profile(ms.parse_cutter(tool))
+    s = np.linspace(0, 60, 241)
+    za = np.sin(s / 4) * 0.8 + 0.2 * rng.normal(size=s.size)
+    zb = np.cos(s / 5) * 0.8 + 0.2 * rng.normal(size=s.size)
+    rows = np.arange(30, 210, 3)
+    for ta, tb, lift in ((0.0, 1.5, 0.0), (0.0, 4.0, 0.0), (0.0, 8.0, 6.0)):
+        a, b = SweptLine(prof, s, za), SweptLine(prof, s, zb + lift)
+        lo, hi = np.full(rows.size, ta - 0.5), np.full(rows.size, tb + 0.5)
+        t, z = cusp_points(a, ta, b, tb, rows, lo, hi)
+        n_checked = 0
+        for k, row in enumerate(rows):
+            bt, bz = _brute_cusp(a, ta, b, tb, row, lo[k], hi[k])
+            assert math.isnan(bt) == math.isnan(t[k]), (ta, tb, row)
+            if math.isnan(bt):
+                continue
+            n_checked += 1
+            assert t[k] == pytest.approx(bt, abs=1e-9) and z[k] == pytest.approx(bz, abs=1e-9), (ta, tb, row)
+        assert n_checked >= 5
+        if lift:  # line b 6 mm higher: a is the lower all the way to its tool's rim
+            ok = np.isfinite(z)
+            assert ok.sum() >= rows.size // 2
+            np.testing.assert_allclose(t[ok], ta + prof.R, atol=1e-12)
+            np.testing.assert_allclose(z[ok], b(rows[ok], np.full(ok.sum(), tb - ta - prof.R)), atol=1e-12)
