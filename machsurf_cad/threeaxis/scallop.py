@@ -156,16 +156,22 @@ def part_heights(fs, xy, k: int = 12, iters: int = 16):
     u, v = fs.sample_uv[j, 0].copy(), fs.sample_uv[j, 1].copy()
     target = xy[q]
     scale = max(fs.spacing, 1.0)
+    k = np.arange(q.size)  # the points still moving (a step of more than 1e-13 of the scale)
     for _ in range(iters):
-        P, Su, Sv = fs.atlas.derivatives(fid, u, v, 1)
-        r = target - P[:, :2]
+        P, Su, Sv = fs.atlas.derivatives(fid[k], u[k], v[k], 1)
+        r = target[k] - P[:, :2]
         a, b, c, d = Su[:, 0], Sv[:, 0], Su[:, 1], Sv[:, 1]
         det = a * d - b * c
         ok = np.abs(det) > 1e-12 * (np.abs(a * d) + np.abs(b * c) + 1e-300)
         det = np.where(ok, det, 1.0)
         du = np.where(ok, (d * r[:, 0] - b * r[:, 1]) / det, 0.0)
         dv = np.where(ok, (-c * r[:, 0] + a * r[:, 1]) / det, 0.0)
-        u, v = _clamp_uv(fs, fid, u + du, v + dv)
+        u0, v0 = u[k], v[k]
+        u[k], v[k] = _clamp_uv(fs, fid[k], u0 + du, v0 + dv)
+        moved = np.hypot(u[k] - u0, v[k] - v0) > 0
+        k = k[moved & (np.abs(r).max(axis=1) > 1e-13 * scale)]
+        if k.size == 0:
+            break
     P, Su, Sv = fs.atlas.derivatives(fid, u, v, 1)
     n = np.cross(Su, Sv)
     nn = np.linalg.norm(n, axis=1)
