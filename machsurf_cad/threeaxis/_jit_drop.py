@@ -301,7 +301,7 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
     r1 = _group_best(1, zeros, zz, rseed, idx)[0]
     if f1 >= 0:
         _solve(FACE, idx[f1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
-    if r1 >= 0:
+    if r1 >= 0 and (best[4] == 0 or bounds[1][gk[r1]] > best[1] + BOUND_TIE):  # (a ball's rim: seldom)
         _solve(RIM, idx[r1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
     CB_ = (np.full(m, math.nan), np.full(m, math.nan))
     CB = borrowed(CB_)
