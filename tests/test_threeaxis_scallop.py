@@ -134,19 +134,26 @@ def test_the_swept_surface_equals_the_minimum_over_every_position(tool):
         "cone:D=6,angle=10,L=20",
         "drum:D=30,Rp=60,L=20",
         "apt:D=10,r=2,e=3,f=2,alpha=10,beta=0,h=20",
-    ],  # fmt: skip
+        "drum:D=200,Rp=270.49,L=228.721",
+        "bull:D=20,r=4.536",
+        "ball:D=5.518",
+    ],
 )
 def test_the_profile_height_from_its_pieces_equals_lower_height_to_the_bit(tool):
     """``_Profile.height`` (each piece's own formula) against the profile's ``lower_height`` search over
     every segment: equal bit for bit on a dense grid, at every piece's ends and a nanometre either side,
-    the axis, the rim, beyond it, negative radii, NaN and inf."""
+    the axis, the rim, beyond it, negative radii, NaN and inf; the pieces kept where ``lower_height`` squares
+    a radius differently from a product (r = 4.536, D = 5.518), and a drum whose arcs of 270 mm run past their
+    ends by more than a nanometre (``lower_height``'s 1e-9 degrees)."""
     from machsurf_cad.threeaxis.solves import _Profile
 
     prof = _Profile(ms.parse_cutter(tool))
     tb = prof._pieces()
     assert tb.shape[0] >= 1 and tb[0, 0] <= 1e-9 and tb[-1, 1] >= prof.R - 1e-9  # the pieces cover [0, R]
     ends = np.r_[tb[:, 0], tb[-1, 1]]
-    near = np.r_[ends, ends - 1e-9, ends + 1e-9, ends + 2e-9]
+    m = prof._piece_margin
+    near = np.r_[ends, ends - 1e-9, ends + 1e-9, ends + 2e-9, ends + m, ends - m, ends + 2 * m, ends - 2 * m]
+    near = np.r_[near, np.nextafter(near, np.inf), np.nextafter(near, -np.inf)]
     rho = np.r_[np.linspace(-1.0, 1.01 * prof.R, 100001), near, np.nan, np.inf, -np.inf]
     with np.errstate(invalid="ignore"):
         np.testing.assert_array_equal(prof.height(rho), prof(rho)[0])
@@ -168,21 +175,21 @@ def test_crossing_profile_segments_have_no_pieces_and_height_searches():
 
 def _brute_cusp(a, ta, b, tb, row, lo, hi, n=4001):
     """The first crossing of ``a`` (at ``ta``) and ``b`` (at ``tb``) at sample ``row`` between ``lo`` and ``hi``:
-    where ``a`` stops being the lower on a dense scan, then bisected to the last bit (``a``'s surface ends at its
-    rim, inf beyond, so a crossing there is at ``b``'s height)."""
+    where ``a`` stops being the lower (``a <= b``, then ``a > b``) on a dense scan, then bisected to the last
+    bit (``a``'s surface ends at its rim, inf beyond, so a crossing there is at ``b``'s height)."""
     t = np.linspace(lo, hi, n)
     r = np.full(n, row)
     d = a(r, t - ta) - b(r, tb - t)
-    up = np.nonzero(~(d <= 0))[0]
-    if up.size == 0 or up[0] == 0:
+    sw = np.nonzero((d[:-1] <= 0) & (d[1:] > 0))[0]  # (inf - inf: neither)
+    if sw.size == 0:
         return math.nan, math.nan
-    x0, x1 = t[up[0] - 1], t[up[0]]
+    x0, x1 = t[sw[0]], t[sw[0] + 1]
     for _ in range(100):
         m = 0.5 * (x0 + x1)
         if m in (x0, x1):
             break
         dm = a(np.array([row]), np.array([m - ta])) - b(np.array([row]), np.array([tb - m]))
-        x0, x1 = (x0, m) if not dm[0] <= 0 else (m, x1)
+        x0, x1 = (x0, m) if dm[0] > 0 else (m, x1)
     za = a(np.array([row]), np.array([x0 - ta]))[0]
     zb = b(np.array([row]), np.array([tb - x0]))[0]
     return x0, max(za, zb)
@@ -222,3 +229,29 @@ def test_the_cusp_equals_a_dense_scan_between_wavy_lines(tool):
             assert ok.sum() >= rows.size // 2
             np.testing.assert_allclose(t[ok], ta + prof.R, atol=1e-12)
             np.testing.assert_allclose(z[ok], b(rows[ok], np.full(ok.sum(), tb - ta - prof.R)), atol=1e-12)
+
+
+def test_the_cusp_beyond_a_tie_at_its_ends_and_beside_a_stretch_without_faces():
+    """Two cases a hostile review found (against the dense scan above): a bull D10 r2 on a plateau 9 mm long
+    between two lines 1 mm apart over a pocket, where both tools' flats stand on the plateau at the bracket's
+    ends (the two surfaces equal there): the switch is inside, at the plateau's middle (t = 0.5), not at an
+    end; and a ball's line with no face under it for 4.7 mm either side of the row (its swept surface inf
+    short of its rim): the crossing inside the bracket, not NaN."""
+    from machsurf_cad.threeaxis.scallop import SweptLine, cusp_points
+    from machsurf_cad.threeaxis.solves import _Profile
+
+    s = np.linspace(0, 40, 161)
+    row = np.array([80])  # s = 20
+    bull = _Profile(ms.parse_cutter("bull:D=10,r=2"))
+    plateau = SweptLine(bull, s, np.where(np.abs(s - 20) < 4.5, 0.0, -1.0))
+    t, z = cusp_points(plateau, 0.0, plateau, 1.0, row, [-2.0], [3.0])
+    bt, bz = _brute_cusp(plateau, 0.0, plateau, 1.0, 80, -2.0, 3.0)
+    assert t[0] == pytest.approx(0.5, abs=1e-9) and bt == pytest.approx(0.5, abs=1e-9)
+    assert z[0] == pytest.approx(bz, abs=1e-9) and z[0] < -0.29
+    ball = _Profile(ms.BallEndMill(10))
+    a = SweptLine(ball, s, np.where(np.abs(s - 20) <= 4.7, np.nan, -3.0))
+    b = SweptLine(ball, s, np.zeros_like(s))
+    with np.errstate(invalid="ignore"):
+        t, z = cusp_points(a, 0.0, b, 3.0, row, [-3.0], [4.0])
+        bt, bz = _brute_cusp(a, 0.0, b, 3.0, 80, -3.0, 4.0)
+    assert np.isfinite(bt) and t[0] == pytest.approx(bt, abs=1e-9) and z[0] == pytest.approx(bz, abs=1e-9)

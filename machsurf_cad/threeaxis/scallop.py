@@ -81,14 +81,16 @@ class SweptLine:
 def cusp_points(a: SweptLine, ta: float, b: SweptLine, tb: float, rows, lo, hi, iters: int = 40):
     """Cusp offset ``t*`` and height ``z*`` between the swept lower surfaces of lines ``a`` (at ``ta``) and
     ``b`` (at ``tb``) at the samples ``rows``, searched between ``lo`` and ``hi`` (the two contacts' offsets:
-    ``a`` touches the part at ``lo``, ``b`` at ``hi``): where one stops being the lower. NaN where they do
-    not cross there.
+    ``a`` touches the part at ``lo``, ``b`` at ``hi``): where ``a`` stops being the lower (a switch from
+    ``a <= b`` to ``a > b``). NaN where they do not cross there.
 
     A swept surface ends at its tool's rim, ``R`` from its line (inf beyond): where ``a`` is still below
     ``b`` at ``ta + R`` the cusp is there, at ``b``'s height (and where ``b`` is below ``a`` at ``tb - R``,
     there at ``a``'s). Otherwise the bracket between those ends, where both are finite, shrinks to
-    ``2**-iters`` of the first one's width by false position (Illinois), with a halving step wherever two
-    steps did not halve it: at most twice the ``iters`` steps of bisection, far fewer on smooth surfaces."""
+    ``2**-iters`` of the first one's width by false position (Illinois), with a halving step after any step
+    that did not halve it: at most twice the ``iters`` steps of bisection, far fewer on smooth surfaces. A
+    step landing exactly where the two are equal (a crossing hit exactly, or a stretch where both tools'
+    flats stand at one height) looks ``2**-iters`` of the width above it for the switch."""
     rows = np.asarray(rows)
     lo = np.array(lo, float)
     hi = np.array(hi, float)
@@ -97,17 +99,23 @@ def cusp_points(a: SweptLine, ta: float, b: SweptLine, tb: float, rows, lo, hi, 
         return np.nan_to_num(a(rows[k], t - ta) - b(rows[k], tb - t), posinf=1e300, neginf=-1e300)
 
     every = np.arange(rows.size)
-    crosses = (f(every, lo) <= 0) & (f(every, hi) >= 0)
-    tol = (hi - lo) * 2.0**-iters
-    R = a.prof.R
-    lo, hi = np.maximum(lo, tb - R), np.minimum(hi, ta + R)  # b, a finite
-    crosses &= lo <= hi
     f_lo, f_hi = f(every, lo), f(every, hi)
-    at_hi, at_lo = crosses & (f_hi < 0), crosses & ~(f_hi < 0) & (f_lo > 0)  # at a's rim, at b's
-    lo = np.where(at_hi | (f_hi == 0), hi, lo)  # (an end where they meet: the cusp)
-    hi = np.where(at_lo | (f_lo == 0), lo, hi)
-    width2 = np.full(rows.size, np.inf)  # the bracket's width two steps ago
-    width1 = np.full(rows.size, np.inf)
+    crosses = (f_lo <= 0) & (f_hi >= 0)
+    tol = (hi - lo) * 2.0**-iters
+    lo_c, hi_c = np.maximum(lo, tb - b.prof.R), np.minimum(hi, ta + a.prof.R)  # b, a finite (but NaN stretches)
+    fc_lo, fc_hi = f(every, lo_c), f(every, hi_c)
+    clip = crosses & (lo_c <= hi_c)
+    at_hi = clip & (fc_hi < 0) & (fc_hi > -1e300)  # a finite and still below b at a's rim
+    at_lo = clip & ~at_hi & (fc_lo > 0) & (fc_lo < 1e300)  # b finite and below a at b's rim
+    for end, f_end, cut, f_cut, keep in ((lo, f_lo, lo_c, fc_lo, fc_lo <= 0), (hi, f_hi, hi_c, fc_hi, fc_hi >= 0)):
+        use = clip & keep  # a clipped end where it still brackets the switch
+        end[use], f_end[use] = cut[use], f_cut[use]
+    lo[at_hi], f_lo[at_hi] = hi_c[at_hi], fc_hi[at_hi]
+    hi[at_hi] = hi_c[at_hi]
+    hi[at_lo], f_hi[at_lo] = lo_c[at_lo], fc_lo[at_lo]
+    lo[at_lo] = lo_c[at_lo]
+    width1 = np.full(rows.size, np.inf)  # the bracket's width before the last step
+    halved = np.zeros(rows.size, bool)  # whether the last step was a halving
     keep_lo = np.zeros(rows.size, bool)  # which end the last step kept (Illinois halves its value)
     keep_hi = np.zeros(rows.size, bool)
     for _ in range(2 * iters):
@@ -118,16 +126,23 @@ def cusp_points(a: SweptLine, ta: float, b: SweptLine, tb: float, rows, lo, hi, 
         w = h - l
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             x = l - fl * w / (fh - fl)
-        halve = ~((x > l) & (x < h)) | (w > 0.5 * width2[k])
+        halve = ~((x > l) & (x < h)) | (~halved[k] & (w > 0.5 * width1[k]))
         x = np.where(halve, 0.5 * (l + h), x)
         fx = f(k, x)
-        up = fx > 0  # the crossing lies below x: x is the new upper end
-        width2[k], width1[k] = width1[k], w
-        hi[k] = np.where(up | (fx == 0), x, h)  # (they meet at x: the cusp)
+        up = fx > 0  # the switch lies below x: x is the new upper end
+        width1[k], halved[k] = w, halve
+        hi[k] = np.where(up, x, h)
         lo[k] = np.where(up, l, x)
         f_hi[k] = np.where(up, fx, np.where(keep_hi[k] & ~halve, 0.5 * fh, fh))
         f_lo[k] = np.where(up, np.where(keep_lo[k] & ~halve, 0.5 * fl, fl), fx)
         keep_lo[k], keep_hi[k] = up, ~up
+        z0 = np.nonzero(fx == 0)[0]
+        if z0.size:  # equal at x: the switch just above it ends the search there
+            kz = k[z0]
+            xp = np.minimum(x[z0] + tol[kz], h[z0])
+            fp = f(kz, xp)
+            there = np.nonzero(fp > 0)[0]
+            hi[kz[there]], f_hi[kz[there]] = xp[there], fp[there]
     t = 0.5 * (lo + hi)
     z = np.maximum(a(rows, t - ta), b(rows, tb - t))
     return np.where(crosses & np.isfinite(z), t, np.nan), np.where(crosses & np.isfinite(z), z, np.nan)
@@ -156,21 +171,21 @@ def part_heights(fs, xy, k: int = 12, iters: int = 16):
     u, v = fs.sample_uv[j, 0].copy(), fs.sample_uv[j, 1].copy()
     target = xy[q]
     scale = max(fs.spacing, 1.0)
-    k = np.arange(q.size)  # the points still moving (a step of more than 1e-13 of the scale)
+    live = np.arange(q.size)  # the points still moving (a step of more than 1e-13 of the scale)
     for _ in range(iters):
-        P, Su, Sv = fs.atlas.derivatives(fid[k], u[k], v[k], 1)
-        r = target[k] - P[:, :2]
+        P, Su, Sv = fs.atlas.derivatives(fid[live], u[live], v[live], 1)
+        r = target[live] - P[:, :2]
         a, b, c, d = Su[:, 0], Sv[:, 0], Su[:, 1], Sv[:, 1]
         det = a * d - b * c
         ok = np.abs(det) > 1e-12 * (np.abs(a * d) + np.abs(b * c) + 1e-300)
         det = np.where(ok, det, 1.0)
         du = np.where(ok, (d * r[:, 0] - b * r[:, 1]) / det, 0.0)
         dv = np.where(ok, (-c * r[:, 0] + a * r[:, 1]) / det, 0.0)
-        u0, v0 = u[k], v[k]
-        u[k], v[k] = _clamp_uv(fs, fid[k], u0 + du, v0 + dv)
-        moved = np.hypot(u[k] - u0, v[k] - v0) > 0
-        k = k[moved & (np.abs(r).max(axis=1) > 1e-13 * scale)]
-        if k.size == 0:
+        u0, v0 = u[live], v[live]
+        u[live], v[live] = _clamp_uv(fs, fid[live], u0 + du, v0 + dv)
+        moved = np.hypot(u[live] - u0, v[live] - v0) > 0
+        live = live[moved & (np.abs(r).max(axis=1) > 1e-13 * scale)]
+        if live.size == 0:
             break
     P, Su, Sv = fs.atlas.derivatives(fid, u, v, 1)
     n = np.cross(Su, Sv)

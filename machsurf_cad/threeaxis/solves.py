@@ -102,15 +102,16 @@ class _Profile:
     def height(self, rho) -> np.ndarray:
         """``h`` alone, the first of :meth:`__call__`'s results, to the bit: on each piece of ``[0, R]`` where one
         segment (one branch of an arc) is the lowest its formula, without ``lower_height``'s search over the
-        segments and its arcs' angles (within ``PIECE_MARGIN_MM`` of a piece's inner ends, and for a profile
+        segments and its arcs' angles (within a margin of a piece's inner ends, and for a profile
         whose pieces do not match ``lower_height`` everywhere, ``lower_height`` itself). The scallop planner's
         swept surfaces evaluate it millions of times, on a few hundred radii a call."""
         rho = np.asarray(rho, float)
         x = np.abs(np.minimum(rho, self.R))
         tb = self._pieces()
+        margin = self._piece_margin
         h = np.full(x.shape, np.nan)
         for lo, hi, kind, a, b, c, d in tb:
-            on = (x > lo + PIECE_MARGIN_MM) & (x < hi - PIECE_MARGIN_MM)
+            on = (x > lo + margin) & (x < hi - margin)
             h[on] = _piece_h(kind, a, b, c, d, x[on])
         rest = np.isnan(h)
         if rest.any():
@@ -124,45 +125,53 @@ class _Profile:
 
     def _pieces(self) -> np.ndarray:
         """Rows ``lo, hi, kind (0 line, 1 arc branch, -1 none), a, b, c, d`` (a line's ``rho0, z0, rho1, z1``; an
-        arc's ``rho_c, z_c, radius, branch``): the pieces between the segments' ends and their arcs' extremes,
-        each with its lowest segment, checked against ``lower_height`` on 64 points of every piece (to the
-        bit); none where a piece does not match (segments crossing inside it)."""
+        arc's ``rho_c, z_c, radius**2, branch``): the pieces between the segments' ends and their arcs'
+        extremes, each with its lowest segment, checked against ``lower_height`` on 64 points of every piece
+        and at its margin's edges (to the bit); none where a piece does not match (segments crossing inside
+        it). The margin is ``PIECE_MARGIN_MM``, or 1e-10 of the largest arc's radius (``lower_height`` lets an
+        arc run 1e-9 degrees past its ends: 1.7e-11 of its radius)."""
         table: np.ndarray | None = getattr(self, "_piece_table", None)
         if table is not None:
             return table
         ends = [0.0, self.R]
+        radii = [0.0]
         for seg in self.segs:
             if isinstance(seg, ArcSegment):
                 c, r = seg.rho_c, seg.radius
                 ends += [c - r, c + r] + [c + r * math.cos(math.radians(a)) for a in (seg.start_deg, seg.end_deg)]
+                radii.append(abs(r))
             else:
                 ends += [seg.rho0, seg.rho1]
+        margin = max(PIECE_MARGIN_MM, 1e-10 * max(radii))
         cuts = np.unique(np.clip(np.array(ends, float), 0.0, self.R))
         rows = []
         for lo, hi in zip(cuts[:-1], cuts[1:]):
-            if hi - lo > 4e-9:
+            if hi - lo > 4 * margin:
                 rows.append((lo, hi, *_lowest_piece(self.segs, 0.5 * (lo + hi))))
         tb = np.array(rows, float).reshape(-1, 7)
         for lo, hi, kind, a, b, c, d in tb:
-            x = np.linspace(lo + 2e-9, hi - 2e-9, 64)
+            inner = np.nextafter([lo + margin, hi - margin], [hi, lo])  # the first and last radii a piece takes
+            x = np.r_[inner, np.linspace(lo + 2 * margin, hi - 2 * margin, 64)]
             if not np.array_equal(_piece_h(kind, a, b, c, d, x), lower_height(self.segs, x)[0]):
                 tb = np.zeros((0, 7))
                 break
         self._h_ends = lower_height(self.segs, np.array([0.0, self.R]))[0]
+        self._piece_margin = margin
         self._piece_table = tb
         return tb
 
 
 PIECE_MARGIN_MM = 1e-9
-"""Within this distance of a profile piece's ends :meth:`_Profile.height` runs ``lower_height`` itself."""
+"""Within this distance of a profile piece's ends (at least; :meth:`_Profile._pieces`) :meth:`_Profile.height`
+runs ``lower_height`` itself."""
 
 
 def _piece_h(kind, a, b, c, d, x):
     """``h`` at ``x`` on a profile piece (:meth:`_Profile._pieces`): ``lower_height``'s formulas."""
     if kind == 0.0:
         return b + (x - a) / (c - a) * (d - b)
-    if kind == 1.0:
-        return b + d * np.sqrt(np.clip(c * c - (x - a) * (x - a), 0, None))
+    if kind == 1.0:  # c: the radius squared as lower_height squares it
+        return b + d * np.sqrt(np.clip(c - (x - a) * (x - a), 0, None))
     return np.full(np.shape(x), np.inf)
 
 
@@ -178,7 +187,7 @@ def _lowest_piece(segs, x: float) -> tuple:
                 z = seg.z_c + sgn * root
                 ang = np.array([math.degrees(math.atan2(z - seg.z_c, dx))])
                 if abs(dx) <= seg.radius + 1e-12 and _angle_in(ang, seg.start_deg, seg.end_deg)[0] and z < best:
-                    best, out = z, (1.0, seg.rho_c, seg.z_c, seg.radius, sgn)
+                    best, out = z, (1.0, seg.rho_c, seg.z_c, seg.radius**2, sgn)
         elif abs(seg.rho1 - seg.rho0) >= 1e-15:
             z = float(_segment_z_at(seg, np.array([x]), lowest=True)[0])
             if z < best:
