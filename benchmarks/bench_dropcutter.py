@@ -42,9 +42,10 @@ def dropcutter_rows(quick=False, deflection=0.001, sizes=None, ocl_max_points=40
     lifts its tool there: ``n_below_0_01`` counts the points where ours is more than 0.01 mm lower.
 
     Both sides are timed alone: OpenCAMLib's mesh, k-d tree and query points are set up before its run (the
-    setup's time is ``ref_setup_s``), as machsurf's face set and sample pool are before its queries. Each is
-    timed ``repeat`` times on the same grid (fewer for OpenCAMLib once its runs pass ``repeat_budget_s``,
-    and then as many for machsurf) and the least time is kept (the machine's other load only adds time;
+    setup's time is ``ref_setup_s``), as machsurf's face set and sample pool are before its queries. Both
+    are timed ``repeat`` times on the same grid, in turns (ours, OpenCAMLib's, ours, ...: this machine's
+    speed drifts by tens of percent over minutes; fewer turns once OpenCAMLib's runs pass
+    ``repeat_budget_s``) and the least time of each is kept (the machine's other load only adds time;
     ``n_runs`` says how many). machsurf's repeated runs move the grid by a nanometre each, past its CL
     cache."""
     import machsurf_cad as ms
@@ -69,16 +70,17 @@ def dropcutter_rows(quick=False, deflection=0.001, sizes=None, ocl_max_points=40
             for n in sizes:
                 xy = _grid(lo, hi, n)
                 ref = None
-                k = repeat
-                if ocl_mesh is not None and xy.shape[0] <= ocl_max_points:
-                    runs = []
-                    while len(runs) < repeat and sum(r[1] for r in runs) < repeat_budget_s:
+                with_ocl = ocl_mesh is not None and xy.shape[0] <= ocl_max_points
+                mine, runs = [], []  # one of ours, then one of OpenCAMLib's: both sampled over the same minutes
+                while len(mine) < repeat and (not runs or sum(r[1] for r in runs) < repeat_budget_s):
+                    mine.append(_timed(ms.drop_cutter, None, cutter, xy + 1e-9 * len(mine), face_set=fs))
+                    if with_ocl:
                         batch, _, t_setup = _timed(ocl_mesh.prepare, cutter, xy)
                         runs.append(_timed(OclBatch.run, batch))
+                if runs:
                     ref, c_ref, w_ref = runs[0][0], min(r[1] for r in runs), min(r[2] for r in runs)
-                    k = len(runs)
-                mine = [_timed(ms.drop_cutter, None, cutter, xy + 1e-9 * i, face_set=fs) for i in range(k)]
                 res, c_ours, w_ours = mine[0][0], min(r[1] for r in mine), min(r[2] for r in mine)
+                k = len(mine)
                 ours = res.height
                 row = {
                     "name": f"drop-cutter {spec}, {label}",
