@@ -250,3 +250,21 @@ def test_the_cusp_beyond_a_tie_at_its_ends_and_beside_a_stretch_without_faces():
         t, z = cusp_points(a, 0.0, b, 3.0, row, [-3.0], [4.0])
         (bt,), (bz,) = _brute_cusp(a, 0.0, b, 3.0, 80, -3.0, 4.0)
     assert np.isfinite(bt) and t[0] == pytest.approx(bt, abs=1e-9) and z[0] == pytest.approx(bz, abs=1e-9)
+
+
+def test_the_unmet_message_names_the_worst_pair():
+    """The command's line on pairs of lines still over the target names the worst of them and where (the mould
+    insert, bull D10 r2, 0.02 mm: its first unmet pair left 0.79 mm, its second 2.31 mm; the line said 0.79)."""
+    from machsurf_cad.jobs.run_threeaxis import _say_scallop
+
+    unmet = [
+        {"between_mm": [0.49, 0.69], "left_mm": 0.7884, "at_xy_mm": [-29.751, 0.588]},
+        {"between_mm": [16.86, 17.06], "left_mm": 2.309, "at_xy_mm": [-9.752, 21.855]},
+    ]
+    info = {"stepover_min_mm": 0.205, "stepover_max_mm": 6.56, "stepover_flat_floor_mm": 6.56,
+            "scallop_planned_max_mm": 2.309, "scallop_planned_max_vertical_mm": 7.53, "scallop_target_mm": 0.02,
+            "scallop_planned_worst_xy_mm": [-9.752, 21.855], "n_cusps_at_cutter_limit": 0, "n_scallop_unmet": 2,
+            "scallop_unmet": unmet}  # fmt: skip
+    lines = []
+    assert _say_scallop(lines.append, info) == 2
+    assert "up to 2.309 mm near (-9.752, 21.855) mm" in lines[-1]

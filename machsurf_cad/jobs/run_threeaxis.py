@@ -120,12 +120,12 @@ def _say_scallop(say: Say, i: dict) -> int:
             else ""
         )
     )
-    if i["n_scallop_unmet"]:
-        w = i["scallop_unmet"][0]
+    if i["n_scallop_unmet"]:  # the worst pair over the target is the worst of all (the others are within it)
+        w = i["scallop_planned_worst_xy_mm"]
         say(
             f"scallop target not met between {i['n_scallop_unmet']} pair(s) of lines at the smallest "
-            f"step-over (1/32 of the flat-floor one): up to {w['left_mm']:.4g} mm near "
-            f"({w['at_xy_mm'][0]:.3f}, {w['at_xy_mm'][1]:.3f}) mm"
+            f"step-over (1/32 of the flat-floor one): up to {i['scallop_planned_max_mm']:.4g} mm near "
+            f"({w[0]:.3f}, {w[1]:.3f}) mm"
         )
         return EXIT_TOLERANCE
     return EXIT_OK
