@@ -397,8 +397,26 @@ def test_the_kernels_profile_pieces_give_lower_heights_numbers_to_the_bit(spec):
     assert tb.shape[0] >= 1 and tb[0, 0] < 1e-9 and tb[-1, 1] == pytest.approx(p.R)  # pieces cover [0, R]
     ends = np.r_[tb[:, 0], tb[-1, 1]]
     rho = np.r_[np.linspace(0.0, p.R, 20001), ends, ends - 1e-9, ends + 1e-9, ends + 3e-9, ends - 3e-9]
+    rho = np.r_[rho, np.nextafter(ends + 1e-9, np.inf), np.nextafter(ends - 1e-9, -np.inf)]
     for r in rho[(rho >= 0) & (rho <= p.R)]:
         assert prof(PR, r) == lower_height(PR[0], min(r, PR[1][0])), (spec, r)
+
+
+@needs_numba
+def test_a_long_drums_profile_gets_no_pieces_and_the_kernel_searches():
+    """A drum of 270 mm arcs (D 200, L 229): ``lower_height`` runs an arc 1e-9 degrees past its ends, 4.7 nm
+    here, more than the pieces' 1 nm margin, so the pieces would differ there (by 4.3e-9 mm): it gets none,
+    and the kernel's heights are the search's own numbers on either side of the arcs' ends."""
+    from machsurf_cad.threeaxis._jit_geom import lower_height, prof
+    from machsurf_cad.threeaxis.dropcutter import _Profile
+
+    p = _Profile(ms.parse_cutter("drum:D=200,Rp=270.49,L=228.721"))
+    PR = compiled._profile(p)
+    assert PR[2].shape == (0, 7)
+    ends = np.unique(np.clip([s.points(2)[:, 0] for s in p.segs], 0.0, p.R))
+    rho = np.r_[np.linspace(0.0, p.R, 2001), ends + 2e-9, ends - 2e-9]
+    for r in rho[(rho >= 0) & (rho <= p.R)]:
+        assert prof(PR, r) == lower_height(PR[0], min(r, PR[1][0])), r
 
 
 @needs_numba

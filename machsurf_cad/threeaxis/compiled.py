@@ -210,9 +210,10 @@ def _pieces(segs: np.ndarray, R: float) -> np.ndarray:
     """The profile's lower surface as pieces of ``[0, R]`` on each of which one segment (one arc branch) is
     the lowest: rows ``lo, hi, kind (0 line, 1 arc, -1 none), r0, z0, r1, z1`` (lines) or ``rho_c, z_c, r,
     branch`` (arcs), for :func:`._jit_geom.piece_height`. Ends: every segment's ends in ``rho`` and its arcs'
-    extremes. Checked against ``lower_height`` on 500 points of every piece (to the bit); a profile where
-    they differ anywhere (segments crossing inside a piece) gets no pieces: ``lower_height`` runs everywhere."""
-    from ._jit_geom import lower_height, lowest_segment, piece_height
+    extremes. Checked against ``lower_height`` on 500 points of every piece and at its first and last radii
+    (to the bit); a profile where they differ anywhere (segments crossing inside a piece, an arc of over
+    57 mm) gets no pieces: ``lower_height`` runs everywhere."""
+    from ._jit_geom import PIECE_MARGIN, lower_height, lowest_segment, piece_height
 
     ends = [0.0, R]
     for typ, a, _b, c, d, e in segs:
@@ -234,7 +235,10 @@ def _pieces(segs: np.ndarray, R: float) -> np.ndarray:
             rows.append((lo, hi, 1.0, *segs[s, 1:4], sgn))
     tb = np.array(rows, float).reshape(-1, 7)
     for lo, hi in tb[:, :2]:
-        for x in np.linspace(lo + 2e-9, hi - 2e-9, 500):
+        # and the first and last radii a piece takes (PIECE_MARGIN in): lower_height runs an arc 1e-9 degrees
+        # past its ends, more than the margin on arcs of over 57 mm (a long drum's side: no pieces then)
+        inner = np.nextafter([lo + PIECE_MARGIN, hi - PIECE_MARGIN], [hi, lo])
+        for x in np.r_[inner, np.linspace(lo + 2e-9, hi - 2e-9, 500)]:
             fast = piece_height(tb, x)
             if not fast[3] or fast[:3] != lower_height(segs, x):
                 return np.zeros((0, 7))
