@@ -103,7 +103,11 @@ def cusp_points(a: SweptLine, ta: float, b: SweptLine, tb: float, rows, lo, hi, 
     crosses = (f_lo <= 0) & (f_hi >= 0)
     tol = (hi - lo) * 2.0**-iters
     lo_c, hi_c = np.maximum(lo, tb - b.prof.R), np.minimum(hi, ta + a.prof.R)  # b, a finite (but NaN stretches)
-    fc_lo, fc_hi = f(every, lo_c), f(every, hi_c)
+    fc_lo, fc_hi = f_lo.copy(), f_hi.copy()
+    for cut, f_cut, end in ((lo_c, fc_lo, lo), (hi_c, fc_hi, hi)):
+        moved = np.nonzero(cut != end)[0]  # (most ends are within reach already: not evaluated again)
+        if moved.size:
+            f_cut[moved] = f(moved, cut[moved])
     clip = crosses & (lo_c <= hi_c)
     at_hi = clip & (fc_hi < 0) & (fc_hi > -1e300)  # a finite and still below b at a's rim
     at_lo = clip & ~at_hi & (fc_lo > 0) & (fc_lo < 1e300)  # b finite and below a at b's rim
