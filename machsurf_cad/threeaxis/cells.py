@@ -105,12 +105,11 @@ def fine_cells(fs: FaceSet, factor: int = 4) -> FineCells:
         factor -= 1
     if factor in cache:
         return cache[factor]
-    pool_xyz = np.concatenate([fs.sample_xyz, fs.edge_xyz])
-    pool_face = np.concatenate([fs.sample_face, fs.edge_face[fs.edge_id]])
+    pool_xyz, pool_face = fs.pool_xyz, fs.pool_face
     XYZ, RISE, COV, OWN, DIST = [], [], [], [], []
     for i in range(len(fs.faces)):
         mine = np.nonzero(pool_face == i)[0]
-        if mine.size == 0:
+        if mine.size == 0 or fs.face_vertical[i]:  # (a vertical face's samples bound nothing: no cells)
             continue
         p, rise, cov = _face_fine(fs, i, factor)
         dist, k = cKDTree(pool_xyz[mine]).query(p, workers=-1)
@@ -119,6 +118,8 @@ def fine_cells(fs: FaceSet, factor: int = 4) -> FineCells:
         COV.append(cov)
         OWN.append(mine[k])
         DIST.append(dist + cov)
+    if not OWN:  # only vertical faces: no cells
+        OWN, XYZ, RISE, COV, DIST = [np.zeros(0, np.int64)], [np.zeros((0, 3))], [np.zeros(0)], [np.zeros(0)], [[]]
     own = np.concatenate(OWN)
     order = np.argsort(own, kind="stable")
     own = own[order]
@@ -129,7 +130,8 @@ def fine_cells(fs: FaceSet, factor: int = 4) -> FineCells:
     np.maximum.at(radius, own, dist)
     top = np.full(n_pool, -np.inf)
     np.maximum.at(top, own, xyz[:, 2] + rise)
-    contained = bool(np.all(radius <= fs.cover * (1 + 1e-9)))
+    bounding = np.isfinite(fs.cover)
+    contained = bool(np.all(radius[bounding] <= fs.cover[bounding] * (1 + 1e-9)))
     cells = FineCells(start, np.ascontiguousarray(xyz), rise, cov, radius, top, factor, contained)
     cache[factor] = cells
     return cells

@@ -248,9 +248,7 @@ def _pieces(segs: np.ndarray, R: float) -> np.ndarray:
 def _pool(fs: FaceSet):
     c = fine_cells(fs)
     n_int = fs.sample_xyz.shape[0]
-    xyz = np.ascontiguousarray(np.concatenate([fs.sample_xyz, fs.edge_xyz]))
-    pf = np.concatenate([fs.sample_face, fs.edge_face[fs.edge_id]]).astype(np.int64)
-    puv = np.ascontiguousarray(np.concatenate([fs.sample_uv, fs.edge_uv]))
+    xyz, pf, puv = (np.ascontiguousarray(a) for a in (fs.pool_xyz, fs.pool_face, fs.pool_uv))
     return (xyz, pf, puv, n_int, fs.edge_id.astype(np.int64), fs.edge_t.astype(float), fs.edge_dt.astype(float),
             fs.cover.astype(float), fs.rise.astype(float), fs.min_tilt.astype(float),
             fs.edge_cover.astype(float), c.start, c.xyz, c.rise, c.cover, c.radius, c.top,

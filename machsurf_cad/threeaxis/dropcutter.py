@@ -194,9 +194,7 @@ def _seeds(fs: FaceSet, prof: _Profile, C: np.ndarray):
     sdm = qtree.sparse_distance_matrix(fs.tree, prof.R + margin, output_type="ndarray")
     qi = sdm["i"].astype(np.int64)
     sj = sdm["j"].astype(np.int64)
-    xyz = np.where(
-        (sj < n_int)[:, None], fs.sample_xyz[np.minimum(sj, n_int - 1)], fs.edge_xyz[np.maximum(sj - n_int, 0)]
-    )
+    xyz = fs.pool_xyz[sj]
     d = xyz[:, :2] - C[qi]
     rho = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])  # as the compiled path computes it (ties match)
     h = prof(np.minimum(rho, prof.R))[0]
@@ -206,9 +204,7 @@ def _seeds(fs: FaceSet, prof: _Profile, C: np.ndarray):
     quadrant = np.where(d[:, 1] < 0, np.where(d[:, 0] < 0, 1, 2), np.where(d[:, 0] > 0, 3, 4))
     sector = np.where(rho < 0.5 * prof.R, 0, quadrant)
     is_edge = sj >= n_int
-    group = np.where(
-        is_edge, len(fs.faces) + fs.edge_id[np.maximum(sj - n_int, 0)], fs.sample_face[np.minimum(sj, n_int - 1)]
-    )
+    group = np.where(is_edge, len(fs.faces) + fs.edge_id[np.maximum(sj - n_int, 0)], fs.pool_face[sj])
     return qi, sj, rho, xyz, val, feasible, sector, is_edge, group
 
 
@@ -257,11 +253,8 @@ def _start(fs, sj):
     n_int = fs.sample_xyz.shape[0]
     is_edge = sj >= n_int
     ke = np.where(is_edge, sj - n_int, 0)
-    ks = np.where(is_edge, 0, sj)
-    fid = np.where(is_edge, fs.edge_face[fs.edge_id[ke]], fs.sample_face[ks])
-    u0 = np.where(is_edge, fs.edge_uv[ke, 0], fs.sample_uv[ks, 0])
-    v0 = np.where(is_edge, fs.edge_uv[ke, 1], fs.sample_uv[ks, 1])
-    return fid, u0, v0, is_edge, ke
+    uv = fs.pool_uv[sj]
+    return fs.pool_face[sj], uv[:, 0], uv[:, 1], is_edge, ke
 
 
 def _solve(fs, prof, C, cand: _Candidates, q, sj, kind: str, kink: int | None = None):
@@ -501,6 +494,8 @@ def machining_face_set(faces, check_faces, cutter, *, axis, seed_spacing=None, w
     spacing = default_seed_spacing(cutter) if seed_spacing is None else float(seed_spacing)
     fs = cache.face_set(build_face_set, machined + list(check_faces), axis=axis, spacing=spacing)
     xy = fs.sample_xyz[fs.sample_face < len(machined), :2]
+    if xy.shape[0] == 0:  # only vertical faces (no samples inside them): their edges
+        xy = fs.edge_xyz[fs.edge_face[fs.edge_id] < len(machined), :2]
     return fs, (float(xy[:, 0].min()), float(xy[:, 0].max()), float(xy[:, 1].min()), float(xy[:, 1].max()))
 
 

@@ -1,8 +1,9 @@
 """The faces a 3-axis job drops the tool on, in the tool-axis frame, with seed samples and edges.
 
 A :class:`FaceSet` holds the part's faces rotated so that the tool axis is +z (the rotation is exact:
-B-spline poles rotate), a trim-aware grid of samples on each face and samples along every trimming
-edge (the parameter box's sides for an untrimmed face) and every crease (an iso-parameter line at a knot
+B-spline poles rotate), a trim-aware grid of samples on each face (none on a vertical face,
+:func:`is_vertical`: its edges hold its every contact) and samples along every trimming edge (the
+parameter box's sides for an untrimmed face) and every crease (an iso-parameter line at a knot
 where the surface is only C0, inside the trimming: ``z - h`` can peak there with no stationary point on
 either side, so the crease is searched as an edge is). The samples only seed the exact contact search of
 :mod:`machsurf_cad.threeaxis.dropcutter`; no result is read off them.
@@ -207,6 +208,45 @@ def hull_top(face: Face) -> float:
     return top + margin
 
 
+def is_vertical(face: Face) -> bool:
+    """Whether the face stands along the tool axis (z) so that no point inside it can carry a contact: its
+    surface's plan position ``(x, y)`` does not depend on one parameter, along which z rises strictly.
+
+    Exact on the poles: along that parameter every row of poles keeps its x, y and weight, and every row's
+    z strictly rises (or every row's strictly falls). Then the surface's z along it is a B-spline of strictly
+    monotone coefficients (the weights of the other parameter, positive, mix the rows), so from any point
+    inside the face the tool's axis distance stays and z rises: the highest value of ``z - h(rho)`` over the
+    face, and of z on any circle, lies on its trimming edges (sampled and searched as edges). Where the
+    face's box or trimming curves leave the knot domain (:func:`_stray`; a CAD system's rounding), the
+    surface is extrapolated: taken along that parameter only at degree 1 (z stays linear), across it only
+    where each row's z is one value (z then does not depend on the other parameter), and never by more than
+    a thousandth of the shortest knot span. A vertical plane, a hole's cylinder and a wall extruded along z
+    are vertical faces."""
+    s = face.surface
+    P = np.asarray(s.poles, float)
+    if P.ndim != 3 or not np.all(np.isfinite(P)):
+        return False
+    W = np.ones(P.shape[:2]) if s.weights is None else np.asarray(s.weights, float).reshape(P.shape[:2])
+    stray = None
+    for d, degree in ((0, s.degree_u), (1, s.degree_v)):
+        Q, Wq = np.moveaxis(P, d, 0), np.moveaxis(W, d, 0)
+        if Q.shape[0] < 2 or np.any(Q[:, :, :2] != Q[:1, :, :2]) or np.any(Wq != Wq[:1]):
+            continue
+        dz = np.diff(Q[:, :, 2], axis=0)
+        if not (np.all(dz > 0) or np.all(dz < 0)):
+            continue
+        stray = _stray(face) if stray is None else stray
+        if not np.any(stray > 0):
+            return True
+        spans = [np.diff(np.asarray(k, float)) for k in (s.knots_u, s.knots_v)]
+        short = min(float(x[x > 0].min()) if np.any(x > 0) else 0.0 for x in spans)
+        along_ok = stray[d] == 0 or degree == 1
+        across_ok = stray[1 - d] == 0 or bool(np.all(Q[:, :, 2] == Q[:, :1, 2]))
+        if along_ok and across_ok and bool(np.all(stray <= 1e-3 * short)):
+            return True
+    return False
+
+
 def capped_rise(rise: np.ndarray, z: np.ndarray, top: float) -> np.ndarray:
     """``rise`` (how much higher than ``z`` the face gets near each sample, mm) cut to what the face's
     :func:`hull_top` allows (nothing is cut where it is ``inf``): the bounds of the samples at the top of a
@@ -279,8 +319,13 @@ class FaceSet:
         and the face's largest normal turning between samples, and at most up to the face's ``face_top``.
         They bound what a local solve can gain over a sample, so seeds that cannot beat a known contact
         are skipped.
+        The edge samples of a vertical face have a cover of ``-inf`` (and rise ``-inf``, ``min_tilt``
+        ``inf``): they seed and bound no face or rim solve, only their edge's search.
     face_top : ndarray (n_faces,)
         Per face: no point of it is higher (mm, :func:`hull_top`; ``inf`` where that is not known).
+    face_vertical : ndarray (n_faces,) of bool
+        Per face: whether it is vertical (:func:`is_vertical`): its trimming edges hold its every contact,
+        and it has no samples inside it.
     names : tuple of str
         The faces' names, as given.
     """
@@ -308,6 +353,7 @@ class FaceSet:
     min_tilt: np.ndarray = field(repr=False)
     edge_rise: np.ndarray = field(repr=False)
     face_top: np.ndarray = field(repr=False)
+    face_vertical: np.ndarray = field(repr=False)
 
     @cached_property
     def edge_loop(self) -> np.ndarray:
@@ -336,10 +382,25 @@ class FaceSet:
         return SurfaceAtlas([f.surface for f in self.faces])
 
     @cached_property
+    def pool_xyz(self) -> np.ndarray:
+        """The pool's samples: face samples, then edge samples (the k-d tree's order), ``(n, 3)``."""
+        return np.concatenate([self.sample_xyz, self.edge_xyz])
+
+    @cached_property
+    def pool_face(self) -> np.ndarray:
+        """The face of each pool sample (an edge sample's: its edge's face)."""
+        return np.concatenate([self.sample_face, self.edge_face[self.edge_id]]).astype(np.int64)
+
+    @cached_property
+    def pool_uv(self) -> np.ndarray:
+        """The face parameters ``(u, v)`` of each pool sample."""
+        return np.concatenate([self.sample_uv, self.edge_uv])
+
+    @cached_property
     def pool_extent(self) -> tuple[int, np.ndarray, np.ndarray, float]:
         """Number of face and edge samples, their plan box (``lo``, ``hi``) and the diagonal of their 3-D box
         (mm): what the drop-cutter sizes its work by."""
-        xyz = np.concatenate([self.sample_xyz, self.edge_xyz]) if self.edge_xyz.size else self.sample_xyz
+        xyz = self.pool_xyz
         if xyz.shape[0] == 0:
             return 0, np.zeros(2), np.zeros(2), 0.0
         return (int(xyz.shape[0]), xyz[:, :2].min(axis=0), xyz[:, :2].max(axis=0),
@@ -370,6 +431,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
     edges: list[BSplineCurve] = []
     EF, EP, ET, EI, EDT, EUV = [], [], [], [], [], []
     COV, RISE, ECOV, ERISE, CLOSED, EALONG, FLAT, EFLAT, EZ, TOP = [], [], [], [], [], [], [], [], [], []
+    VERT: list[bool] = []
     total = 0
     for i, f in enumerate(faces):
         if isinstance(f, BSplineSurface):
@@ -398,6 +460,10 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         top = hull_top(face)
         TOP.append(top)
         keep = face.contains_uv_grid(us, vs).ravel() if face.is_trimmed else np.ones(U.size, bool)
+        vertical = is_vertical(face)
+        VERT.append(vertical)
+        if vertical:  # its edges hold every contact: no sample inside it seeds or bounds one
+            keep[:] = False
         P.append(pts[keep])
         UV.append(np.stack([U.ravel()[keep], V.ravel()[keep]], axis=1))
         F.append(np.full(int(keep.sum()), i))
@@ -413,9 +479,14 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
             de = s.derivatives(uv[:, 0], uv[:, 1], 1)
             EP.append(de.point)
             e_slope = _slope(de.su, de.sv)
-            ECOV.append(np.full(n, delta))
-            ERISE.append(capped_rise(delta * np.minimum(1.0, e_slope + kappa * delta), de.point[:, 2], top))
-            EFLAT.append(np.maximum(e_slope - kappa * delta, 0.0))
+            if vertical:  # nor do its edge samples, but as its edges' seeds and bounds
+                ECOV.append(np.full(n, -np.inf))
+                ERISE.append(np.full(n, -np.inf))
+                EFLAT.append(np.full(n, np.inf))
+            else:
+                ECOV.append(np.full(n, delta))
+                ERISE.append(capped_rise(delta * np.minimum(1.0, e_slope + kappa * delta), de.point[:, 2], top))
+                EFLAT.append(np.maximum(e_slope - kappa * delta, 0.0))
             half = 0.5 * float(np.linalg.norm(np.diff(de.point, axis=0), axis=1).max())
             EALONG.append(np.full(n, half))
             EZ.append(capped_rise(_edge_rise(c, t, de, half), de.point[:, 2], top))
@@ -454,4 +525,5 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         np.concatenate(FLAT + EFLAT),
         np.concatenate(EZ),
         np.array(TOP, float),
+        np.array(VERT, bool),
     )
