@@ -64,8 +64,8 @@ def dropcutter_rows(quick=False, deflection=0.001, sizes=None, ocl_max_points=40
         for spec in cutters or CUTTERS:
             cutter = ms.parse_cutter(spec)
             fs = ms.threeaxis.faceset.face_set(faces, spacing=ms.threeaxis.dropcutter.default_seed_spacing(cutter))
-            ms.drop_cutter(None, cutter, fs.sample_xyz[:2, :2], face_set=fs)  # the kernel loaded once
-            lo, hi = fs.sample_xyz.min(axis=0)[:2], fs.sample_xyz.max(axis=0)[:2]
+            ms.drop_cutter(None, cutter, fs.pool_xyz[:2, :2], face_set=fs)  # the kernel loaded once
+            _, lo, hi, _ = fs.pool_extent  # the plan box of the faces and their edges
             ocl_per_point = None
             for n in sizes:
                 xy = _grid(lo, hi, n)
