@@ -765,3 +765,16 @@ def test_mill3_refuses_faces_the_tool_reaches_nowhere_before_planning():
     w = ms.mill3([wall, floor], "ball:D=6", faces="0", pattern="waterline", stepdown=5.0)
     assert w.reach_summary()["touched_fraction"] == 0.0 and w.reach_summary()["reachable_fraction"] > 0.8
     assert w.verdict == "clean" and w.toolpath.n_cut > 0
+
+
+@pytest.mark.parametrize("pattern", ["raster", "waterline"])
+def test_mill3_names_a_part_of_walls_only(pattern):
+    """Four walls of a box and nothing else (no floor, no lid): a tool coming down +Z touches them only at
+    their edges and reaches none of them; the one-line answer names them as parallel to the axis (not as
+    hidden behind other faces: there are none)."""
+    walls = [ms.Face(ms.builders.plane_patch(o, d, (0, 0, 20)), name=f"wall{k}") for k, (o, d) in
+             enumerate([((0, 0, 0), (40, 0, 0)), ((40, 0, 0), (0, 30, 0)), ((40, 30, 0), (-40, 0, 0)),
+                        ((0, 30, 0), (0, -30, 0))])]  # fmt: skip
+    with pytest.raises(ms.InputError, match=r"face\(s\) 0, 1, 2, 3 are parallel to the tool axis") as e:
+        ms.mill3(walls, "ball:D=6", faces="all", pattern=pattern, stepover=5.0)
+    assert "stand in front" not in str(e.value) and "\n" not in str(e.value)

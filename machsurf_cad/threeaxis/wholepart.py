@@ -172,9 +172,16 @@ def mill3(
     for r in reach:
         r["face"] = machined[r["face"]]
     if reach and not any(r["reachable_mm2"] > 0.0 for r in reach):  # (a wall is reached, not touched by a drop)
+        names = ", ".join(str(i) for i in machined)
+        if all(faces_away(part[i], axis, below=0.01) for i in machined):  # walls only (a tube, a fin)
+            raise InputError(
+                f"face(s) {names} are parallel to the tool axis {list(axis)} or face away from it: a tool coming "
+                "down the axis touches them only at their edges, and reaches none of them: nothing to machine "
+                "along this axis"
+            )
         raise InputError(
-            f"the tool along {list(axis)} reaches none of face(s) {', '.join(str(i) for i in machined)}: other "
-            "faces stand in front of them: nothing to machine along this axis"
+            f"the tool along {list(axis)} reaches none of face(s) {names}: other faces stand in front of them: "
+            "nothing to machine along this axis"
         )
     step = 2.0 if stepover is None else float(stepover)
     common = dict(check_faces=cf, chordal_tolerance=chordal_tolerance, clearance=clearance, axis=axis,
