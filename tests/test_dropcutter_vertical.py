@@ -58,6 +58,44 @@ def test_a_face_extrapolated_along_its_height_counts_only_at_degree_one():
     assert not is_vertical(Face(lin, uv_bounds=(0.0, 1.0, 0.0, 1.01)))  # past a thousandth of its span
 
 
+def test_a_periodic_height_and_an_open_knot_vectors_extrapolation_are_not_vertical():
+    """Found by a hostile review. Rows rising strictly along a periodic parameter wrap from their last pole
+    back to their first: z climbs and falls, its top inside the face (a ball D4 sat 2.12 mm too low). An
+    open (unclamped) knot vector's domain is inside its first and last knot: a box past the domain is
+    extrapolated, and there z turned over (14.1 mm too low); the stray is measured from the domain."""
+    from machsurf_cad.geometry.bspline import BSplineSurface
+    from machsurf_cad.threeaxis.faceset import _stray
+
+    P = np.array([[[x, 0.0, z] for z in (0.0, 1.0, 2.0, 3.0)] for x in (0.0, 10.0)])
+    periodic = BSplineSurface(1, 2, [0, 1], [2, 2], np.arange(5.0), np.ones(5, int), P, periodic_v=True)
+    assert not is_vertical(Face(periodic))
+    P = np.array([[[x, 0.0, z] for z in (0.0, 9.0, 10.0)] for x in (0.0, 10.0)])
+    open_v = BSplineSurface(1, 2, [0, 1], [2, 2], np.arange(6.0), np.ones(6, int), P)
+    assert open_v.bounds[2:] == (2.0, 3.0)
+    assert is_vertical(Face(open_v))  # its box is its domain
+    past = Face(open_v, uv_bounds=(0.0, 1.0, 0.0, 5.0))
+    assert _stray(past)[1] == 2.0 and not is_vertical(past)
+    v = np.linspace(0.0, 5.0, 5001)
+    top = float(open_v.evaluate(np.full(v.size, 0.5), v)[:, 2].max())  # 9.5625 at v = 3.125, inside the box
+    for engine in ("numpy", "compiled") if compiled.available() else ("numpy",):
+        h = ms.drop_cutter([past], ms.parse_cutter("flat:D=4"), [[5.0, -1.5]], engine=engine).height[0]
+        assert h == pytest.approx(top, abs=1e-6)
+
+
+@pytest.mark.parametrize("faces", ["wall", "cylinder"])
+def test_the_path_planners_take_a_part_of_vertical_faces_only(faces):
+    """No samples inside any face: the raster, the scallop raster and the waterline plan from the edges (a
+    review found them reading the empty face samples' top)."""
+    part = [builders.plane_patch((0, 0, 0), (10, 0, 0), (0, 0, 5))] if faces == "wall" else [
+        builders.cylinder_patch(5.0, 10.0, 360.0)]  # fmt: skip
+    tool = ms.parse_cutter("ball:D=4")
+    tp = ms.raster(part, tool, stepover=1.0)
+    assert tp.n_cut > 0 and ms.verify(part, tp, gouge_tolerance=0.01).max_gouge <= 0.01
+    assert ms.waterline(part, tool, stepdown=1.0).n_cut > 0
+    if faces == "cylinder":
+        assert ms.raster(part, tool, scallop=0.05).n_cut > 0
+
+
 def test_vertical_is_taken_in_the_tool_frame():
     wall = builders.plane_patch((0, 0, 0), (10, 0, 0), (0, 0, 5))
     assert face_set([wall], spacing=1.0).face_vertical.tolist() == [True]

@@ -163,7 +163,7 @@ def _stray(face: Face) -> np.ndarray:
     surface's knot domain: 0 where a curve's poles (which hold it) lie inside, else from 1025 points along
     the curve plus the bulge of the curve between them (an eighth of its largest second difference)."""
     s = face.surface
-    k = np.array([s.knots_u[0], s.knots_u[-1], s.knots_v[0], s.knots_v[-1]], float)
+    k = np.array(s.bounds, float)  # the spline's domain (an open knot vector's is inside its first and last knot)
     out = np.zeros(2)
 
     def reach(lo_u, hi_u, lo_v, hi_v, pad=(0.0, 0.0)):  # np.max: a NaN parameter gives NaN, then inf
@@ -212,26 +212,26 @@ def is_vertical(face: Face) -> bool:
     """Whether the face stands along the tool axis (z) so that no point inside it can carry a contact: its
     surface's plan position ``(x, y)`` does not depend on one parameter, along which z rises strictly.
 
-    Exact on the poles: along that parameter every row of poles keeps its x, y and weight, and every row's
-    z strictly rises (or every row's strictly falls). Then the surface's z along it is a B-spline of strictly
-    monotone coefficients (the weights of the other parameter, positive, mix the rows), so from any point
-    inside the face the tool's axis distance stays and z rises: the highest value of ``z - h(rho)`` over the
-    face, and of z on any circle, lies on its trimming edges (sampled and searched as edges). Where the
-    face's box or trimming curves leave the knot domain (:func:`_stray`; a CAD system's rounding), the
-    surface is extrapolated: taken along that parameter only at degree 1 (z stays linear), across it only
-    where each row's z is one value (z then does not depend on the other parameter), and never by more than
-    a thousandth of the shortest knot span. A vertical plane, a hole's cylinder and a wall extruded along z
-    are vertical faces."""
+    Exact on the poles: along that parameter (not periodic) every row of poles keeps its x, y and weight, and
+    every row's z strictly rises (or every row's strictly falls). Then the surface's z along it is a
+    B-spline of strictly monotone coefficients (the weights of the other parameter, positive, mix the
+    rows), so from any point inside the face the tool's axis distance stays and z rises: the highest value
+    of ``z - h(rho)`` over the face, and of z on any circle, lies on its trimming edges (sampled and
+    searched as edges). Where the face's box or trimming curves leave the spline's domain (:func:`_stray`;
+    a CAD system's rounding), the surface is extrapolated: taken along that parameter only at degree 1 (z
+    stays linear), across it only where each row's z is one value (z then does not depend on the other
+    parameter), and never by more than a thousandth of the shortest knot span. A vertical plane, a hole's
+    cylinder and a wall extruded along z are vertical faces."""
     s = face.surface
     P = np.asarray(s.poles, float)
     if P.ndim != 3 or not np.all(np.isfinite(P)):
         return False
     W = np.ones(P.shape[:2]) if s.weights is None else np.asarray(s.weights, float).reshape(P.shape[:2])
     stray = None
-    for d, degree in ((0, s.degree_u), (1, s.degree_v)):
+    for d, degree, periodic in ((0, s.degree_u, s.periodic_u), (1, s.degree_v, s.periodic_v)):
         Q, Wq = np.moveaxis(P, d, 0), np.moveaxis(W, d, 0)
-        if Q.shape[0] < 2 or np.any(Q[:, :, :2] != Q[:1, :, :2]) or np.any(Wq != Wq[:1]):
-            continue
+        if periodic or Q.shape[0] < 2 or np.any(Q[:, :, :2] != Q[:1, :, :2]) or np.any(Wq != Wq[:1]):
+            continue  # (a periodic row wraps from its last pole back to its first: z climbs, then falls)
         dz = np.diff(Q[:, :, 2], axis=0)
         if not (np.all(dz > 0) or np.all(dz < 0)):
             continue

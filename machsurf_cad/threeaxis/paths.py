@@ -172,7 +172,7 @@ def raster(
         res = _drop(fs, tool, pts, progress)
         H = res.height.reshape(len(offsets), len(s))
         CC = res.contact.reshape(len(offsets), len(s), 3)
-    z_top = float(max(fs.sample_xyz[:, 2].max(), fs.edge_xyz[:, 2].max()))
+    z_top = float(fs.pool_xyz[:, 2].max())
     passes = []  # per pass: (s values, heights, contacts, line index)
     for i in range(len(offsets)):
         ok = np.isfinite(H[i])

@@ -151,7 +151,7 @@ def waterline(
         raise InputError("no face lies under the tool anywhere in the waterline's extent")
     z_low = float(np.nanmin(Z)) - 1.0
     Zf = np.where(fin, Z, z_low)
-    z_top = float(max(fs.sample_xyz[:, 2].max(), fs.edge_xyz[:, 2].max()))
+    z_top = float(fs.pool_xyz[:, 2].max())
     z_bottom = float(np.nanmin(Z[fin])) if z_min is None else float(z_min)
     levels = np.arange(float(np.nanmax(Z)) - stepdown, z_bottom - 1e-9, -stepdown)
     if levels.size == 0:
