@@ -176,3 +176,17 @@ def test_a_vertical_faces_edge_samples_seed_only_their_edges():
     assert np.all(fs.min_tilt[n_int:][mine] == np.inf)
     assert np.all(np.isfinite(fs.edge_cover[mine])) and np.all(np.isfinite(fs.edge_rise[mine]))
     assert np.all(np.isfinite(fs.cover[n_int:][~mine]))
+
+
+def test_a_machined_vertical_face_keeps_its_place_in_the_plan_box():
+    """A floor (x, y in [0, 10]) and a wall standing at x = 15, both machined: the raster's plan box reaches
+    the wall (from its edges' samples: it has none inside it), as it did from its samples before."""
+    from machsurf_cad.threeaxis.dropcutter import machining_face_set
+
+    floor = builders.plane_patch((0, 0, 0), (10, 0, 0), (0, 10, 0))
+    wall = builders.plane_patch((15, 0, 0), (0, 10, 0), (0, 0, 5))
+    fs, box = machining_face_set([floor, wall], [], ms.parse_cutter("ball:D=4"), axis=(0, 0, 1))
+    assert fs.face_vertical.tolist() == [False, True]
+    assert box == pytest.approx((0.0, 15.0, 0.0, 10.0), abs=1e-12)
+    _, box_floor = machining_face_set([floor], [wall], ms.parse_cutter("ball:D=4"), axis=(0, 0, 1))
+    assert box_floor == pytest.approx((0.0, 10.0, 0.0, 10.0), abs=1e-12)  # the wall only avoided

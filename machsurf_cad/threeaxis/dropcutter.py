@@ -493,9 +493,9 @@ def machining_face_set(faces, check_faces, cutter, *, axis, seed_spacing=None, w
         raise InputError(f"{what} needs at least one face to machine")
     spacing = default_seed_spacing(cutter) if seed_spacing is None else float(seed_spacing)
     fs = cache.face_set(build_face_set, machined + list(check_faces), axis=axis, spacing=spacing)
-    xy = fs.sample_xyz[fs.sample_face < len(machined), :2]
-    if xy.shape[0] == 0:  # only vertical faces (no samples inside them): their edges
-        xy = fs.edge_xyz[fs.edge_face[fs.edge_id] < len(machined), :2]
+    on_edge = fs.edge_face[fs.edge_id]  # a vertical face has no samples inside it: its edges' samples
+    xy = np.concatenate([fs.sample_xyz[fs.sample_face < len(machined), :2],
+                         fs.edge_xyz[(on_edge < len(machined)) & fs.face_vertical[on_edge], :2]])  # fmt: skip
     return fs, (float(xy[:, 0].min()), float(xy[:, 0].max()), float(xy[:, 1].min()), float(xy[:, 1].max()))
 
 
