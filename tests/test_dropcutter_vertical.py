@@ -85,15 +85,31 @@ def test_a_periodic_height_and_an_open_knot_vectors_extrapolation_are_not_vertic
 @pytest.mark.parametrize("faces", ["wall", "cylinder"])
 def test_the_path_planners_take_a_part_of_vertical_faces_only(faces):
     """No samples inside any face: the raster, the scallop raster and the waterline plan from the edges (a
-    review found them reading the empty face samples' top)."""
-    part = [builders.plane_patch((0, 0, 0), (10, 0, 0), (0, 0, 5))] if faces == "wall" else [
-        builders.cylinder_patch(5.0, 10.0, 360.0)]  # fmt: skip
+    review found them reading the empty face samples' top). Every cutting position rests on the top edge,
+    at its closed form: a ball D4 at plan distance ``d`` from the edge stands at ``top - (2 - sqrt(4 - d^2))``
+    (the waterline's contour points within its tracing tolerance)."""
+    from machsurf_cad.cam.toolpath import Move
+
+    if faces == "wall":  # x in [0, 10], y = 0, z in [0, 5]
+        part, top = [builders.plane_patch((0, 0, 0), (10, 0, 0), (0, 0, 5))], 5.0
+
+        def dist(p):
+            return np.hypot(p[:, 0] - np.clip(p[:, 0], 0.0, 10.0), p[:, 1])
+    else:  # a tube of radius 5 around z, z in [0, 10]
+        part, top = [builders.cylinder_patch(5.0, 10.0, 360.0)], 10.0
+
+        def dist(p):
+            return np.abs(np.hypot(p[:, 0], p[:, 1]) - 5.0)
+
     tool = ms.parse_cutter("ball:D=4")
-    tp = ms.raster(part, tool, stepover=1.0)
-    assert tp.n_cut > 0 and ms.verify(part, tp, gouge_tolerance=0.01).max_gouge <= 0.01
-    assert ms.waterline(part, tool, stepdown=1.0).n_cut > 0
-    if faces == "cylinder":
-        assert ms.raster(part, tool, scallop=0.05).n_cut > 0
+    paths = [(ms.raster(part, tool, stepover=1.0), 1e-9), (ms.waterline(part, tool, stepdown=1.0), 1e-6)]
+    if faces == "cylinder":  # (the wall's plan is a line: narrower than one scallop line)
+        paths.append((ms.raster(part, tool, scallop=0.05), 1e-9))
+    for tp, tol in paths:
+        tip = np.asarray(tp.tip)[np.isin(tp.move, [Move.CUT, Move.APPROACH])]
+        d = dist(tip)
+        assert tip.shape[0] > 0 and np.all(d <= 2.0 + 1e-9)
+        np.testing.assert_allclose(tip[:, 2], top - (2.0 - np.sqrt(np.maximum(4.0 - d * d, 0.0))), atol=tol)
 
 
 def test_vertical_is_taken_in_the_tool_frame():
@@ -131,7 +147,7 @@ def parts():
 
 def _without_the_rule(monkeypatch):
     cache.clear()
-    monkeypatch.setattr(faceset, "is_vertical", lambda face: False)
+    monkeypatch.setattr(faceset, "is_vertical", lambda face, stray=None: False)
 
 
 @pytest.mark.parametrize("name, n_vertical", [("freeform_block.step", 6), ("mould_insert.step", 28)])

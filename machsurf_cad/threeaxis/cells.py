@@ -119,7 +119,8 @@ def fine_cells(fs: FaceSet, factor: int = 4) -> FineCells:
         OWN.append(mine[k])
         DIST.append(dist + cov)
     if not OWN:  # only vertical faces: no cells
-        OWN, XYZ, RISE, COV, DIST = [np.zeros(0, np.int64)], [np.zeros((0, 3))], [np.zeros(0)], [np.zeros(0)], [[]]
+        OWN, XYZ = [np.zeros(0, np.int64)], [np.zeros((0, 3))]
+        RISE = COV = DIST = [np.zeros(0)]
     own = np.concatenate(OWN)
     order = np.argsort(own, kind="stable")
     own = own[order]

@@ -182,17 +182,17 @@ def _stray(face: Face) -> np.ndarray:
     return np.where(np.isfinite(out), out, np.inf)
 
 
-def hull_top(face: Face) -> float:
+def hull_top(face: Face, stray: np.ndarray | None = None) -> float:
     """A height no point of the face reaches above (mm, the tool frame's z): its surface's highest pole (the
     convex hull property of a B-spline; its weights are positive), raised by twice the most z can climb
     over the stretch (:func:`_stray`) by which its parameter box or trimming curves leave the knot domain,
     where the surface is extrapolated. ``inf`` when that stretch is over a thousandth of the shortest knot
-    span (there the climb is not bounded so)."""
+    span (there the climb is not bounded so). ``stray``: the face's :func:`_stray`, when known."""
     s = face.surface
     Z = np.asarray(s.poles, float)[..., 2]
     w = np.ones_like(Z) if s.weights is None else np.asarray(s.weights, float).reshape(Z.shape)
     top = float(Z.max())
-    stray = _stray(face)
+    stray = _stray(face) if stray is None else stray
     if not np.any(stray > 0):
         return top
     margin = 0.0
@@ -208,7 +208,7 @@ def hull_top(face: Face) -> float:
     return top + margin
 
 
-def is_vertical(face: Face) -> bool:
+def is_vertical(face: Face, stray: np.ndarray | None = None) -> bool:
     """Whether the face stands along the tool axis (z) so that no point inside it can carry a contact: its
     surface's plan position ``(x, y)`` does not depend on one parameter, along which z rises strictly.
 
@@ -221,7 +221,8 @@ def is_vertical(face: Face) -> bool:
     a CAD system's rounding), the surface is extrapolated: taken along that parameter only at degree 1 (z
     stays linear), across it only where each row's z is one value (z then does not depend on the other
     parameter), and never by more than a thousandth of the shortest knot span. A vertical plane, a hole's
-    cylinder and a wall extruded along z are vertical faces."""
+    cylinder and a wall extruded along z are vertical faces. ``stray``: the face's :func:`_stray`, when
+    known."""
     s = face.surface
     P = np.asarray(s.poles, float)
     if P.ndim != 3 or not np.all(np.isfinite(P)):
@@ -457,10 +458,11 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         CLOSED.append(_closed(d.point))
         pts = d.point.reshape(-1, 3)
         slope, delta, kappa = _slopes(d, nu, nv)
-        top = hull_top(face)
+        stray = _stray(face)  # (both read it: it evaluates the trimming curves that leave the knot domain)
+        top = hull_top(face, stray)
         TOP.append(top)
         keep = face.contains_uv_grid(us, vs).ravel() if face.is_trimmed else np.ones(U.size, bool)
-        vertical = is_vertical(face)
+        vertical = is_vertical(face, stray)
         VERT.append(vertical)
         if vertical:  # its edges hold every contact: no sample inside it seeds or bounds one
             keep[:] = False

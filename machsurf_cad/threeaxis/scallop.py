@@ -161,15 +161,15 @@ def part_heights(fs, xy, k: int = 12, iters: int = 16):
     n_int = fs.sample_xyz.shape[0]
     z_best = np.full(xy.shape[0], -np.inf)
     n_best = np.tile([0.0, 0.0, 1.0], (xy.shape[0], 1))
-    if xy.shape[0] == 0 or n_int == 0:  # (no samples inside any face: only vertical ones)
-        return np.full(xy.shape[0], np.nan), n_best
+    if xy.shape[0] == 0:
+        return z_best, n_best
     _, nb = fs.tree.query(xy, k=min(k, fs.tree.n))
     nb = np.atleast_2d(nb)
     q = np.repeat(np.arange(xy.shape[0]), nb.shape[1])
     j = nb.ravel()
     keep = j < n_int  # face samples (edge samples follow them in the tree)
     q, j = q[keep], j[keep]
-    if q.size == 0:
+    if q.size == 0:  # no face sample near any point (only vertical faces: they have none)
         return np.full(xy.shape[0], np.nan), n_best
     fid = fs.sample_face[j]
     first = np.unique(q * (len(fs.faces) + 1) + fid, return_index=True)[1]  # nearest sample per (point, face)
