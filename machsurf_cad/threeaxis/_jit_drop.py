@@ -19,6 +19,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from ._jit_cert import boxed, rim_certificate
 from ._jit_geom import borrowed, hyp, inside, isfin, keep, norm3, prof, prof_floor, surf
 from ._jit_solve import ON_CIRCLE, edge_search, enters_face, face_newton, into_disc, rim_ascent, tip_solve
 
@@ -29,7 +30,7 @@ BOUND_TIE = 1e-10
 that only ties the best (a flat end on a horizontal floor: the floor's edges and rim at the floor's height)
 cannot raise it by more (the numpy path's ``_BOUND_TIE_MM``)."""
 
-KERNEL_SOURCES = "090d88e3cf1aff7b"
+KERNEL_SOURCES = "6871d7c9a2dc26e6"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 
@@ -83,6 +84,7 @@ def _solve(kind, j, cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk):
         u, v, g = rim_ascent(S, sp, rk, hk, cx, cy, f, u0, v0, W)
         if _beats(best, g) and inside(S, T, f, u, v) and enters_face(S, T, R, cx, cy, f, u, v, W):
             _add(best, bp, g, RIM, f, D[0, 0], D[0, 1], D[0, 2])
+            best[6], best[7] = u, v  # (the rim certificate's start)
     else:
         k = j - SM[3]
         g = edge_search(S, E, PR, cx, cy, SM[4][k], SM[5][k], SM[6][k], W, SM[18], k)
@@ -303,14 +305,37 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
         _solve(FACE, idx[f1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
     if r1 >= 0 and (best[4] == 0 or bounds[1][gk[r1]] > best[1] + BOUND_TIE):  # (a ball's rim: seldom)
         _solve(RIM, idx[r1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
-    CB_ = (np.full(m, math.nan), np.full(m, math.nan))
+    # a flat end's rim contact: the seed samples whose neighbourhoods its certificate covers bound nothing more
+    CB_ = (np.full(m, math.nan), np.full(m, math.nan), np.full(5, -1.0))
     CB = borrowed(CB_)
+    cert = CB[2]
+    if K[10] > 0 and K[9] > 0 and best[4] > 0 and best[2] == RIM:
+        if rim_certificate(S, int(best[3]), best[6], best[7], cx, cy, R, best[1] + h_R, cert[1:]):
+            cert[0] = best[3]
+            free_ = np.empty(m, np.bool_)
+            free = borrowed(free_)
+            for k in range(m):
+                free[k] = not _covered(k, idx, SM, cert)
+            bounds_ = (_group_max(ng, gk, ub, free), _group_max(ng, gk, rim_ub, free), bounds_[2])
+            bounds = borrowed(bounds_)
+            keep(free_)
     _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk, ek, f1, r1, CB)
     low = _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, is_seed, feas, is_e, ub, gk, ng, CB)
     _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed, is_e, ek, n_eg)
     for kk in range(kinks.shape[0]):
         _kink_rounds(kinks[kk, 0], kinks[kk, 1], low, cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, zz, gk, ng)
     keep((W_, got, cand, strictly_, zeros_, seeds_, ones_, bounds_, CB_))
+
+
+@njit(cache=True, inline="always")
+def _covered(k, idx, SM, cert):
+    """Whether seed sample ``idx[k]`` (inside a face) has its grid neighbourhood in the certified box."""
+    j = idx[k]
+    if j >= SM[3] or cert[0] < 0:
+        return False
+    f = SM[1][j]
+    steps = SM[20]
+    return boxed(cert, f, SM[2][j, 0], SM[2][j, 1], steps[f, 0] * (1 + 1e-9), steps[f, 1] * (1 + 1e-9))
 
 
 @njit(cache=True)
@@ -475,8 +500,14 @@ def _cell(k, which, low, cx, cy, idx, rr, PR, SM, K, CB):
     if rough < low:
         return rough
     start, cxyz, crise, ccov = SM[11], SM[12], SM[13], SM[14]
+    cert, cuv = CB[2], SM[19]
+    f = SM[1][j]
+    certified = cert[0] == f
+    du, dv = SM[20][f, 2] * (1 + 1e-9), SM[20][f, 3] * (1 + 1e-9)
     fb = rb = -math.inf
     for c in range(start[j], start[j + 1]):
+        if certified and boxed(cert, f, cuv[c, 0], cuv[c, 1], du, dv):  # (NaN on an edge: never)
+            continue
         r = hyp(cxyz[c, 0] - cx, cxyz[c, 1] - cy)
         t = cxyz[c, 2] + crise[c]
         if r - ccov[c] <= R:
@@ -504,7 +535,7 @@ def _group_cells(g, which, low, cx, cy, idx, rr, gk, PR, SM, K, CB):
 def drop_batch(C, S, E, T, PR, SM, G, K, kinks, height, kind, face, point):
     """Heights of the query points ``C`` (n, 2) into the output arrays, in parallel."""
     for q in prange(C.shape[0]):
-        best = np.zeros(6)
+        best = np.zeros(8)
         bp = np.zeros(3)
         _query(C[q, 0], C[q, 1], S, E, T, PR, SM, G, K, kinks, best, bp)
         if best[4] > 0:

@@ -14,14 +14,12 @@ point within ``R`` of it: a neighbourhood whose cells' bounds are below a contac
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..gougecheck import face_size
-from .faceset import FaceSet, _slope, _slopes, capped_rise
+from .faceset import FaceSet, _slope, _slopes, capped_rise, grid_counts
 
 MAX_FINE_SAMPLES = 4_000_000
 """Fine samples at most (the factor falls for face sets that would need more)."""
@@ -44,6 +42,13 @@ class FineCells:
         may be skipped on either bound (a point in a cell is in its sample's neighbourhood too).
     top : ndarray (n_pool,)
         The highest ``z + rise`` of the cell's fine samples (mm).
+    uv : ndarray (n_fine, 2)
+        The parameters of the fine samples inside a face (NaN for those on its edges).
+    steps : ndarray (n_faces, 4)
+        Per face the parameter steps of its seed grid and of its fine grid: ``du, dv, du / factor, dv /
+        factor`` (0 for a vertical face). A face point in a grid cell lies within the cover radius of each of
+        the cell's corners, so a sample's bound covers no point outside the parameter box of one step about
+        it (the rim certificate of the compiled drop-cutter relies on this).
     factor : int
         How many times finer than the seed samples.
     """
@@ -55,6 +60,8 @@ class FineCells:
     radius: np.ndarray
     top: np.ndarray
     factor: int
+    uv: np.ndarray
+    steps: np.ndarray
     contained: bool
 
 
@@ -72,9 +79,7 @@ def _face_fine(fs: FaceSet, i: int, factor: int):
     face = fs.faces[i]
     s = face.surface
     u0, u1, v0, v1 = face.uv_bounds
-    lu, lv = (max(x, 1e-9) for x in face_size(face))
-    nu = int(max(5, math.ceil(lu / fs.spacing) + 1))
-    nv = int(max(5, math.ceil(lv / fs.spacing) + 1))
+    nu, nv = grid_counts(face, fs.spacing)
     us = _refined(np.linspace(u0, u1, nu), factor)
     vs = _refined(np.linspace(v0, v1, nv), factor)
     d = s.derivatives_grid(us, vs, 1)
@@ -84,16 +89,20 @@ def _face_fine(fs: FaceSet, i: int, factor: int):
     else:
         keep = np.ones(us.size * vs.size, bool)
     pts = [d.point.reshape(-1, 3)[keep]]
+    U, V = np.meshgrid(us, vs, indexing="ij")
+    uvs = [np.stack([U.ravel(), V.ravel()], axis=1)[keep]]
     slopes = [slope[keep]]
     for e in np.nonzero(fs.edge_face == i)[0]:
         t = _refined(np.sort(fs.edge_t[fs.edge_id == e]), factor)
         uv = fs.edges[e].evaluate(t)
         de = s.derivatives(uv[:, 0], uv[:, 1], 1)
         pts.append(de.point)
+        uvs.append(np.full((t.size, 2), np.nan))
         slopes.append(_slope(de.su, de.sv))
     p, sl = np.concatenate(pts), np.concatenate(slopes)
     rise = capped_rise(delta * np.minimum(1.0, sl + kappa * delta), p[:, 2], float(fs.face_top[i]))
-    return p, rise, np.full(p.shape[0], delta)
+    steps = ((u1 - u0) / (nu - 1), (v1 - v0) / (nv - 1))
+    return p, rise, np.full(p.shape[0], delta), np.concatenate(uvs), steps
 
 
 def fine_cells(fs: FaceSet, factor: int = 4) -> FineCells:
@@ -106,12 +115,15 @@ def fine_cells(fs: FaceSet, factor: int = 4) -> FineCells:
     if factor in cache:
         return cache[factor]
     pool_xyz, pool_face = fs.pool_xyz, fs.pool_face
-    XYZ, RISE, COV, OWN, DIST = [], [], [], [], []
+    XYZ, RISE, COV, OWN, DIST, UV = [], [], [], [], [], []
+    steps = np.zeros((len(fs.faces), 4))
     for i in range(len(fs.faces)):
         mine = np.nonzero(pool_face == i)[0]
         if mine.size == 0 or fs.face_vertical[i]:  # (a vertical face's samples bound nothing: no cells)
             continue
-        p, rise, cov = _face_fine(fs, i, factor)
+        p, rise, cov, uv, (du, dv) = _face_fine(fs, i, factor)
+        steps[i] = du, dv, du / factor, dv / factor
+        UV.append(uv)
         dist, k = cKDTree(pool_xyz[mine]).query(p, workers=-1)
         XYZ.append(p)
         RISE.append(rise)
@@ -119,12 +131,12 @@ def fine_cells(fs: FaceSet, factor: int = 4) -> FineCells:
         OWN.append(mine[k])
         DIST.append(dist + cov)
     if not OWN:  # only vertical faces: no cells
-        OWN, XYZ = [np.zeros(0, np.int64)], [np.zeros((0, 3))]
+        OWN, XYZ, UV = [np.zeros(0, np.int64)], [np.zeros((0, 3))], [np.zeros((0, 2))]
         RISE = COV = DIST = [np.zeros(0)]
     own = np.concatenate(OWN)
     order = np.argsort(own, kind="stable")
     own = own[order]
-    xyz, rise, cov, dist = (np.concatenate(a)[order] for a in (XYZ, RISE, COV, DIST))
+    xyz, rise, cov, dist, uv = (np.concatenate(a)[order] for a in (XYZ, RISE, COV, DIST, UV))
     start = np.zeros(n_pool + 1, np.int64)
     np.cumsum(np.bincount(own, minlength=n_pool), out=start[1:])
     radius = np.zeros(n_pool)
@@ -133,6 +145,7 @@ def fine_cells(fs: FaceSet, factor: int = 4) -> FineCells:
     np.maximum.at(top, own, xyz[:, 2] + rise)
     bounding = np.isfinite(fs.cover)
     contained = bool(np.all(radius[bounding] <= fs.cover[bounding] * (1 + 1e-9)))
-    cells = FineCells(start, np.ascontiguousarray(xyz), rise, cov, radius, top, factor, contained)
+    cells = FineCells(start, np.ascontiguousarray(xyz), rise, cov, radius, top, factor, np.ascontiguousarray(uv),
+                      steps, contained)
     cache[factor] = cells
     return cells

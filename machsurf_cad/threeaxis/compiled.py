@@ -69,7 +69,7 @@ def kernel_stamp() -> str:
 
     here = Path(__file__).parent
     h = hashlib.sha256()
-    for name in ("_jit_geom.py", "_jit_solve.py"):
+    for name in ("_jit_geom.py", "_jit_solve.py", "_jit_cert.py"):
         h.update((here / name).read_bytes())
     return h.hexdigest()[:16]
 
@@ -293,7 +293,8 @@ def _packed(fs: FaceSet):
         if 0 < n_e * WINDOW * 24 <= MAX_WINDOW_BYTES:
             EW = np.empty((n_e, WINDOW, 3))
             edge_windows(S, E, pool[4], pool[5], pool[6], EW)
-        cache["fs"] = (S, E, T, (*pool, EW))
+        c = fine_cells(fs)
+        cache["fs"] = (S, E, T, (*pool, EW, c.uv, c.steps))
     return cache["fs"]
 
 
@@ -313,7 +314,8 @@ def drop(fs: FaceSet, prof, C: np.ndarray):
     PR = _profile(prof)
     h0 = float(prof(np.zeros(1))[0][0])
     K = np.array([prof.R, fs.spacing, prof.max_tilt, prof.h_R, 1.0 if prof.pointed else 0.0, len(fs.faces),
-                  max(len(fs.edges), 1), h0, reach, 1.0 if cells.contained else 0.0])  # fmt: skip
+                  max(len(fs.edges), 1), h0, reach, 1.0 if cells.contained else 0.0,
+                  1.0 if prof.h_min == prof.h_R and not prof.pointed else 0.0])  # fmt: skip
     kinks = np.array(prof.kinks, float).reshape(-1, 2)
     m = C.shape[0]
     height = np.full(m, np.nan)

@@ -420,6 +420,13 @@ class FaceSet:
         return np.asarray(p, float) @ self.frame.T
 
 
+def grid_counts(face: Face, spacing: float) -> tuple[int, int]:
+    """The seed grid's numbers of samples along u and v of ``face`` (``spacing`` mm apart, at least 5): the
+    samples are ``linspace(u0, u1, nu)`` x ``linspace(v0, v1, nv)`` over its parameter bounds."""
+    lu, lv = (max(x, 1e-9) for x in face_size(face))
+    return int(max(5, math.ceil(lu / spacing) + 1)), int(max(5, math.ceil(lv / spacing) + 1))
+
+
 def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 5_000_000) -> FaceSet:
     """Rotate ``faces`` into the frame of ``axis`` and sample them ``spacing`` mm apart (at least 5 x 5
     per face and 4 per edge, so small faces and short edges are seeded too)."""
@@ -444,9 +451,7 @@ def face_set(faces, *, axis=(0.0, 0.0, 1.0), spacing: float, max_samples: int = 
         out_faces.append(face)
         names.append(f.name or f"face_{i}")
         u0, u1, v0, v1 = face.uv_bounds
-        lu, lv = (max(x, 1e-9) for x in face_size(face))
-        nu = int(max(5, math.ceil(lu / spacing) + 1))
-        nv = int(max(5, math.ceil(lv / spacing) + 1))
+        nu, nv = grid_counts(face, spacing)
         total += nu * nv
         if total > max_samples:
             raise InputError(

@@ -1,0 +1,105 @@
+"""The compiled drop-cutter's certificate of a flat end's rim contact (:mod:`._jit_cert`), checked by brute force:
+every point of the face in the certified parameter box and inside the tool's disc lies at most
+``CERT_SLACK`` above the contact."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import least_squares
+
+import machsurf_cad as ms
+from machsurf_cad.geometry.builders import surface_from_grid
+from machsurf_cad.threeaxis import compiled
+from machsurf_cad.threeaxis.dropcutter import Contact
+
+needs_numba = pytest.mark.skipif(not compiled.available(), reason="numba is not installed")
+ROOT = Path(__file__).resolve().parents[1]
+R = 5.0
+
+
+def _certify(fs, f, xyz, cx, cy):
+    """The certificate at the contact ``xyz`` of face ``f``: (found, box, u, v)."""
+    from machsurf_cad.threeaxis._jit_cert import rim_certificate
+
+    s = fs.faces[f].surface
+    u0, u1, v0, v1 = fs.faces[f].uv_bounds
+    us, vs = np.linspace(u0, u1, 201), np.linspace(v0, v1, 201)
+    P = s.evaluate_grid(us, vs).reshape(-1, 3)
+    k = int(np.argmin(np.linalg.norm(P - xyz, axis=1)))
+    start = np.array([us[k // 201], vs[k % 201]])
+    sol = least_squares(lambda w: s.evaluate(w[:1], w[1:])[0] - xyz, start, xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    u, v = sol.x
+    box = np.full(4, -1.0)
+    S = compiled._packed(fs)[0]
+    ok = rim_certificate(S, f, float(u), float(v), float(cx), float(cy), R, float(xyz[2]), box)
+    return ok, box, u, v
+
+
+def _brute_top(fs, f, box, cx, cy, n=401):
+    """The highest point of face ``f`` in ``box`` (clipped to its bounds) inside the disc, on an n x n grid."""
+    u0, u1, v0, v1 = fs.faces[f].uv_bounds
+    us = np.linspace(max(box[0], u0), min(box[1], u1), n)
+    vs = np.linspace(max(box[2], v0), min(box[3], v1), n)
+    P = fs.faces[f].surface.evaluate_grid(us, vs).reshape(-1, 3)
+    inside = np.hypot(P[:, 0] - cx, P[:, 1] - cy) <= R
+    return P[inside, 2].max() if inside.any() else -np.inf
+
+
+def _patch(f, half=40.0):
+    """A bicubic patch with poles on ``z = f(x, y)`` over ``[-half, half]^2`` (7 x 7 poles: four knot spans)."""
+    g = np.linspace(-half, half, 7)
+    X, Y = np.meshgrid(g, g, indexing="ij")
+    return surface_from_grid(np.stack([X, Y, f(X, Y)], axis=2))
+
+
+@needs_numba
+def test_certificate_on_a_tilted_plane_holds_and_refuses_where_it_must():
+    plane = _patch(lambda x, y: 0.2 * x)  # (the poles lie on the plane: so does the patch)
+    fs = ms.threeaxis.faceset.face_set([plane], spacing=10 / 6)
+    r = ms.drop_cutter(None, ms.FlatEndMill(10), [[1.0, 2.0]], face_set=fs)
+    assert r.kind[0] == Contact.RIM and abs(r.height[0] - 0.2 * 6.0) <= 1e-9  # the uphill point of the rim
+    ok, box, u, v = _certify(fs, 0, fs.to_frame(r.contact)[0], 1.0, 2.0)
+    assert ok and box[0] < u < box[1] and box[2] < v < box[3]
+    top = _brute_top(fs, 0, box, 1.0, 2.0)
+    assert top <= r.height[0] + 5e-11 and top >= r.height[0] - 1e-3  # the box reaches the contact
+    # the downhill point of the same circle is no rim maximum: no certificate
+    ok, _, _, _ = _certify(fs, 0, np.array([-4.0, 2.0, -0.8]), 1.0, 2.0)
+    assert not ok
+
+
+@needs_numba
+def test_certificate_refuses_a_point_that_is_a_minimum_along_the_circle():
+    """``z = 0.2 x + 0.5 y^2``: at (R, 0) on the circle about the origin z rises both ways along it."""
+    s = _patch(lambda x, y: 0.2 * x + 0.5 * y**2, half=20.0)
+    fs = ms.threeaxis.faceset.face_set([s], spacing=1.0)
+    p = s.evaluate(np.array([0.6]), np.array([0.5]))[0]
+    ok, _, _, _ = _certify(fs, 0, p, p[0] - 5.0, p[1])
+    assert not ok
+
+
+@needs_numba
+def test_certificates_on_the_example_block_hold_by_brute_force():
+    """Rim contacts of a flat D10 on the block's curved top: most are certified, and in every certified box
+    the face inside the disc is at most 5e-11 mm above the contact (401 x 401 samples of the box)."""
+    pytest.importorskip("OCP")
+    from machsurf_cad.occ import read_step_faces
+
+    faces = read_step_faces(ROOT / "example_parts" / "freeform_block.step")
+    cutter = ms.FlatEndMill(10)
+    fs = ms.threeaxis.faceset.face_set(faces, spacing=ms.threeaxis.dropcutter.default_seed_spacing(cutter))
+    rng = np.random.default_rng(3)
+    _, lo, hi, _ = fs.pool_extent
+    xy = lo + (hi - lo) * rng.random((60, 2))
+    r = ms.drop_cutter(None, cutter, xy, face_set=fs)
+    rim = np.nonzero((r.kind == Contact.RIM) & (r.face == 0))[0][:24]
+    assert rim.size >= 20
+    found = 0
+    for k in rim:
+        ok, box, _, _ = _certify(fs, 0, fs.to_frame(r.contact[k : k + 1])[0], *xy[k])
+        if ok:
+            found += 1
+            assert _brute_top(fs, 0, box, *xy[k]) <= r.height[k] + 5e-11
+    assert found >= 0.8 * rim.size
