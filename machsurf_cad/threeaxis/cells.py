@@ -145,7 +145,8 @@ def fine_cells(fs: FaceSet, factor: int = 4) -> FineCells:
     np.maximum.at(top, own, xyz[:, 2] + rise)
     bounding = np.isfinite(fs.cover)
     contained = bool(np.all(radius[bounding] <= fs.cover[bounding] * (1 + 1e-9)))
-    cells = FineCells(start, np.ascontiguousarray(xyz), rise, cov, radius, top, factor, np.ascontiguousarray(uv),
-                      steps, contained)
+    cells = FineCells(
+        start, np.ascontiguousarray(xyz), rise, cov, radius, top, factor, np.ascontiguousarray(uv), steps, contained
+    )
     cache[factor] = cells
     return cells
