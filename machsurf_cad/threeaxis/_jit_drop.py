@@ -9,7 +9,10 @@ height found, then up to four rounds of further face seeds and the circles where
 The local solves are the scalar forms in :mod:`._jit_solve`. Unlike the numpy path, the kernel drops the
 gathered samples whose every bound is below the height a sample inside the disc already lifts the tool to
 (:func:`_prune`), and skips a face or rim seed when the fine cells (:mod:`.cells`) of its group bound it
-below the best height: the same answer with about half the local solves.
+below the best height: the same answer with about half the local solves. When the first phase ends on a
+flat end's rim contact, its certificate (:mod:`._jit_cert`: a parameter box in which no point inside the
+disc is higher) leaves out of every bound the seed samples and fine samples whose grid neighbourhoods lie in
+the box, so the other sectors' seeds no longer climb back to the same contact.
 """
 
 from __future__ import annotations
