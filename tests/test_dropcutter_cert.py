@@ -72,11 +72,19 @@ def test_certificate_on_a_tilted_plane_holds_and_refuses_where_it_must():
 
 @needs_numba
 def test_certificate_refuses_a_point_that_is_a_minimum_along_the_circle():
-    """``z = 0.2 x + 0.5 y^2``: at (R, 0) on the circle about the origin z rises both ways along it."""
+    """A patch near ``z = 0.2 x + 0.5 y^2``: at its point ``p`` on the circle of radius R about ``p - (R, 0)``
+    the face rises outwards (``mu > 0``) but also both ways along the circle: no rim maximum, no certificate."""
     s = _patch(lambda x, y: 0.2 * x + 0.5 * y**2, half=20.0)
     fs = ms.threeaxis.faceset.face_set([s], spacing=1.0)
     p = s.evaluate(np.array([0.6]), np.array([0.5]))[0]
-    ok, _, _, _ = _certify(fs, 0, p, p[0] - 5.0, p[1])
+    cx, cy = p[0] - R, p[1]
+    # the premise, by brute force: the face on the circle 1 degree either side of p is higher than p
+    for deg in (-1.0, 1.0):
+        q = np.array([cx + R * np.cos(np.radians(deg)), cy + R * np.sin(np.radians(deg))])
+        w = least_squares(lambda w, q=q: s.evaluate(w[:1], w[1:])[0, :2] - q, [0.6, 0.5], xtol=1e-15, ftol=1e-15).x
+        on = s.evaluate(w[:1], w[1:])[0]
+        assert np.linalg.norm(on[:2] - q) < 1e-9 and on[2] > p[2] + 1e-3
+    ok, _, _, _ = _certify(fs, 0, p, cx, cy)
     assert not ok
 
 

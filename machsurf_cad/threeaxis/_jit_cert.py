@@ -11,10 +11,11 @@ contact and scaled to a box ``|ds| <= rs, |dt| <= rt`` (``x = ds / rs``, ``y = d
 
 where ``g`` is the sum of the linear coefficients' magnitudes (zero at the contact but for rounding), ``lam``
 the least eigenvalue of minus the quadratic part and ``K`` the sum of the magnitudes of every coefficient of
-degree three and more. When ``K < lam`` every point of the face in the box and in the disc is at most
-``L* + g^2 / (4 (lam - K))`` high: exact arithmetic on the piece's coefficients, no sampling. The drop-cutter
-then leaves out the seed samples whose whole grid neighbourhood lies in the box (they bound nothing above the
-contact), which ends the local solves that would climb back to the same contact from a neighbouring sector.
+degree three and more. When ``K < lam`` (asked with a margin: ``K < lam / 2``) every point of the face in the
+box and in the disc is at most ``L* + g^2 / (4 (lam - K))`` high: exact arithmetic on the piece's
+coefficients, no sampling. The drop-cutter then leaves out the seed samples whose whole grid neighbourhood
+lies in the box (they bound nothing above the contact), which ends the local solves that would climb back to
+the same contact from a neighbouring sector.
 """
 
 from __future__ import annotations
@@ -109,8 +110,7 @@ def rim_certificate(S, f, u, v, cx, cy, R, z, out):
         g = abs(L[1, 0]) * rs + abs(L[0, 1]) * rt
         A, B, C = L[2, 0] * rs * rs, L[1, 1] * rs * rt, L[0, 2] * rt * rt
         lam = -(0.5 * (A + C) + math.sqrt(0.25 * (A - C) ** 2 + 0.25 * B * B))
-        K = 0.0
-        size = abs(L[0, 0])
+        K = size = 0.0
         for a in range(2 * p + 1):
             for b in range(2 * q + 1):
                 c = abs(L[a, b]) * rs**a * rt**b
