@@ -291,26 +291,42 @@ def into_disc(S, sp, R, cx, cy, f, u, v, W, deeper, iters=16):
     return u, v
 
 
+@njit(cache=True, inline="always")
+def _rim_terms(D, cx, cy, R):
+    """At the point of ``D`` (second derivatives): its offset ``rho - R``, the gradient ``pu, pv`` of ``rho``
+    (to first order in the offset), its square norm and the multiplier ``lam`` (the rise of z across the
+    circle per mm of ``rho``)."""
+    dx, dy = D[0, 0] - cx, D[0, 1] - cy
+    pu = (dx * D[1, 0] + dy * D[1, 1]) / R
+    pv = (dx * D[2, 0] + dy * D[2, 1]) / R
+    n2 = pu * pu + pv * pv
+    lam = (D[1, 2] * pu + D[2, 2] * pv) / n2 if n2 > 1e-300 else 0.0
+    return hyp(dx, dy) - R, pu, pv, n2, lam
+
+
 @njit(cache=True)
 def rim_ascent(S, sp, R, h_R, cx, cy, f, u, v, W, iters=40):
     """``_rim_ascent``: the highest point of the face on ``rho = R`` near the start; returns ``u, v, g``
-    (``-inf`` when it is not on the circle), the point in ``W[0][0]``."""
+    (``-inf`` when it is not on the circle), the point in ``W[0][0]``.
+
+    Each step is Newton's along the circle (within a trust radius) with its second-order correction across
+    it, so that the point stays on the circle to third order; Newton steps onto the circle follow only while
+    it is off by more than ``1e-9 R``. A step is kept when it does not lower the height the point would have
+    on the circle (its z less ``lam`` times its offset), and the ascent stops on the circle (to
+    ``ON_CIRCLE_MM``) where the next step would not move the point: one second-order evaluation a step near
+    the top."""
     D, wk = W[0], W[5]
     tol = 1e-9 * max(R, 1.0)
-    u, v, on = project_circle(S, sp, R, cx, cy, f, u, v, 6, W)
-    if not on:  # else W[0] holds the point already (the same numbers)
-        surf(S, f, u, v, 0, D, wk)
-    z = D[0, 2] if abs(hyp(D[0, 0] - cx, D[0, 1] - cy) - R) <= tol else -math.inf
+    snap = ON_CIRCLE_MM * max(R, 1.0)
+    u, v, _ = project_circle(S, sp, R, cx, cy, f, u, v, 6, W)
+    surf(S, f, u, v, 2, D, wk)
+    off, pu, pv, n2, lam = _rim_terms(D, cx, cy, R)
+    z = D[0, 2] - lam * off if abs(off) <= tol else -math.inf
     radius = 0.5 * sp
     current = True
-    for _ in range(iters):
-        surf(S, f, u, v, 2, D, wk)
+    for _ in range(iters):  # D holds the second derivatives at (u, v)
         pax, pay, paz = D[0, 0], D[0, 1], D[0, 2]
         dx, dy = pax - cx, pay - cy
-        pu = (dx * D[1, 0] + dy * D[1, 1]) / R
-        pv = (dx * D[2, 0] + dy * D[2, 1]) / R
-        n2 = pu * pu + pv * pv
-        lam = (D[1, 2] * pu + D[2, 2] * pv) / n2 if n2 > 1e-300 else 0.0
         tu, tv = -pv, pu
         zt = D[1, 2] * tu + D[2, 2] * tv
         hz = D[3, 2] * tu * tu + 2 * D[4, 2] * tu * tv + D[5, 2] * tv * tv
@@ -327,24 +343,49 @@ def rim_ascent(S, sp, R, h_R, cx, cy, f, u, v, W, iters=40):
         s = s * nmin(1.0, radius / nmax(abs(s) * tlen, 1e-300))
         if not isfin(s):
             s = 0.0
-        nu, nv = clamp_uv(S, f, u + s * tu, v + s * tv)
-        nu, nv, on = project_circle(S, sp, R, cx, cy, f, nu, nv, 3, W)
-        if not on:
-            surf(S, f, nu, nv, 0, D, wk)
-        on = abs(hyp(D[0, 0] - cx, D[0, 1] - cy) - R) <= tol
-        zn = D[0, 2] if on else -math.inf
+        if isfin(z) and Ltt < -1e-300 and abs(s) * tlen < 1e-12 and abs(off) <= snap:
+            break  # the next step would not move the point
+        c = (-off - 0.5 * s * s * hphi) / n2 if n2 > 1e-300 else 0.0  # across: onto the circle
+        if not isfin(c):
+            c = 0.0
+        nu, nv = clamp_uv(S, f, u + s * tu + c * pu, v + s * tv + c * pv)
+        surf(S, f, nu, nv, 2, D, wk)
+        for _p in range(3):  # Newton steps onto the circle (``project_circle``'s, from this evaluation)
+            ex, ey = D[0, 0] - cx, D[0, 1] - cy
+            rho = hyp(ex, ey)
+            if abs(R - rho) <= tol:
+                break
+            ru = (ex * D[1, 0] + ey * D[1, 1]) / nmax(rho, 1e-300)
+            rv = (ex * D[2, 0] + ey * D[2, 1]) / nmax(rho, 1e-300)
+            m2 = ru * ru + rv * rv
+            t = (R - rho) / m2 if m2 > 1e-300 else 0.0
+            shrink = nmin(1.0, sp / nmax(_tan_len(D, t * ru, t * rv), 1e-300))
+            if not isfin(shrink):
+                shrink = 0.0
+            nu, nv = clamp_uv(S, f, nu + t * ru * shrink, nv + t * rv * shrink)
+            surf(S, f, nu, nv, 2, D, wk)
+        off_n, pu_n, pv_n, n2_n, lam_n = _rim_terms(D, cx, cy, R)
+        zn = D[0, 2] - lam_n * off_n if abs(off_n) <= tol else -math.inf
         acc = isfin(zn) and zn >= z - 1e-13 * (1 + abs(z))
         moved = norm3(D[0, 0] - pax, D[0, 1] - pay, D[0, 2] - paz)
-        current = acc  # W[0] holds the point (u, v) after an accepted step
         if acc:
             u, v, z = nu, nv, zn
+            off, pu, pv, n2, lam = off_n, pu_n, pv_n, n2_n, lam_n
             radius = nmax(radius, 2 * moved)
         else:
             radius = 0.25 * radius
+        current = acc
         if (acc and moved < 1e-11) or (not acc and radius < 1e-12):
             break
-    if not current:
+        if not acc:
+            surf(S, f, u, v, 2, D, wk)
+            current = True
+    if current and abs(off) <= snap:
+        z = D[0, 2]
+    else:  # (stopped off the circle by more than ON_CIRCLE_MM, or on a rejected step: onto it from the point)
+        u, v, _ = project_circle(S, sp, R, cx, cy, f, u, v, 3, W)
         surf(S, f, u, v, 0, D, wk)
+        z = D[0, 2] if abs(hyp(D[0, 0] - cx, D[0, 1] - cy) - R) <= tol else -math.inf
     return u, v, (z - h_R) if isfin(z) else -math.inf
 
 
@@ -489,12 +530,24 @@ def _edge_from(S, E, PR, cx, cy, e, k0, ts, gs, W, iters):
     n = ts.shape[0]
     lo, hi = ts[max(k0 - 1, 0)], ts[min(k0 + 1, n - 1)]
     t = ts[k0]
+    tried = 0  # the bracket's ends tried as its maximum: 1 lo, 2 hi
     for _ in range(iters):
         edge_derivs(S, E, e, t, 2, Ed, cu, wk)
-        _, _, g1, _, g2 = edge_g(PR, cx, cy, Ed, 2)
-        t, lo, hi, conv = _newton_max(t, lo, hi, g1, g2)
+        g, _, g1, _, g2 = edge_g(PR, cx, cy, Ed, 2)
+        t_new, lo, hi, conv = _newton_max(t, lo, hi, g1, g2)
         if conv:
+            t = t_new
             break
+        side = 0 if (g2 < 0 and lo < t - g1 / g2 < hi) else (2 if g1 > 0 else 1)
+        if side > 0 and not (tried & side):  # a bisection towards an end: the end may be the maximum
+            tried |= side
+            end = hi if side == 2 else lo
+            edge_derivs(S, E, e, end, 1, Ed, cu, wk)
+            ge, _, ge1, _, _ = edge_g(PR, cx, cy, Ed, 1)
+            if ge >= g and (ge1 >= 0 if side == 2 else ge1 <= 0):
+                t = end  # (the old bisection's limit, there in one step)
+                break
+        t = t_new
     edge_derivs(S, E, e, t, 0, Ed, cu, wk)
     g, rho, _, _, _ = edge_g(PR, cx, cy, Ed, 0)
     if rho > R:
@@ -572,6 +625,8 @@ def _onto_circle(S, E, PR, cx, cy, e, t, ts, gs, W, iters=40):
         fx = rho - R  # inside: within the disc as the edge search accepts it
         if fx <= 1e-12 * R:
             t_in = x
+            if fx >= -1e-12 * R:
+                break  # on the circle
         if fx > 1e-12 * R:
             t_out = x
         newton = x - fx / (r1 if r1 != 0 else math.inf)

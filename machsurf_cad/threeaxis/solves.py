@@ -435,49 +435,100 @@ def _into_disc(fs, R, c, fid, u, v, deeper: bool = False, iters: int = 16):
     return u, v
 
 
+def _rim_terms(D, c, R):
+    """At the points of ``D`` (second derivatives): their offsets ``rho - R``, the gradients ``pu, pv`` of
+    ``rho`` (to first order in the offset), their square norms and the multipliers ``lam`` (the rise of z
+    across the circle per mm of ``rho``)."""
+    P, Su, Sv = D[0], D[1], D[2]
+    d = P[:, :2] - c
+    pu = np.einsum("ij,ij->i", d, Su[:, :2]) / R
+    pv = np.einsum("ij,ij->i", d, Sv[:, :2]) / R
+    n2 = pu * pu + pv * pv
+    ok = n2 > 1e-300
+    lam = np.where(ok, (Su[:, 2] * pu + Sv[:, 2] * pv) / np.where(ok, n2, 1.0), 0.0)
+    return np.hypot(d[:, 0], d[:, 1]) - R, pu, pv, n2, lam
+
+
 def _rim_ascent(fs, R, h_R, c, fid, u, v, iters):
+    """The highest point of each row's face on ``rho = R`` near its start (see :func:`._jit_solve.rim_ascent`:
+    Newton along the circle with its second-order correction across it, Newton steps onto it while the point
+    is off by more than ``1e-9 R``, steps kept when the height the point would have on the circle does not
+    fall, a row stopping on the circle where its next step would not move it)."""
+    tol = 1e-9 * max(R, 1.0)
+    snap = _ON_CIRCLE_MM * max(R, 1.0)
     u, v = _project_circle(fs, R, c, fid, u.copy(), v.copy(), 6)
-    P = _surface_eval(fs, fid, u, v, 0)[0]
-    z = np.where(np.abs(np.hypot(*(P[:, :2] - c).T) - R) <= 1e-9 * max(R, 1.0), P[:, 2], -np.inf)
+    D = list(_surface_eval(fs, fid, u, v, 2))  # the kept points' second derivatives, per row
+    off, pu, pv, n2, lam = _rim_terms(D, c, R)
+    z = np.where(np.abs(off) <= tol, D[0][:, 2] - lam * off, -np.inf)
     radius = np.full(u.shape, 0.5 * fs.spacing)
     active = np.ones(u.shape, bool)
     for _ in range(iters):
         a_ = np.nonzero(active)[0]
         if a_.size == 0:
             break
-        Pa, Su, Sv, Suu, Suv, Svv = _surface_eval(fs, fid[a_], u[a_], v[a_], 2)
+        Pa, Su, Sv, Suu, Suv, Svv = (X[a_] for X in D)
         d = Pa[:, :2] - c[a_]
-        pu = np.einsum("ij,ij->i", d, Su[:, :2]) / R  # gradient of phi = (|d|^2 - R^2) / (2R)
-        pv = np.einsum("ij,ij->i", d, Sv[:, :2]) / R
-        n2 = pu * pu + pv * pv
-        ok_n = n2 > 1e-300
-        lam = np.where(ok_n, (Su[:, 2] * pu + Sv[:, 2] * pv) / np.where(ok_n, n2, 1.0), 0.0)
-        tu, tv = -pv, pu  # tangent of the circle on the face
+        tu, tv = -pv[a_], pu[a_]  # tangent of the circle on the face
         zt = Su[:, 2] * tu + Sv[:, 2] * tv
         hz = Suu[:, 2] * tu * tu + 2 * Suv[:, 2] * tu * tv + Svv[:, 2] * tv * tv
         xt = Su[:, :2] * tu[:, None] + Sv[:, :2] * tv[:, None]
         xtt = Suu[:, :2] * (tu * tu)[:, None] + 2 * Suv[:, :2] * (tu * tv)[:, None] + Svv[:, :2] * (tv * tv)[:, None]
         hphi = (np.einsum("ij,ij->i", xt, xt) + np.einsum("ij,ij->i", d, xtt)) / R
-        Ltt = hz - lam * hphi
+        Ltt = hz - lam[a_] * hphi
         tlen = np.linalg.norm(Su * tu[:, None] + Sv * tv[:, None], axis=1)
         newton = Ltt < -1e-300
         s = np.where(newton, -zt / np.where(newton, Ltt, -1.0), np.sign(zt) * radius[a_] / np.maximum(tlen, 1e-300))
         step = np.abs(s) * tlen
         s = s * np.minimum(1.0, radius[a_] / np.maximum(step, 1e-300))
         s = np.where(np.isfinite(s), s, 0.0)
-        nu, nv = _clamp_uv(fs, fid[a_], u[a_] + s * tu, v[a_] + s * tv)
-        nu, nv = _project_circle(fs, R, c[a_], fid[a_], nu, nv, 3)
-        Pn = _surface_eval(fs, fid[a_], nu, nv, 0)[0]
-        on = np.abs(np.hypot(*(Pn[:, :2] - c[a_]).T) - R) <= 1e-9 * max(R, 1.0)
-        zn = np.where(on, Pn[:, 2], -np.inf)
-        acc = np.isfinite(zn) & (zn >= z[a_] - 1e-13 * (1 + np.abs(z[a_])))
-        moved = np.linalg.norm(Pn - Pa, axis=1)
-        ia = a_[acc]
+        top = np.isfinite(z[a_]) & newton & (np.abs(s) * tlen < 1e-12) & (np.abs(off[a_]) <= snap)
+        active[a_[top]] = False  # the next step would not move the point
+        go = ~top
+        b_, s, tu, tv, Pa, hphi = a_[go], s[go], tu[go], tv[go], Pa[go], hphi[go]
+        if b_.size == 0:
+            break
+        ok = n2[b_] > 1e-300
+        cc = np.where(ok, (-off[b_] - 0.5 * s * s * hphi) / np.where(ok, n2[b_], 1.0), 0.0)  # onto the circle
+        cc = np.where(np.isfinite(cc), cc, 0.0)
+        nu, nv = _clamp_uv(fs, fid[b_], u[b_] + s * tu + cc * pu[b_], v[b_] + s * tv + cc * pv[b_])
+        Dn = list(_surface_eval(fs, fid[b_], nu, nv, 2))
+        for _p in range(3):  # Newton steps onto the circle while off it by more than tol
+            dn = Dn[0][:, :2] - c[b_]
+            rho = np.hypot(dn[:, 0], dn[:, 1])
+            far = np.nonzero(np.abs(R - rho) > tol)[0]
+            if far.size == 0:
+                break
+            Su_, Sv_ = Dn[1][far], Dn[2][far]
+            ru = np.einsum("ij,ij->i", dn[far], Su_[:, :2]) / np.maximum(rho[far], 1e-300)
+            rv = np.einsum("ij,ij->i", dn[far], Sv_[:, :2]) / np.maximum(rho[far], 1e-300)
+            m2 = ru * ru + rv * rv
+            t = np.where(m2 > 1e-300, (R - rho[far]) / np.where(m2 > 1e-300, m2, 1.0), 0.0)
+            st = np.linalg.norm(Su_ * (t * ru)[:, None] + Sv_ * (t * rv)[:, None], axis=1)
+            shrink = np.minimum(1.0, fs.spacing / np.maximum(st, 1e-300))
+            shrink = np.where(np.isfinite(shrink), shrink, 0.0)
+            nu[far], nv[far] = _clamp_uv(fs, fid[b_[far]], nu[far] + t * ru * shrink, nv[far] + t * rv * shrink)
+            for X, Y in zip(Dn, _surface_eval(fs, fid[b_[far]], nu[far], nv[far], 2)):
+                X[far] = Y
+        off_n, pu_n, pv_n, n2_n, lam_n = _rim_terms(Dn, c[b_], R)
+        zn = np.where(np.abs(off_n) <= tol, Dn[0][:, 2] - lam_n * off_n, -np.inf)
+        acc = np.isfinite(zn) & (zn >= z[b_] - 1e-13 * (1 + np.abs(z[b_])))
+        moved = np.linalg.norm(Dn[0] - Pa, axis=1)
+        ia = b_[acc]
         u[ia], v[ia], z[ia] = nu[acc], nv[acc], zn[acc]
-        radius[a_] = np.where(acc, np.maximum(radius[a_], 2 * moved), 0.25 * radius[a_])
-        done = (acc & (moved < 1e-11)) | (~acc & (radius[a_] < 1e-12))
-        active[a_[done]] = False
-    P = _surface_eval(fs, fid, u, v, 0)[0]
+        off[ia], pu[ia], pv[ia], n2[ia], lam[ia] = off_n[acc], pu_n[acc], pv_n[acc], n2_n[acc], lam_n[acc]
+        for X, Y in zip(D, Dn):
+            X[ia] = Y[acc]
+        radius[b_] = np.where(acc, np.maximum(radius[b_], 2 * moved), 0.25 * radius[b_])
+        done = (acc & (moved < 1e-11)) | (~acc & (radius[b_] < 1e-12))
+        active[b_[done]] = False
+    P = D[0].copy()
+    z = P[:, 2].copy()
+    away = np.nonzero(np.abs(off) > snap)[0]  # stopped off the circle by more than ON_CIRCLE_MM: onto it
+    if away.size:
+        u[away], v[away] = _project_circle(fs, R, c[away], fid[away], u[away], v[away], 3)
+        P[away] = _surface_eval(fs, fid[away], u[away], v[away], 0)[0]
+        on = np.abs(np.hypot(*(P[away, :2] - c[away]).T) - R) <= tol
+        z[away] = np.where(on, P[away, 2], -np.inf)
     return u, v, np.where(np.isfinite(z), z - h_R, -np.inf), P
 
 
@@ -596,14 +647,32 @@ def _edge_from(fs, prof, c, eid, ts, g_s, k, iters: int):
     lo = ts[np.arange(m), np.maximum(k - 1, 0)]
     hi = ts[np.arange(m), np.minimum(k + 1, n - 1)]
     t = ts[np.arange(m), k].copy()
+    tried = np.zeros(m, np.int64)  # the bracket's ends tried as its maximum: 1 lo, 2 hi
     act = np.arange(m)
     for _ in range(iters):
         if act.size == 0:
             break
         ta, la, ha = t[act], lo[act], hi[act]
         Pk, P1, P2 = _edge_derivs(fs, eid[act], ta, 2)
-        _, _, g1, _, g2 = _edge_g(prof, c[act], Pk, P1, P2)
-        t[act], lo[act], hi[act], conv = _newton_max(ta, la, ha, g1, g2)
+        ga, _, g1, _, g2 = _edge_g(prof, c[act], Pk, P1, P2)
+        t_new, la, ha, conv = _newton_max(ta, la, ha, g1, g2)
+        lo[act], hi[act] = la, ha
+        # a bisection towards an end not tried yet: the end may be the bracket's maximum (an edge rising
+        # out of the disc); there in one step instead of the bisection's fifty
+        with np.errstate(divide="ignore", invalid="ignore"):
+            newton_in = (g2 < 0) & (ta - g1 / g2 > la) & (ta - g1 / g2 < ha)
+        side = np.where(newton_in, 0, np.where(g1 > 0, 2, 1))
+        probe = np.nonzero(~conv & (side > 0) & ((tried[act] & side) == 0))[0]
+        if probe.size:
+            rows = act[probe]
+            tried[rows] |= side[probe]
+            end = np.where(side[probe] == 2, ha[probe], la[probe])
+            Pe, Pe1 = _edge_derivs(fs, eid[rows], end, 1)
+            ge, _, ge1, _ = _edge_g(prof, c[rows], Pe, Pe1)
+            top = (ge >= ga[probe]) & np.where(side[probe] == 2, ge1 >= 0, ge1 <= 0)
+            t_new[probe[top]] = end[top]
+            conv[probe[top]] = True
+        t[act] = t_new
         act = act[~conv]
     # the maximum outside the disc: the best point is on the circle, between the last point inside
     # and the first outside (Newton on rho(t) = R, kept in that bracket)
@@ -744,6 +813,7 @@ def _onto_circle(fs, prof, c, eid, t, ts, g, out, iters: int = 40):
         lo, hi = np.minimum(ti, to), np.maximum(ti, to)
         x_new = np.where((newton > lo) & (newton < hi), newton, 0.5 * (ti + to))
         conv = np.abs(x_new - xa) <= 1e-15 * np.maximum(np.abs(xa), 1.0)
+        conv |= np.abs(f) <= 1e-12 * R  # on the circle
         t_in[act], t_out[act] = ti, to
         x[act] = np.where(conv, xa, x_new)
         act = act[~conv]
