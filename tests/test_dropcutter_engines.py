@@ -562,3 +562,34 @@ def test_the_face_ascent_climbs_along_the_side_of_the_box_where_g_leaves_it(engi
         u, v, g = _jit_solve.face_newton(S, compiled._profile(prof), fs.spacing, 9.0, cy, 0, 0.8, cy / 10 - 0.05, W)
     assert u == 1.0
     assert abs(g - exact) < 1e-9
+
+
+@needs_numba
+@pytest.mark.parametrize("name", ["freeform_block.step", "mould_insert.step"])
+def test_the_kernels_trim_test_classifies_as_the_faces_do(parts, name):
+    """The kernel's even-odd test (its polygon edges in slabs of v whose bounds are quantiles of the edges'
+    ends) against :meth:`.Face.contains_uv` on the same polygons: random points of each trimmed face's box,
+    points on the polygons' vertex rows (``v`` of a vertex: the rays through the slabs' bounds) and points
+    within 1e-6 of the box's lower side, where the block's top has a loop of thousands of edges level but
+    for rounding."""
+    from machsurf_cad.geometry.face import TRIM_TOLERANCE
+    from machsurf_cad.threeaxis._jit_geom import inside
+    from machsurf_cad.threeaxis.faceset import face_set
+
+    fs = face_set(parts[name], spacing=2.0)
+    S, _, T, _ = compiled._packed(fs)
+    rng = np.random.default_rng(7)
+    checked = 0
+    for f, face in enumerate(fs.faces):
+        if not face.is_trimmed:
+            continue
+        u0, u1, v0, v1 = fs.bounds[f]
+        verts = np.concatenate(face.trim_polygons(TRIM_TOLERANCE))
+        u = np.concatenate([rng.uniform(u0, u1, 1500), rng.uniform(u0, u1, 300), rng.uniform(u0, u1, 200)])
+        low_side = v0 + rng.uniform(0, 1e-6, 200) * (v1 - v0)
+        v = np.concatenate([rng.uniform(v0, v1, 1500), rng.choice(verts[:, 1], 300), low_side])
+        want = face.contains_uv(u, v)
+        got = np.array([inside(S, T, f, a, b) for a, b in zip(u, v)])
+        assert np.array_equal(got, want), f"face {f}: {np.sum(got != want)} of {u.size} points differ"
+        checked += u.size
+    assert checked >= 4000

@@ -33,7 +33,7 @@ BOUND_TIE = 1e-10
 that only ties the best (a flat end on a horizontal floor: the floor's edges and rim at the floor's height)
 cannot raise it by more (the numpy path's ``_BOUND_TIE_MM``)."""
 
-KERNEL_SOURCES = "f07e82282134f0ed"
+KERNEL_SOURCES = "954ec323315b36b9"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 
@@ -391,6 +391,8 @@ def _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk,
     p1x, p1y, p1z = bp[0], bp[1], bp[2]
     tk = np.empty(3 * m, np.int64)
     tb = np.empty(3 * m)
+    GI_ = _group_index(fb.shape[0], gk)  # borrowed: see _query
+    GI = borrowed(GI_)
     nt = 0
     for k in range(m):
         if is_seed[k] and k != f1 and fb[gk[k]] > low:
@@ -412,9 +414,10 @@ def _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk,
         kind, k = FACE + tk[i] // m, tk[i] % m
         if kind != EDGE and best[4] > 0 and K[9] > 0:
             low = best[1] + BOUND_TIE
-            if _group_cells(gk[k], kind - FACE, low, cx, cy, idx, rr, gk, PR, SM, K, CB) <= low:
+            if _group_cells(gk[k], kind - FACE, low, cx, cy, idx, rr, GI, PR, SM, K, CB) <= low:
                 continue
         _solve(kind, idx[k], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
+    keep(GI_)
 
 
 @njit(cache=True)
@@ -522,15 +525,32 @@ def _cell(k, which, low, cx, cy, idx, rr, PR, SM, K, CB):
 
 
 @njit(cache=True)
-def _group_cells(g, which, low, cx, cy, idx, rr, gk, PR, SM, K, CB):
-    """The largest face (``which`` 0) or rim (1) cell bound of group ``g``'s samples (stops at the first
-    that reaches ``low``)."""
+def _group_index(ng, gk):
+    """The samples of each group in their order: ``order[start[g]:start[g + 1]]`` (a counting sort)."""
+    m = gk.shape[0]
+    start = np.zeros(ng + 1, np.int64)
+    for k in range(m):
+        start[gk[k] + 1] += 1
+    for g in range(ng):
+        start[g + 1] += start[g]
+    fill = start[:-1].copy()
+    order = np.empty(m, np.int64)
+    for k in range(m):
+        order[fill[gk[k]]] = k
+        fill[gk[k]] += 1
+    return order, start
+
+
+@njit(cache=True)
+def _group_cells(g, which, low, cx, cy, idx, rr, GI, PR, SM, K, CB):
+    """The largest face (``which`` 0) or rim (1) cell bound of group ``g``'s samples (``GI``: see
+    :func:`_group_index`; stops at the first that reaches ``low``)."""
+    order, start = GI
     out = -math.inf
-    for k in range(idx.shape[0]):
-        if gk[k] == g:
-            out = max(out, _cell(k, which, low, cx, cy, idx, rr, PR, SM, K, CB))
-            if out >= low:
-                break
+    for i in range(start[g], start[g + 1]):
+        out = max(out, _cell(order[i], which, low, cx, cy, idx, rr, PR, SM, K, CB))
+        if out >= low:
+            break
     return out
 
 

@@ -20,8 +20,9 @@ from numba.extending import intrinsic
 #   fi[f] = p, q, nsu, nsv, uoff, voff, coff, periodic_u, periodic_v, closed_u, closed_v, trimmed, loop0, loop1
 #   ff[f] = a_u, b_u, a_v, b_v (power-data domain), period u0, u1, v0, v1, face box u0, u1, v0, v1
 # curve table E = (ei, ef, knots, poles): ei[e] = degree, koff, nk, poff, npoles, face; ef[e] = t0, t1
-# trim table T = (tf, tl, start, items, ea, eb, px, py): per face its slabs of v (first, count; v0, height, v1),
-#   each slab's polygon edges (items, CSR by start), each edge's vertices (ea, eb) in px, py
+# trim table T = (tf, tl, start, items, ea, eb, px, py, tb): per face its slabs of v (first, count; v0, where its
+#   bounds start in tb, v1), each slab's polygon edges (items, CSR by start), each edge's vertices (ea, eb) in
+#   px, py; tb the slabs' bounds
 # profile PR = (segs, consts, pieces): segs[s] = kind (0 line, 1 arc), 5 numbers; consts = R, h_R, h_min, monotone,
 #   lower_height at R (h, h1, h2) and at 0; pieces from compiled._pieces
 
@@ -451,12 +452,19 @@ def inside(S, T, f, u, v):
         u0, u1, v0, v1 = ff[f, 8], ff[f, 9], ff[f, 10], ff[f, 11]
         tol = 1e-12 * max(u1 - u0, v1 - v0, 1.0)
         return u >= u0 - tol and u <= u1 + tol and v >= v0 - tol and v <= v1 + tol
-    tf, tl, start, items, ea, eb, px, py = T
+    tf, tl, start, items, ea, eb, px, py, tb = T
     s0, ns = tf[f, 0], tf[f, 1]
-    vmin, dv = tl[f, 0], tl[f, 1]
-    if not (v > vmin and v <= tl[f, 2]):
+    if not (v > tl[f, 0] and v <= tl[f, 2]):
         return False
-    k = min(max(int((v - vmin) / dv), 0), ns - 1)
+    b0 = int(tl[f, 1])
+    lo, hi = 0, ns - 1  # the slab (b_k, b_k+1] of v: the first k with b_k+1 >= v
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if tb[b0 + mid + 1] >= v:
+            hi = mid
+        else:
+            lo = mid + 1
+    k = lo
     flip = False
     for i in range(start[s0 + k], start[s0 + k + 1]):
         e = items[i]

@@ -121,12 +121,16 @@ def _surfaces(fs: FaceSet):
 
 def _slabs(fi, loops, px, py):
     """The trimming polygons' edges bucketed in horizontal slabs of v per face, so that the even-odd test of a
-    point visits the edges of its slab only (a face's polygons may have tens of thousands of vertices)."""
+    point visits the edges of its slab only (a face's polygons may have tens of thousands of vertices). The
+    slabs' bounds are quantiles of the edges' ends, so that a run of short edges (a loop along a side of the
+    parameter box, level but for rounding) fills thin slabs of its own instead of one slab every point near
+    that side visits. A slab ``(b_k, b_k+1]`` holds the edges with ``lo < b_k+1`` and ``hi > b_k``: every edge
+    that crosses a ray in it (``lo < v <= hi``); a level edge crosses none and is in none."""
     n = fi.shape[0]
     tf = np.zeros((n, 2), np.int64)
     tl = np.zeros((n, 3))
-    starts, items, ea, eb = [np.zeros(1, np.int64)], [], [], []
-    n_edges = n_slab = 0
+    starts, items, ea, eb, tb = [np.zeros(1, np.int64)], [], [], [], []
+    n_edges = n_slab = n_bounds = 0
     for f in range(n):
         a_, b_ = [], []
         for s, m in loops[fi[f, 12] : fi[f, 13]]:
@@ -138,11 +142,15 @@ def _slabs(fi, loops, px, py):
         a, b = np.concatenate(a_), np.concatenate(b_)
         lo, hi = np.minimum(py[a], py[b]), np.maximum(py[a], py[b])
         vmin, vmax = float(lo.min()), float(hi.max())
+        ends = np.sort(np.concatenate([lo[hi > lo], hi[hi > lo], [vmin, vmax]]))
         ns = int(max(1, min(4096, a.size // 4)))
-        dv = max((vmax - vmin) / ns, 1e-300)
-        s0 = np.clip(((lo - vmin) / dv).astype(np.int64), 0, ns - 1)
-        s1 = np.clip(((hi - vmin) / dv).astype(np.int64), 0, ns - 1)
-        cnt = s1 - s0 + 1
+        bounds = np.unique(ends[np.round(np.linspace(0, ends.size - 1, ns + 1)).astype(np.int64)])
+        if bounds.size < 2:
+            bounds = np.array([vmin, vmax if vmax > vmin else vmin + 1.0])
+        ns = bounds.size - 1
+        s0 = np.clip(np.searchsorted(bounds[1:], lo, side="right"), 0, ns - 1)
+        s1 = np.clip(np.searchsorted(bounds, hi, side="left") - 1, 0, ns - 1)
+        cnt = np.where(hi > lo, np.maximum(s1 - s0 + 1, 0), 0)
         slab = concat_ranges(s0, cnt)
         edge = np.repeat(np.arange(a.size), cnt)
         order = np.argsort(slab, kind="stable")
@@ -150,14 +158,17 @@ def _slabs(fi, loops, px, py):
         items.append(n_edges + edge[order])
         ea.append(a)
         eb.append(b)
+        tb.append(bounds)
         tf[f] = n_slab, ns
-        tl[f] = vmin, dv, vmax
+        tl[f] = vmin, n_bounds, vmax  # (the face's slab bounds are tb[n_bounds:][:ns + 1])
+        n_bounds += ns + 1
         n_edges += a.size
         n_slab += ns
     cat = np.concatenate
     return (tf, tl, cat(starts).astype(np.int64), cat(items).astype(np.int64) if items else np.zeros(0, np.int64),
             cat(ea).astype(np.int64) if ea else np.zeros(0, np.int64),
-            cat(eb).astype(np.int64) if eb else np.zeros(0, np.int64), px, py)  # fmt: skip
+            cat(eb).astype(np.int64) if eb else np.zeros(0, np.int64), px, py,
+            cat(tb) if tb else np.zeros(0))  # fmt: skip
 
 
 def _curves(fs: FaceSet):
