@@ -33,31 +33,35 @@ drop-cutter's tie margin, so a seed left out can raise the height by no more tha
 
 
 @njit(cache=True)
-def _taylor(coef, base, p, q, s0, t0, out):
+def _taylor(coef, base, p, q, s0, t0, out, tmp):
     """The piece's Taylor coefficients about ``(s0, t0)`` (x, y, z of the power-basis block at ``base``) into
-    ``out[3, 8, 8]``."""
-    tmp = np.zeros((3, 8, 8))
+    ``out[3, 8, 8]`` (``tmp``: scratch of the same shape)."""
     for d in range(3):  # along u: sum_i C[i, b] binom(i, a) s0^(i - a)
         for b in range(q + 1):
             for a in range(p + 1):
                 acc = 0.0
                 for i in range(p, a - 1, -1):
-                    acc = acc * s0 + coef[base + (i * (q + 1) + b) * 4 + d] * _binom(i, a)
+                    acc = acc * s0 + coef[base + (i * (q + 1) + b) * 4 + d] * _BINOM[i, a]
                 tmp[d, a, b] = acc
         for a in range(p + 1):
             for b in range(q + 1):
                 acc = 0.0
                 for j in range(q, b - 1, -1):
-                    acc = acc * t0 + tmp[d, a, j] * _binom(j, b)
+                    acc = acc * t0 + tmp[d, a, j] * _BINOM[j, b]
                 out[d, a, b] = acc
 
 
-@njit(cache=True, inline="always")
-def _binom(n, k):
-    r = 1.0
-    for i in range(k):
-        r = r * (n - i) / (i + 1)
-    return r
+def _pascal(n):
+    out = np.zeros((n, n))
+    for i in range(n):
+        out[i, 0] = 1.0
+        for k in range(1, i + 1):
+            out[i, k] = out[i - 1, k - 1] + out[i - 1, k]
+    return out
+
+
+_BINOM = _pascal(8)
+"""Binomial coefficients ``binom(n, k)`` for n < 8 (the power basis's degrees: at most 7)."""
 
 
 @njit(cache=True)
@@ -79,8 +83,9 @@ def rim_certificate(S, f, u, v, cx, cy, R, z, out):
         for b in range(q + 1):
             if coef[base + (a * (q + 1) + b) * 4 + 3] != (1.0 if a == 0 and b == 0 else 0.0):
                 return False
-    T = np.zeros((3, 8, 8))
-    _taylor(coef, base, p, q, (u - ust[uo + i]) / h1, (v - vst[vo + j]) / h2, T)
+    T = np.zeros((2, 3, 8, 8))  # the Taylor coefficients and _taylor's scratch
+    _taylor(coef, base, p, q, (u - ust[uo + i]) / h1, (v - vst[vo + j]) / h2, T[0], T[1])
+    T = T[0]
     X, Y, Z = T[0], T[1], T[2]
     X[0, 0] -= cx
     Y[0, 0] -= cy
@@ -111,12 +116,16 @@ def rim_certificate(S, f, u, v, cx, cy, R, z, out):
         A, B, C = L[2, 0] * rs * rs, L[1, 1] * rs * rt, L[0, 2] * rt * rt
         lam = -(0.5 * (A + C) + math.sqrt(0.25 * (A - C) ** 2 + 0.25 * B * B))
         K = size = 0.0
+        ra = 1.0
         for a in range(2 * p + 1):
+            c_ = ra  # rs^a rt^b by running products
             for b in range(2 * q + 1):
-                c = abs(L[a, b]) * rs**a * rt**b
+                c = abs(L[a, b]) * c_
+                c_ *= rt
                 size += c
                 if a + b >= 3:
                     K += c
+            ra *= rs
         if not (lam > 0 and K < 0.5 * lam):
             continue
         # L* above z, the linear terms' rise and the coefficients' rounding (1e-14 of their sum)

@@ -33,7 +33,7 @@ BOUND_TIE = 1e-10
 that only ties the best (a flat end on a horizontal floor: the floor's edges and rim at the floor's height)
 cannot raise it by more (the numpy path's ``_BOUND_TIE_MM``)."""
 
-KERNEL_SOURCES = "954ec323315b36b9"
+KERNEL_SOURCES = "5843d994a3e7f24e"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 
@@ -189,6 +189,7 @@ def _candidates(cx, cy, idx, rr, PR, SM, K):
     nl = ne = 0
     val, zz, negr, ub, rim_ub = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     e_ub = np.full(m, -math.inf)
+    level = PR[1][2] == h_R  # (a flat end: h = h_R on the whole disc, no profile call in the loop)
     feas = np.empty(m, np.bool_)
     is_e = np.empty(m, np.bool_)
     gk = np.empty(m, np.int64)
@@ -198,7 +199,7 @@ def _candidates(cx, cy, idx, rr, PR, SM, K):
         rho = rr[k]
         z = xyz[j, 2]
         zz[k], negr[k] = z, -rho
-        val[k] = z - prof(PR, min(rho, R))[0]
+        val[k] = z - (h_R if level else prof(PR, min(rho, R))[0])
         feas[k] = rho <= R
         dx, dy = xyz[j, 0] - cx, xyz[j, 1] - cy
         sector = 0  # the centre, else the quadrant (as the numpy path's _seeds)
@@ -210,7 +211,7 @@ def _candidates(cx, cy, idx, rr, PR, SM, K):
             nl += 1
         gk[k] = fmap[f] * 5 + sector
         reach = rho - cov[j]
-        ub[k] = z + rise[j] - prof_floor(PR, reach) if reach <= R else -math.inf
+        ub[k] = z + rise[j] - (h_R if level else prof_floor(PR, reach)) if reach <= R else -math.inf
         rim_ub[k] = z + rise[j] - h_R if abs(rho - R) <= cov[j] else -math.inf
         is_e[k] = j >= n_int
         if is_e[k]:
@@ -221,7 +222,7 @@ def _candidates(cx, cy, idx, rr, PR, SM, K):
             ek[k] = (emap[e] * 5 + sector) * 2 + (1 if feas[k] else 0)
             ec = ecov[j - n_int]
             if rho - ec <= R:
-                e_ub[k] = z + SM[17][j - n_int] - prof_floor(PR, rho - ec)
+                e_ub[k] = z + SM[17][j - n_int] - (h_R if level else prof_floor(PR, rho - ec))
     return val, zz, negr, ub, rim_ub, e_ub, feas, is_e, gk, ek, nl, ne
 
 
@@ -511,13 +512,14 @@ def _cell(k, which, low, cx, cy, idx, rr, PR, SM, K, CB):
     certified = cert[0] == f
     du, dv = SM[20][f, 2] * (1 + 1e-9), SM[20][f, 3] * (1 + 1e-9)
     fb = rb = -math.inf
+    level = PR[1][2] == h_R  # (a flat end: the floor is h_R everywhere, no profile call in the loop)
     for c in range(start[j], start[j + 1]):
         if certified and boxed(cert, f, cuv[c, 0], cuv[c, 1], du, dv):  # (NaN on an edge: never)
             continue
         r = hyp(cxyz[c, 0] - cx, cxyz[c, 1] - cy)
         t = cxyz[c, 2] + crise[c]
         if r - ccov[c] <= R:
-            fb = max(fb, t - prof_floor(PR, r - ccov[c]))
+            fb = max(fb, t - (h_R if level else prof_floor(PR, r - ccov[c])))
         if abs(r - R) <= ccov[c]:
             rb = max(rb, t - h_R)
     CB[0][k], CB[1][k] = fb, rb

@@ -416,9 +416,10 @@ def prof(PR, rho):
 
 @njit(cache=True, inline="always")
 def prof_floor(PR, rho):
-    """A lower bound of ``h`` on ``[rho, R]`` (``_Profile.floor``)."""
+    """A lower bound of ``h`` on ``[rho, R]`` (``_Profile.floor``); ``h_min`` itself where the profile is not
+    monotone or is level from its lowest point to the rim (a flat end: ``h_min == h_R``)."""
     k = PR[1]
-    if k[3] == 0.0:
+    if k[3] == 0.0 or k[2] == k[1]:
         return k[2]
     return prof(PR, min(max(rho, 0.0), k[0]))[0]
 
