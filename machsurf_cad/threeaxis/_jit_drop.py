@@ -431,6 +431,7 @@ def _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, tried0, feas,
     scratch = borrowed(scratch_)
     tried, sel = scratch[0], scratch[1]
     tried[:] = tried0
+    one = np.empty(1, np.int64)
     low = -math.inf
     for _ in range(4):
         low = best[1] if best[4] > 0 else -math.inf
@@ -442,7 +443,9 @@ def _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, tried0, feas,
                 continue
             far = best[4] == 0 or best[2] != FACE or pf[j] != best[3]
             far = far or norm3(xyz[j, 0] - bp[0], xyz[j, 1] - bp[1], xyz[j, 2] - bp[2]) > cov[j]
-            if far and (K[9] == 0 or _cell(k, 0, low + 1e-7, cx, cy, idx, rr, PR, SM, K, CB) > low + 1e-7):
+            if K[9] > 0 and far:
+                one[0] = k
+            if far and (K[9] == 0 or _cells(one, 0, 1, 0, low + 1e-7, cx, cy, idx, rr, PR, SM, K, CB) > low + 1e-7):
                 sel[k] = True
                 any_ = True
         if not any_:
@@ -488,42 +491,55 @@ def _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed,
 
 
 @njit(cache=True)
-def _cell(k, which, low, cx, cy, idx, rr, PR, SM, K, CB):
-    """The face (``which`` 0) or rim (1) bound of pool sample ``idx[k]``'s cell (:mod:`.cells`) at the
-    query: the bound of the whole cell when that is below ``low``, else the largest over its fine samples
-    (computed once per query and sample, kept in ``CB``)."""
-    out = CB[which]
-    if not math.isnan(out[k]):
-        return out[k]
-    j = idx[k]
+def _cells(order, i0, i1, which, low, cx, cy, idx, rr, PR, SM, K, CB):
+    """The largest face (``which`` 0) or rim (1) bound of the cells (:mod:`.cells`) of pool samples
+    ``idx[order[i0:i1]]`` at the query, stopping at the first that reaches ``low``. A cell's bound is the
+    bound of the whole cell when that is below ``low``, else the largest over its fine samples (computed once
+    per query and sample, kept in ``CB``). The arrays are taken out of their tuples once for all the cells
+    (each take and each call costs a reference count)."""
     R, h_R = K[0], K[3]
-    rad, top = SM[15][j], SM[16][j]
-    if not (top > -math.inf):
-        return -math.inf
-    rho = rr[k]
-    rough = top - prof_floor(PR, rho - rad) if rho - rad <= R else -math.inf
-    if which == 1:
-        rough = top - h_R if abs(rho - R) <= rad else -math.inf
-    if rough < low:
-        return rough
-    start, cxyz, crise, ccov = SM[11], SM[12], SM[13], SM[14]
-    cert, cuv = CB[2], SM[19]
-    f = SM[1][j]
-    certified = cert[0] == f
-    du, dv = SM[20][f, 2] * (1 + 1e-9), SM[20][f, 3] * (1 + 1e-9)
-    fb = rb = -math.inf
+    pf, start, cxyz, crise, ccov, rad, top = SM[1], SM[11], SM[12], SM[13], SM[14], SM[15], SM[16]
+    cuv, steps = SM[19], SM[20]
+    CBf, CBr, cert = CB[0], CB[1], CB[2]
     level = PR[1][2] == h_R  # (a flat end: the floor is h_R everywhere, no profile call in the loop)
-    for c in range(start[j], start[j + 1]):
-        if certified and boxed(cert, f, cuv[c, 0], cuv[c, 1], du, dv):  # (NaN on an edge: never)
+    out = CBf if which == 0 else CBr
+    best = -math.inf
+    for i in range(i0, i1):
+        k = order[i]
+        if not math.isnan(out[k]):
+            best = max(best, out[k])
+            if best >= low:
+                break
             continue
-        r = hyp(cxyz[c, 0] - cx, cxyz[c, 1] - cy)
-        t = cxyz[c, 2] + crise[c]
-        if r - ccov[c] <= R:
-            fb = max(fb, t - (h_R if level else prof_floor(PR, r - ccov[c])))
-        if abs(r - R) <= ccov[c]:
-            rb = max(rb, t - h_R)
-    CB[0][k], CB[1][k] = fb, rb
-    return out[k]
+        j = idx[k]
+        if not (top[j] > -math.inf):
+            continue
+        rho = rr[k]
+        if which == 0:
+            rough = top[j] - (h_R if level else prof_floor(PR, rho - rad[j])) if rho - rad[j] <= R else -math.inf
+        else:
+            rough = top[j] - h_R if abs(rho - R) <= rad[j] else -math.inf
+        if rough < low:
+            best = max(best, rough)
+            continue
+        f = pf[j]
+        certified = cert[0] == f
+        du, dv = steps[f, 2] * (1 + 1e-9), steps[f, 3] * (1 + 1e-9)
+        fb = rb = -math.inf
+        for c in range(start[j], start[j + 1]):
+            if certified and boxed(cert, f, cuv[c, 0], cuv[c, 1], du, dv):  # (NaN on an edge: never)
+                continue
+            r = hyp(cxyz[c, 0] - cx, cxyz[c, 1] - cy)
+            t = cxyz[c, 2] + crise[c]
+            if r - ccov[c] <= R:
+                fb = max(fb, t - (h_R if level else prof_floor(PR, r - ccov[c])))
+            if abs(r - R) <= ccov[c]:
+                rb = max(rb, t - h_R)
+        CBf[k], CBr[k] = fb, rb
+        best = max(best, out[k])
+        if best >= low:
+            break
+    return best
 
 
 @njit(cache=True)
@@ -548,12 +564,7 @@ def _group_cells(g, which, low, cx, cy, idx, rr, GI, PR, SM, K, CB):
     """The largest face (``which`` 0) or rim (1) cell bound of group ``g``'s samples (``GI``: see
     :func:`_group_index`; stops at the first that reaches ``low``)."""
     order, start = GI
-    out = -math.inf
-    for i in range(start[g], start[g + 1]):
-        out = max(out, _cell(order[i], which, low, cx, cy, idx, rr, PR, SM, K, CB))
-        if out >= low:
-            break
-    return out
+    return _cells(order, start[g], start[g + 1], which, low, cx, cy, idx, rr, PR, SM, K, CB)
 
 
 @njit(cache=True, parallel=True, nogil=True)
