@@ -17,7 +17,8 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 # surface table S = (fi, ff, ust, hu, vst, hv, coef)
-#   fi[f] = p, q, nsu, nsv, uoff, voff, coff, periodic_u, periodic_v, closed_u, closed_v, trimmed, loop0, loop1
+#   fi[f] = p, q, nsu, nsv, uoff, voff, coff, periodic_u, periodic_v, closed_u, closed_v, trimmed, loop0, loop1,
+#           rational
 #   ff[f] = a_u, b_u, a_v, b_v (power-data domain), period u0, u1, v0, v1, face box u0, u1, v0, v1
 # curve table E = (ei, ef, knots, poles): ei[e] = degree, koff, nk, poff, npoles, face; ef[e] = t0, t1
 # trim table T = (tf, tl, start, items, ea, eb, px, py, tb): per face its slabs of v (first, count; v0, where its
@@ -151,6 +152,31 @@ def surf(S, f, u, v, order, out, wk):
             wk[40 + b] = wk[24 + b - 2] * (b * (b - 1)) / (h2 * h2)
     # A[a, kv, :] = sum_b rv[kv, b] C[a, b, :] at wk[72:168], then H[ku, kv] = sum_a ru[ku, a] A[a, kv]
     base = fi[f, 6] + (i * fi[f, 3] + j) * (p + 1) * (q + 1) * 4
+    n_out = 1 if order == 0 else (3 if order == 1 else 6)
+    if fi[f, 14] == 0:  # polynomial: the weights' sums are 1 and 0, the division below the same numbers
+        for a in range(p + 1):
+            for kv in range(order + 1):
+                x0 = x1 = x2 = 0.0
+                for b in range(q + 1):
+                    w = wk[24 + 8 * kv + b]
+                    cb = base + (a * (q + 1) + b) * 4
+                    x0 += w * coef[cb]
+                    x1 += w * coef[cb + 1]
+                    x2 += w * coef[cb + 2]
+                o = 72 + (a * 3 + kv) * 4
+                wk[o], wk[o + 1], wk[o + 2] = x0, x1, x2
+        for k in range(n_out):
+            ku = 0 if k == 0 or k == 2 or k == 5 else (1 if k == 1 or k == 4 else 2)
+            kv = 0 if k == 0 or k == 1 or k == 3 else (1 if k == 2 or k == 4 else 2)
+            x0 = x1 = x2 = 0.0
+            for a in range(p + 1):
+                w = wk[8 * ku + a]
+                o = 72 + (a * 3 + kv) * 4
+                x0 += w * wk[o]
+                x1 += w * wk[o + 1]
+                x2 += w * wk[o + 2]
+            out[k, 0], out[k, 1], out[k, 2] = x0, x1, x2
+        return
     for a in range(p + 1):
         for kv in range(order + 1):
             x0 = x1 = x2 = x3 = 0.0
@@ -163,7 +189,7 @@ def surf(S, f, u, v, order, out, wk):
                 x3 += w * coef[cb + 3]
             o = 72 + (a * 3 + kv) * 4
             wk[o], wk[o + 1], wk[o + 2], wk[o + 3] = x0, x1, x2, x3
-    for k in range(1 if order == 0 else (3 if order == 1 else 6)):
+    for k in range(n_out):
         ku = 0 if k == 0 or k == 2 or k == 5 else (1 if k == 1 or k == 4 else 2)
         kv = 0 if k == 0 or k == 1 or k == 3 else (1 if k == 2 or k == 4 else 2)
         x0 = x1 = x2 = x3 = 0.0

@@ -42,7 +42,12 @@ def enters_face(S, T, R, cx, cy, f, u, v, W):
     lb = max(math.sqrt(b0 * b0 + b1 * b1 + b2 * b2), 1e-300)
     b0, b1, b2 = b0 / lb, b1 / lb, b2 / lb
     limit = min(rho, R) - PROBE_DROP * R
-    for i in range(PROBE_DIRECTIONS):
+    # the directions from the one nearest the axis (in plan) outwards: the first probe inward of the circle is
+    # most often on the face, and the answer (any direction) does not depend on the order
+    d0, d1 = cx - W[0][0, 0], cy - W[0][0, 1]
+    near = int(round(math.atan2(d0 * b0 + d1 * b1, d0 * a0 + d1 * a1) / (2 * math.pi) * PROBE_DIRECTIONS))
+    for n_ in range(PROBE_DIRECTIONS):
+        i = (near + ((n_ + 1) // 2 if n_ % 2 else -(n_ // 2))) % PROBE_DIRECTIONS
         th = 2 * math.pi * i / PROBE_DIRECTIONS
         c_, s_ = PROBE_MM * math.cos(th), PROBE_MM * math.sin(th)
         e0, e1, e2 = c_ * a0 + s_ * b0, c_ * a1 + s_ * b1, c_ * a2 + s_ * b2

@@ -81,7 +81,7 @@ def supports(fs: FaceSet) -> bool:
 
 def _surfaces(fs: FaceSet):
     n = len(fs.faces)
-    fi = np.zeros((n, 14), np.int64)
+    fi = np.zeros((n, 15), np.int64)
     ff = np.zeros((n, 12))
     ust, hus, vst, hvs, coefs, loops, px, py = [], [], [], [], [], [], [], []
     nu = nv = nc = nl = npt = 0
@@ -99,7 +99,7 @@ def _surfaces(fs: FaceSet):
         trimmed = bool(face.is_trimmed)
         polys = face.trim_polygons(TRIM_TOLERANCE) if trimmed else []
         fi[f] = (p, q, su.size, sv.size, nu, nv, nc, s.periodic_u, s.periodic_v, *fs.closed[f], trimmed, nl,
-                 nl + len(polys))  # fmt: skip
+                 nl + len(polys), dim == 4)  # fmt: skip
         ff[f, :4] = tu[p], tu[hp.shape[0]], tv[q], tv[hp.shape[1]]
         ff[f, 4:8] = s.knots_u[0], s.knots_u[-1], s.knots_v[0], s.knots_v[-1]
         ff[f, 8:12] = fs.bounds[f]
