@@ -265,15 +265,14 @@ def _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K):
 
 
 @njit(cache=True)
-def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
-    """The tip height at one query point: ``best`` = (rank, height, kind, face, found), ``bp`` the contact."""
+def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp, W):
+    """The tip height at one query point: ``best`` = (rank, height, kind, face, found), ``bp`` the contact;
+    ``W`` the solves' scratch (:mod:`._jit_solve`: nothing in it is read before it is written)."""
     # every array passed on is borrowed (no reference counting: a quarter of the samples, profiled): the
     # arguments are kept alive by the caller, the arrays made here by ``keep`` at the end
-    S, E, T, PR, SM, G, K, kinks, best, bp = borrowed((S, E, T, PR, SM, G, K, kinks, best, bp))
+    S, E, T, PR, SM, G, K, kinks, best, bp, W = borrowed((S, E, T, PR, SM, G, K, kinks, best, bp, W))
     xyz, pf = SM[0], SM[1]
     R, h_R = K[0], K[3]
-    W_ = (np.empty((6, 3)), np.empty((6, 3)), np.empty((6, 3)), np.empty((9, 3)), np.empty((3, 3)), np.empty(480))
-    W = borrowed(W_)
     best[4] = 0.0
     got = _gather(cx, cy, K[8], xyz, G)
     idx, rr = borrowed(got)
@@ -328,7 +327,7 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp):
     _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed, is_e, ek, n_eg)
     for kk in range(kinks.shape[0]):
         _kink_rounds(kinks[kk, 0], kinks[kk, 1], low, cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, zz, gk, ng)
-    keep((W_, got, cand, strictly_, zeros_, seeds_, ones_, bounds_, CB_))
+    keep((got, cand, strictly_, zeros_, seeds_, ones_, bounds_, CB_))
 
 
 @njit(cache=True, inline="always")
@@ -529,7 +528,8 @@ def _cells(order, i0, i1, which, low, cx, cy, idx, rr, PR, SM, K, CB):
         for c in range(start[j], start[j + 1]):
             if certified and boxed(cert, f, cuv[c, 0], cuv[c, 1], du, dv):  # (NaN on an edge: never)
                 continue
-            r = hyp(cxyz[c, 0] - cx, cxyz[c, 1] - cy)
+            ex, ey = cxyz[c, 0] - cx, cxyz[c, 1] - cy
+            r = math.sqrt(ex * ex + ey * ey)  # (a bound with a cover's margin: not libm's hypot, 3 % of the time)
             t = cxyz[c, 2] + crise[c]
             if r - ccov[c] <= R:
                 fb = max(fb, t - (h_R if level else prof_floor(PR, r - ccov[c])))
@@ -568,19 +568,24 @@ def _group_cells(g, which, low, cx, cy, idx, rr, GI, PR, SM, K, CB):
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def drop_batch(C, S, E, T, PR, SM, G, K, kinks, height, kind, face, point):
-    """Heights of the query points ``C`` (n, 2) into the output arrays, in parallel."""
-    for q in prange(C.shape[0]):
+def drop_batch(C, S, E, T, PR, SM, G, K, kinks, height, kind, face, point, chunk):
+    """Heights of the query points ``C`` (n, 2) into the output arrays, in parallel over chunks of ``chunk``
+    points (each chunk's scratch made once for its points; every point's answer is its own)."""
+    n = C.shape[0]
+    for ci in prange((n + chunk - 1) // chunk):
         best = np.zeros(8)
         bp = np.zeros(3)
-        _query(C[q, 0], C[q, 1], S, E, T, PR, SM, G, K, kinks, best, bp)
-        if best[4] > 0:
-            height[q] = best[1]
-            kind[q] = int(best[2])
-            face[q] = int(best[3])
-            point[q, 0], point[q, 1], point[q, 2] = bp[0], bp[1], bp[2]
-        else:
-            height[q] = math.nan
-            kind[q] = 0
-            face[q] = -1
-            point[q, 0] = point[q, 1] = point[q, 2] = math.nan
+        W = (np.empty((6, 3)), np.empty((6, 3)), np.empty((6, 3)), np.empty((9, 3)), np.empty((3, 3)), np.empty(480))
+        for q in range(ci * chunk, min(n, (ci + 1) * chunk)):
+            best[:] = 0.0
+            _query(C[q, 0], C[q, 1], S, E, T, PR, SM, G, K, kinks, best, bp, W)
+            if best[4] > 0:
+                height[q] = best[1]
+                kind[q] = int(best[2])
+                face[q] = int(best[3])
+                point[q, 0], point[q, 1], point[q, 2] = bp[0], bp[1], bp[2]
+            else:
+                height[q] = math.nan
+                kind[q] = 0
+                face[q] = -1
+                point[q, 0] = point[q, 1] = point[q, 2] = math.nan

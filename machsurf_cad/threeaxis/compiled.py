@@ -284,7 +284,7 @@ def _grid(xyz: np.ndarray, reach: float):
 
 PARALLEL_CHUNK = 32
 """Query points per chunk of the kernel's parallel loop (measured on the mould and the block, 40,000 points:
-about a tenth less wall time than the two fixed halves)."""
+about a tenth less wall time than the two fixed halves); a chunk's points share its solves' scratch."""
 
 MAX_WINDOW_BYTES = 64 * 2**20
 """The edge search windows' points are kept when they take at most this much memory (else evaluated)."""
@@ -338,8 +338,9 @@ def drop(fs: FaceSet, prof, C: np.ndarray):
     # the points in chunks handed to whichever thread is free (numba >= 0.57): the points' costs differ by
     # region and so do the two cores' speeds under load; without it each thread takes a fixed half
     chunks = getattr(numba, "parallel_chunksize", None)
-    with chunks(PARALLEL_CHUNK) if chunks is not None else contextlib.nullcontext():
-        drop_batch(np.ascontiguousarray(C, dtype=float), S, E, T, PR, SM, G, K, kinks, height, kind, face, point)
+    with chunks(1) if chunks is not None else contextlib.nullcontext():
+        drop_batch(np.ascontiguousarray(C, dtype=float), S, E, T, PR, SM, G, K, kinks, height, kind, face, point,
+                   PARALLEL_CHUNK)  # fmt: skip
     return height, kind, face, point
 
 
