@@ -21,9 +21,9 @@ from numba.extending import intrinsic
 #           rational
 #   ff[f] = a_u, b_u, a_v, b_v (power-data domain), period u0, u1, v0, v1, face box u0, u1, v0, v1
 # curve table E = (ei, ef, knots, poles): ei[e] = degree, koff, nk, poff, npoles, face; ef[e] = t0, t1
-# trim table T = (tf, tl, start, items, ea, eb, px, py, tb): per face its slabs of v (first, count; v0, where its
-#   bounds start in tb, v1), each slab's polygon edges (items, CSR by start), each edge's vertices (ea, eb) in
-#   px, py; tb the slabs' bounds
+# trim table T = (tf, tl, start, seg, tb): per face its slabs of v (first, count; v0, where its bounds start in
+#   tb, v1), each slab's polygon edges (seg rows u0, v0, u1, v1 of its edges, CSR by start); tb the slabs'
+#   bounds
 # profile PR = (segs, consts, pieces): segs[s] = kind (0 line, 1 arc), 5 numbers; consts = R, h_R, h_min, monotone,
 #   lower_height at R (h, h1, h2) and at 0; pieces from compiled._pieces
 
@@ -479,7 +479,7 @@ def inside(S, T, f, u, v):
         u0, u1, v0, v1 = ff[f, 8], ff[f, 9], ff[f, 10], ff[f, 11]
         tol = 1e-12 * max(u1 - u0, v1 - v0, 1.0)
         return u >= u0 - tol and u <= u1 + tol and v >= v0 - tol and v <= v1 + tol
-    tf, tl, start, items, ea, eb, px, py, tb = T
+    tf, tl, start, seg, tb = T
     s0, ns = tf[f, 0], tf[f, 1]
     if not (v > tl[f, 0] and v <= tl[f, 2]):
         return False
@@ -494,13 +494,11 @@ def inside(S, T, f, u, v):
     k = lo
     flip = False
     for i in range(start[s0 + k], start[s0 + k + 1]):
-        e = items[i]
-        a, b = ea[e], eb[e]
-        y0, y1 = py[a], py[b]
+        x0, y0, x1, y1 = seg[i, 0], seg[i, 1], seg[i, 2], seg[i, 3]
         if y0 == y1:
             continue
         if min(y0, y1) < v <= max(y0, y1):  # as _points_in_polygons: lo < v <= hi
-            xint = px[a] + (v - y0) * (px[b] - px[a]) / (y1 - y0)
+            xint = x0 + (v - y0) * (x1 - x0) / (y1 - y0)
             if u < xint:
                 flip = not flip
     return flip
