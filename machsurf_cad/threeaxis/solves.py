@@ -460,7 +460,7 @@ def _rim_ascent(fs, R, h_R, c, fid, u, v, iters):
     D = list(_surface_eval(fs, fid, u, v, 2))  # the kept points' second derivatives, per row
     off, pu, pv, n2, lam = _rim_terms(D, c, R)
     z = np.where(np.abs(off) <= tol, D[0][:, 2] - lam * off, -np.inf)
-    radius = np.full(u.shape, 0.5 * fs.spacing)
+    radius = np.full(u.shape, 2.0 * fs.spacing)  # (as the kernel's: 2 sample spacings)
     active = np.ones(u.shape, bool)
     for _ in range(iters):
         a_ = np.nonzero(active)[0]
