@@ -51,7 +51,9 @@ def _kernel_compiled_once(tmp_path_factory):
     env.pop("PYTHONPATH", None)
     with open(NUMBA_CACHE / ".lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
-        subprocess.run([FREECADCMD, str(script)], env=env, timeout=900, stdin=subprocess.DEVNULL,
+        # (Debian's numba 0.56 takes 13-14 min of one core for the kernel on the development machine at its
+        # slowest, measured in the eighteenth session: 776 s for the seventeenth session's code, 846 s for this)
+        subprocess.run([FREECADCMD, str(script)], env=env, timeout=2400, stdin=subprocess.DEVNULL,
                        capture_output=True)  # fmt: skip
 
 

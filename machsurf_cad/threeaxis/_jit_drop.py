@@ -156,7 +156,13 @@ def _prune(idx, rr, SM, K, PR):
 def _group_best(n_groups, key, score, sel, idx):
     """Per group the candidate of highest ``score`` among ``sel`` (on ties the smallest pool index ``idx``, as
     the numpy path's ``_best_per``); -1 where none."""
-    out = np.full(n_groups, -1, np.int64)
+    return _group_best_into(np.empty(n_groups, np.int64), key, score, sel, idx)
+
+
+@njit(cache=True)
+def _group_best_into(out, key, score, sel, idx):
+    """:func:`_group_best` into ``out`` (its groups)."""
+    out[:] = -1
     for k in range(key.shape[0]):
         if sel[k]:
             g = key[k]
@@ -167,8 +173,20 @@ def _group_best(n_groups, key, score, sel, idx):
 
 
 @njit(cache=True)
-def _group_max(n_groups, key, x, sel):
-    out = np.full(n_groups, -math.inf)
+def _best_of(score, sel, idx):
+    """``_group_best`` of one group holding every candidate: the index of the highest ``score`` among ``sel``
+    (ties: the smallest ``idx``), -1 where none."""
+    out = -1
+    for k in range(score.shape[0]):
+        if sel[k] and (out < 0 or score[k] > score[out] or (score[k] == score[out] and idx[k] < idx[out])):
+            out = k
+    return out
+
+
+@njit(cache=True)
+def _group_max(out, key, x, sel):
+    """Per group (``out``'s) the largest ``x`` among ``sel``, into ``out``."""
+    out[:] = -math.inf
     for k in range(key.shape[0]):
         if sel[k] and x[k] > out[key[k]]:
             out[key[k]] = x[k]
@@ -184,16 +202,18 @@ def _candidates(cx, cy, idx, rr, PR, SM, K):
     cov, rise, ecov = SM[7], SM[8], SM[10]
     R, h_R = K[0], K[3]
     m = idx.shape[0]
-    fmap = np.full(int(K[5]), -1, np.int64)
-    emap = np.full(int(K[6]), -1, np.int64)
+    # four allocations instead of twelve (each costs about as much as a sample's bounds)
+    maps = np.full(int(K[5]) + int(K[6]), -1, np.int64)
+    fmap, emap = maps[: int(K[5])], maps[int(K[5]) :]
     nl = ne = 0
-    val, zz, negr, ub, rim_ub = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
-    e_ub = np.full(m, -math.inf)
+    F = np.empty((6, m))
+    val, zz, negr, ub, rim_ub, e_ub = F[0], F[1], F[2], F[3], F[4], F[5]
+    e_ub[:] = -math.inf
     level = PR[1][2] == h_R  # (a flat end: h = h_R on the whole disc, no profile call in the loop)
-    feas = np.empty(m, np.bool_)
-    is_e = np.empty(m, np.bool_)
-    gk = np.empty(m, np.int64)
-    ek = np.zeros(m, np.int64)
+    B = np.empty((2, m), np.bool_)
+    feas, is_e = B[0], B[1]
+    I_ = np.zeros((2, m), np.int64)
+    gk, ek = I_[0], I_[1]
     for k in range(m):
         j = idx[k]
         rho = rr[k]
@@ -245,22 +265,26 @@ def _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K):
         M[3, k] = f_ and rr[k] >= R - c  # near the rim inside
         M[4, k] = (not f_) and rr[k] <= R + c  # near the rim outside
         M[5, k], M[6, k] = e_ and f_, e_ and not f_
-    seed = _group_best(ng, gk, val, M[0], idx)
-    s2 = _group_best(ng, gk, val, M[1], idx)
-    s3 = _group_best(ng, gk, negr, M[2], idx)
+    picks_ = np.empty(5 * ng + 2 * n_eg, np.int64)  # the seven picks' groups, in one allocation
+    P = borrowed(picks_)
+    seed = _group_best_into(P[:ng], gk, val, M[0], idx)
+    s2 = _group_best_into(P[ng : 2 * ng], gk, val, M[1], idx)
+    s3 = _group_best_into(P[2 * ng : 3 * ng], gk, negr, M[2], idx)
     out_ = np.zeros((3, m), np.bool_)
     is_seed, rseed, eseed = out_[0], out_[1], out_[2]
     for g in range(ng):
         s = seed[g] if seed[g] >= 0 else (s2[g] if s2[g] >= 0 else s3[g])
         if s >= 0 and tilt[idx[s]] <= max_tilt + 1e-9:
             is_seed[s] = True
-    for mask, groups in ((rseed, _group_best(ng, gk, zz, M[3], idx)), (rseed, _group_best(ng, gk, negr, M[4], idx)),
-                         (eseed, _group_best(n_eg, ek, val, M[5], idx)),
-                         (eseed, _group_best(n_eg, ek, negr, M[6], idx))):  # fmt: skip
+    e0 = 5 * ng
+    for mask, groups in ((rseed, _group_best_into(P[3 * ng : 4 * ng], gk, zz, M[3], idx)),
+                         (rseed, _group_best_into(P[4 * ng : e0], gk, negr, M[4], idx)),
+                         (eseed, _group_best_into(P[e0 : e0 + n_eg], ek, val, M[5], idx)),
+                         (eseed, _group_best_into(P[e0 + n_eg :], ek, negr, M[6], idx))):  # fmt: skip
         for s in groups:
             if s >= 0:
                 mask[s] = True
-    keep(masks_)
+    keep((masks_, picks_))
     return is_seed, rseed, eseed
 
 
@@ -284,33 +308,34 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp, W):
     val, zz, negr, ub, rim_ub, e_ub, feas, is_e, gk, ek, nl, ne = borrowed(cand)
     ng, n_eg = nl * 5, ne * 10
     # the best sample inside the disc (not on its circle: see enters_face) is a lower bound
-    strictly_ = np.empty(m, np.bool_)
-    strictly = borrowed(strictly_)
+    masks_ = np.ones((2, m), np.bool_)  # inside the disc (not on its circle: see enters_face), and every sample
+    masks = borrowed(masks_)
+    strictly, ones = masks[0], masks[1]
     for k in range(m):
         strictly[k] = rr[k] < R * (1 - ON_CIRCLE)
-    zeros_ = np.zeros(m, np.int64)
-    zeros = borrowed(zeros_)
-    b0 = _group_best(1, zeros, val, strictly, idx)[0]
+    b0 = _best_of(val, strictly, idx)
     if b0 >= 0:
         j = idx[b0]
         _add(best, bp, val[b0], SAMPLE, pf[j], xyz[j, 0], xyz[j, 1], xyz[j, 2])
     seeds_ = _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K)
     seeds = borrowed(seeds_)
     is_seed, rseed, eseed = seeds
-    ones_ = np.ones(m, np.bool_)
-    ones = borrowed(ones_)
-    bounds_ = (_group_max(ng, gk, ub, ones), _group_max(ng, gk, rim_ub, ones), _group_max(n_eg, ek, e_ub, is_e))
-    bounds = borrowed(bounds_)
+    bmax_ = np.empty(2 * ng + n_eg)  # the groups' face, rim and edge bounds, in one allocation
+    bmax = borrowed(bmax_)
+    bounds = (_group_max(bmax[:ng], gk, ub, ones), _group_max(bmax[ng : 2 * ng], gk, rim_ub, ones),
+              _group_max(bmax[2 * ng :], ek, e_ub, is_e))  # fmt: skip
     # phase 1: the best face seed and the highest rim seed
-    f1 = _group_best(1, zeros, val, is_seed, idx)[0]
-    r1 = _group_best(1, zeros, zz, rseed, idx)[0]
+    f1 = _best_of(val, is_seed, idx)
+    r1 = _best_of(zz, rseed, idx)
     if f1 >= 0:
         _solve(FACE, idx[f1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
     if r1 >= 0 and (best[4] == 0 or bounds[1][gk[r1]] > best[1] + BOUND_TIE):  # (a ball's rim: seldom)
         _solve(RIM, idx[r1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
     # a flat end's rim contact: the seed samples whose neighbourhoods its certificate covers bound nothing more
-    CB_ = (np.full(m, math.nan), np.full(m, math.nan), np.full(5, -1.0))
-    CB = borrowed(CB_)
+    CB_ = np.full(2 * m + 5, math.nan)  # the cells' face and rim bounds (NaN: not computed) and the certificate
+    cb = borrowed(CB_)
+    CB = (cb[:m], cb[m : 2 * m], cb[2 * m :])
+    CB[2][:] = -1.0
     cert = CB[2]
     if K[10] > 0 and K[9] > 0 and best[4] > 0 and best[2] == RIM:
         if rim_certificate(S, int(best[3]), best[6], best[7], cx, cy, R, best[1] + h_R, cert[1:]):
@@ -319,15 +344,15 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp, W):
             free = borrowed(free_)
             for k in range(m):
                 free[k] = not _covered(k, idx, SM, cert)
-            bounds_ = (_group_max(ng, gk, ub, free), _group_max(ng, gk, rim_ub, free), bounds_[2])
-            bounds = borrowed(bounds_)
+            _group_max(bounds[0], gk, ub, free)
+            _group_max(bounds[1], gk, rim_ub, free)
             keep(free_)
     _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk, ek, f1, r1, CB)
     low = _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, is_seed, feas, is_e, ub, gk, ng, CB)
     _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed, is_e, ek, n_eg)
     for kk in range(kinks.shape[0]):
         _kink_rounds(kinks[kk, 0], kinks[kk, 1], low, cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, zz, gk, ng)
-    keep((got, cand, strictly_, zeros_, seeds_, ones_, bounds_, CB_))
+    keep((got, cand, masks_, seeds_, bmax_, CB_))
 
 
 @njit(cache=True, inline="always")
@@ -546,13 +571,13 @@ def _cells(order, i0, i1, which, low, cx, cy, idx, rr, PR, SM, K, CB):
 def _group_index(ng, gk):
     """The samples of each group in their order: ``order[start[g]:start[g + 1]]`` (a counting sort)."""
     m = gk.shape[0]
-    start = np.zeros(ng + 1, np.int64)
+    buf = np.zeros(2 * ng + 1 + m, np.int64)  # start, the fill pointers and order in one allocation
+    start, fill, order = buf[: ng + 1], buf[ng + 1 : 2 * ng + 1], buf[2 * ng + 1 :]
     for k in range(m):
         start[gk[k] + 1] += 1
     for g in range(ng):
         start[g + 1] += start[g]
-    fill = start[:-1].copy()
-    order = np.empty(m, np.int64)
+    fill[:] = start[:-1]
     for k in range(m):
         order[fill[gk[k]]] = k
         fill[gk[k]] += 1
