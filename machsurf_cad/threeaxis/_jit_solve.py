@@ -234,6 +234,21 @@ def face_newton(S, PR, sp, cx, cy, f, u, v, W, iters=40):
     return u, v, g
 
 
+@njit(cache=True, inline="always")
+def _circle_step(D, sp, R, cx, cy, rho):
+    """The minimum-norm Newton step onto ``rho = R`` from the point of ``D`` (first derivatives), ``rho`` its
+    distance from the axis; shortened to ``sp`` mm on the face. Returns ``du, dv``."""
+    dx, dy = D[0, 0] - cx, D[0, 1] - cy
+    ru = (dx * D[1, 0] + dy * D[1, 1]) / nmax(rho, 1e-300)
+    rv = (dx * D[2, 0] + dy * D[2, 1]) / nmax(rho, 1e-300)
+    n2 = ru * ru + rv * rv
+    t = (R - rho) / n2 if n2 > 1e-300 else 0.0
+    shrink = nmin(1.0, sp / nmax(_tan_len(D, t * ru, t * rv), 1e-300))
+    if not isfin(shrink):
+        shrink = 0.0
+    return t * ru * shrink, t * rv * shrink
+
+
 @njit(cache=True)
 def project_circle(S, sp, R, cx, cy, f, u, v, n, W):
     """``_project_circle``: minimum-norm Newton steps onto ``rho = R``; returns ``u, v`` and whether it stopped
@@ -245,14 +260,8 @@ def project_circle(S, sp, R, cx, cy, f, u, v, n, W):
         rho = hyp(dx, dy)
         if abs(R - rho) <= ON_CIRCLE_MM * nmax(R, 1.0):  # on the circle: the further steps would not move
             return u, v, True
-        ru = (dx * D[1, 0] + dy * D[1, 1]) / nmax(rho, 1e-300)
-        rv = (dx * D[2, 0] + dy * D[2, 1]) / nmax(rho, 1e-300)
-        n2 = ru * ru + rv * rv
-        t = (R - rho) / n2 if n2 > 1e-300 else 0.0
-        shrink = nmin(1.0, sp / nmax(_tan_len(D, t * ru, t * rv), 1e-300))
-        if not isfin(shrink):
-            shrink = 0.0
-        u, v = clamp_uv(S, f, u + t * ru * shrink, v + t * rv * shrink)
+        du, dv = _circle_step(D, sp, R, cx, cy, rho)
+        u, v = clamp_uv(S, f, u + du, v + dv)
     return u, v, False
 
 
@@ -356,18 +365,11 @@ def rim_ascent(S, sp, R, h_R, cx, cy, f, u, v, W, iters=40):
         nu, nv = clamp_uv(S, f, u + s * tu + c * pu, v + s * tv + c * pv)
         surf(S, f, nu, nv, 2, D, wk)
         for _p in range(3):  # Newton steps onto the circle (``project_circle``'s, from this evaluation)
-            ex, ey = D[0, 0] - cx, D[0, 1] - cy
-            rho = hyp(ex, ey)
+            rho = hyp(D[0, 0] - cx, D[0, 1] - cy)
             if abs(R - rho) <= tol:
                 break
-            ru = (ex * D[1, 0] + ey * D[1, 1]) / nmax(rho, 1e-300)
-            rv = (ex * D[2, 0] + ey * D[2, 1]) / nmax(rho, 1e-300)
-            m2 = ru * ru + rv * rv
-            t = (R - rho) / m2 if m2 > 1e-300 else 0.0
-            shrink = nmin(1.0, sp / nmax(_tan_len(D, t * ru, t * rv), 1e-300))
-            if not isfin(shrink):
-                shrink = 0.0
-            nu, nv = clamp_uv(S, f, nu + t * ru * shrink, nv + t * rv * shrink)
+            du, dv = _circle_step(D, sp, R, cx, cy, rho)
+            nu, nv = clamp_uv(S, f, nu + du, nv + dv)
             surf(S, f, nu, nv, 2, D, wk)
         off_n, pu_n, pv_n, n2_n, lam_n = _rim_terms(D, cx, cy, R)
         zn = D[0, 2] - lam_n * off_n if abs(off_n) <= tol else -math.inf

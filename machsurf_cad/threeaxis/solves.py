@@ -372,21 +372,27 @@ def _rim_newton(fs, prof, c, fid, u, v, iters: int = 40, radius: float | None = 
         return _rim_ascent(fs, R, h_R, c, fid, u, v, iters)
 
 
+def _circle_step(fs, P, Su, Sv, c, R):
+    """The minimum-norm Newton step onto ``rho = R`` from each point ``P`` (first derivatives ``Su, Sv``),
+    shortened to the sample spacing on the face: ``du, dv`` and the points' distances ``rho`` from the axis."""
+    d = P[:, :2] - c
+    rho = np.hypot(d[:, 0], d[:, 1])
+    ru = np.einsum("ij,ij->i", d, Su[:, :2]) / np.maximum(rho, 1e-300)
+    rv = np.einsum("ij,ij->i", d, Sv[:, :2]) / np.maximum(rho, 1e-300)
+    n2 = ru * ru + rv * rv
+    t = np.where(n2 > 1e-300, (R - rho) / np.where(n2 > 1e-300, n2, 1.0), 0.0)
+    t = np.where(np.abs(R - rho) <= _ON_CIRCLE_MM * max(R, 1.0), 0.0, t)  # on the circle: stays there
+    step = np.linalg.norm(Su * (t * ru)[:, None] + Sv * (t * rv)[:, None], axis=1)
+    shrink = np.minimum(1.0, fs.spacing / np.maximum(step, 1e-300))
+    shrink = np.where(np.isfinite(shrink), shrink, 0.0)
+    return t * ru * shrink, t * rv * shrink, rho
+
+
 def _project_circle(fs, R, c, fid, u, v, n: int = 4):
     """Minimum-norm Newton steps onto ``rho = R``; returns (u, v)."""
     for _ in range(n):
-        P, Su, Sv = _surface_eval(fs, fid, u, v, 1)
-        d = P[:, :2] - c
-        rho = np.hypot(d[:, 0], d[:, 1])
-        ru = np.einsum("ij,ij->i", d, Su[:, :2]) / np.maximum(rho, 1e-300)
-        rv = np.einsum("ij,ij->i", d, Sv[:, :2]) / np.maximum(rho, 1e-300)
-        n2 = ru * ru + rv * rv
-        t = np.where(n2 > 1e-300, (R - rho) / np.where(n2 > 1e-300, n2, 1.0), 0.0)
-        t = np.where(np.abs(R - rho) <= _ON_CIRCLE_MM * max(R, 1.0), 0.0, t)  # on the circle: stays there
-        step = np.linalg.norm(Su * (t * ru)[:, None] + Sv * (t * rv)[:, None], axis=1)
-        shrink = np.minimum(1.0, fs.spacing / np.maximum(step, 1e-300))
-        shrink = np.where(np.isfinite(shrink), shrink, 0.0)
-        u, v = _clamp_uv(fs, fid, u + t * ru * shrink, v + t * rv * shrink)
+        du, dv, _ = _circle_step(fs, *_surface_eval(fs, fid, u, v, 1), c, R)
+        u, v = _clamp_uv(fs, fid, u + du, v + dv)
     return u, v
 
 
@@ -493,20 +499,12 @@ def _rim_ascent(fs, R, h_R, c, fid, u, v, iters):
         nu, nv = _clamp_uv(fs, fid[b_], u[b_] + s * tu + cc * pu[b_], v[b_] + s * tv + cc * pv[b_])
         Dn = list(_surface_eval(fs, fid[b_], nu, nv, 2))
         for _p in range(3):  # Newton steps onto the circle while off it by more than tol
-            dn = Dn[0][:, :2] - c[b_]
-            rho = np.hypot(dn[:, 0], dn[:, 1])
+            rho = np.hypot(Dn[0][:, 0] - c[b_, 0], Dn[0][:, 1] - c[b_, 1])
             far = np.nonzero(np.abs(R - rho) > tol)[0]
             if far.size == 0:
                 break
-            Su_, Sv_ = Dn[1][far], Dn[2][far]
-            ru = np.einsum("ij,ij->i", dn[far], Su_[:, :2]) / np.maximum(rho[far], 1e-300)
-            rv = np.einsum("ij,ij->i", dn[far], Sv_[:, :2]) / np.maximum(rho[far], 1e-300)
-            m2 = ru * ru + rv * rv
-            t = np.where(m2 > 1e-300, (R - rho[far]) / np.where(m2 > 1e-300, m2, 1.0), 0.0)
-            st = np.linalg.norm(Su_ * (t * ru)[:, None] + Sv_ * (t * rv)[:, None], axis=1)
-            shrink = np.minimum(1.0, fs.spacing / np.maximum(st, 1e-300))
-            shrink = np.where(np.isfinite(shrink), shrink, 0.0)
-            nu[far], nv[far] = _clamp_uv(fs, fid[b_[far]], nu[far] + t * ru * shrink, nv[far] + t * rv * shrink)
+            du, dv, _ = _circle_step(fs, Dn[0][far], Dn[1][far], Dn[2][far], c[b_[far]], R)
+            nu[far], nv[far] = _clamp_uv(fs, fid[b_[far]], nu[far] + du, nv[far] + dv)
             for X, Y in zip(Dn, _surface_eval(fs, fid[b_[far]], nu[far], nv[far], 2)):
                 X[far] = Y
         off_n, pu_n, pv_n, n2_n, lam_n = _rim_terms(Dn, c[b_], R)
