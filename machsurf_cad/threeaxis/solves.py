@@ -391,7 +391,8 @@ def _circle_step(fs, P, Su, Sv, c, R):
 def _project_circle(fs, R, c, fid, u, v, n: int = 4):
     """Minimum-norm Newton steps onto ``rho = R``; returns (u, v)."""
     for _ in range(n):
-        du, dv, _ = _circle_step(fs, *_surface_eval(fs, fid, u, v, 1), c, R)
+        P, Su, Sv = _surface_eval(fs, fid, u, v, 1)[:3]
+        du, dv, _ = _circle_step(fs, P, Su, Sv, c, R)
         u, v = _clamp_uv(fs, fid, u + du, v + dv)
     return u, v
 
