@@ -115,6 +115,34 @@ def _span(keys, off, n, x):
     return lo
 
 
+@njit(cache=True, inline="always")
+def _poly_sums(coef, base, p, q, order, n_out, out, wk):
+    """:func:`surf`'s sums on a polynomial piece (power rows in ``wk``): first over v into ``wk[72:]``, then over
+    u into ``out``. Inlined, so that a call with constant degrees has loops the compiler unrolls."""
+    for a in range(p + 1):
+        for kv in range(order + 1):
+            x0 = x1 = x2 = 0.0
+            for b in range(q + 1):
+                w = wk[24 + 8 * kv + b]
+                cb = base + (a * (q + 1) + b) * 4
+                x0 += w * coef[cb]
+                x1 += w * coef[cb + 1]
+                x2 += w * coef[cb + 2]
+            o = 72 + (a * 3 + kv) * 4
+            wk[o], wk[o + 1], wk[o + 2] = x0, x1, x2
+    for k in range(n_out):
+        ku = 0 if k == 0 or k == 2 or k == 5 else (1 if k == 1 or k == 4 else 2)
+        kv = 0 if k == 0 or k == 1 or k == 3 else (1 if k == 2 or k == 4 else 2)
+        x0 = x1 = x2 = 0.0
+        for a in range(p + 1):
+            w = wk[8 * ku + a]
+            o = 72 + (a * 3 + kv) * 4
+            x0 += w * wk[o]
+            x1 += w * wk[o + 1]
+            x2 += w * wk[o + 2]
+        out[k, 0], out[k, 1], out[k, 2] = x0, x1, x2
+
+
 @njit(cache=True)
 def surf(S, f, u, v, order, out, wk):
     """Point and derivatives of face ``f`` at ``(u, v)`` into ``out`` rows P, Su, Sv, Suu, Suv, Svv (as many
@@ -154,28 +182,10 @@ def surf(S, f, u, v, order, out, wk):
     base = fi[f, 6] + (i * fi[f, 3] + j) * (p + 1) * (q + 1) * 4
     n_out = 1 if order == 0 else (3 if order == 1 else 6)
     if fi[f, 14] == 0:  # polynomial: the weights' sums are 1 and 0, the division below the same numbers
-        for a in range(p + 1):
-            for kv in range(order + 1):
-                x0 = x1 = x2 = 0.0
-                for b in range(q + 1):
-                    w = wk[24 + 8 * kv + b]
-                    cb = base + (a * (q + 1) + b) * 4
-                    x0 += w * coef[cb]
-                    x1 += w * coef[cb + 1]
-                    x2 += w * coef[cb + 2]
-                o = 72 + (a * 3 + kv) * 4
-                wk[o], wk[o + 1], wk[o + 2] = x0, x1, x2
-        for k in range(n_out):
-            ku = 0 if k == 0 or k == 2 or k == 5 else (1 if k == 1 or k == 4 else 2)
-            kv = 0 if k == 0 or k == 1 or k == 3 else (1 if k == 2 or k == 4 else 2)
-            x0 = x1 = x2 = 0.0
-            for a in range(p + 1):
-                w = wk[8 * ku + a]
-                o = 72 + (a * 3 + kv) * 4
-                x0 += w * wk[o]
-                x1 += w * wk[o + 1]
-                x2 += w * wk[o + 2]
-            out[k, 0], out[k, 1], out[k, 2] = x0, x1, x2
+        if p == 3 and q == 3:  # bicubic (most faces): the same sums with constant bounds, unrolled by the compiler
+            _poly_sums(coef, base, 3, 3, order, n_out, out, wk)
+        else:
+            _poly_sums(coef, base, p, q, order, n_out, out, wk)
         return
     for a in range(p + 1):
         for kv in range(order + 1):
@@ -506,7 +516,10 @@ def inside(S, T, f, u, v):
 
 @njit(cache=True, inline="always")
 def hyp(x, y):
-    return math.hypot(x, y)
+    """``hypot(x, y)`` for the kernel's plan distances (mm, far from overflow): the square root of the sum of
+    squares, within two units in the last place of libm's ``hypot`` (which the numpy path's ``np.hypot`` calls)
+    and a third of its cost (profiled: 3 % of the kernel's time in ``hypot``)."""
+    return math.sqrt(x * x + y * y)
 
 
 @njit(cache=True, inline="always")

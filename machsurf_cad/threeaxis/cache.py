@@ -12,6 +12,7 @@ numbers. Both are bounded (:data:`MAX_FACE_SETS`, :data:`MAX_HEIGHTS`) and can b
 from __future__ import annotations
 
 from collections import OrderedDict
+from itertools import repeat
 
 import numpy as np
 
@@ -62,9 +63,10 @@ class HeightMemo:
         return memos.setdefault((tool_key, engine), HeightMemo())
 
     def lookup(self, xy: np.ndarray):
-        """Row of each point in the memo (-1: not computed) and the points' keys."""
-        keys = [r.tobytes() for r in np.ascontiguousarray(xy, dtype=float)]
-        return np.array([self.index.get(k, -1) for k in keys], np.int64), keys
+        """Row of each point in the memo (-1: not computed) and the points' keys (their 16 bytes, an array)."""
+        keys = np.ascontiguousarray(xy, dtype=float).reshape(-1, 2).view("V16").ravel()
+        get = self.index.get
+        return np.fromiter(map(get, keys.tolist(), repeat(-1)), np.int64, keys.size), keys
 
     def take(self, rows):
         """Height, contact kind, face and contact point of memo rows."""
@@ -73,10 +75,11 @@ class HeightMemo:
         return tuple(a[rows] for a in self._joined)
 
     def store(self, keys, height, kind, face, point) -> None:
+        """Remember the results of the points ``keys`` (from :meth:`lookup`)."""
         if self.n + len(keys) > MAX_HEIGHTS:
             self.__init__()
-        for j, k in enumerate(keys):
-            self.index.setdefault(k, self.n + j)
+        # (a point twice in one batch has the same numbers in both rows: either may stay)
+        self.index.update(zip(np.asarray(keys).tolist(), range(self.n, self.n + len(keys))))
         self.chunks.append((np.array(height, float), np.array(kind, np.int8), np.array(face, np.int64),
                             np.array(point, float).reshape(-1, 3)))  # fmt: skip
         self.n += len(keys)

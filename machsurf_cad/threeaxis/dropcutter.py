@@ -581,7 +581,7 @@ def drop_cutter(
     for s in range(0, m, batch_size):
         sel = todo[s : min(m, s + batch_size)]
         height[sel], kind[sel], face[sel], point[sel] = chunk_fn(fs, prof, xy[sel])
-        memo.store([keys[i] for i in sel], height[sel], kind[sel], face[sel], point[sel])
+        memo.store(keys[sel], height[sel], kind[sel], face[sel], point[sel])
         if progress is not None:
             progress(known.size + s + sel.size, n, "drop-cutter")
     t2 = time.perf_counter()
