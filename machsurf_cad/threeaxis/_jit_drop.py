@@ -96,9 +96,13 @@ def _solve(kind, j, cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk):
 
 
 @njit(cache=True)
-def _gather(cx, cy, rq, xyz, G):
-    """Pool samples within ``rq`` of ``(cx, cy)`` in plan (the grid's cells around it): indices and distances."""
-    meta, dims, start, items = G
+def _gather(cx, cy, rq, xyz, G, h_R, h_min, inner):
+    """Pool samples within ``rq`` of ``(cx, cy)`` in plan (the grid's cells around it): indices and distances,
+    in the grid's order (cell by cell, each cell's by pool index). With ``h_R`` (a profile that rises to its
+    rim; else NaN), ``h_min`` and ``inner = R (1 - ON_CIRCLE)``, a cell is read from its highest ``top`` down
+    only while that reaches :func:`_prune`'s ``low`` of the samples read so far (which only grows). The rest
+    would be pruned and raise no ``low`` (``top`` is at least z), so :func:`_prune` keeps the same samples."""
+    meta, dims, start, items, top = G
     x0, y0, cs = meta[0], meta[1], meta[2]
     nx, ny = dims[0], dims[1]
     i0 = max(int(math.floor((cx - rq - x0) / cs)), 0)
@@ -110,16 +114,34 @@ def _gather(cx, cy, rq, xyz, G):
         count += start[i * ny + j1 + 1] - start[i * ny + j0] if j1 >= j0 else 0
     idx = np.empty(max(count, 0), np.int64)
     rr = np.empty(max(count, 0))
+    rising = h_R == h_R
+    lowz = -math.inf  # _prune's: the highest z - h_R strictly inside the disc
+    low = -math.inf  # and its low
     m = 0
     for i in range(i0, i1 + 1):
-        for k in range(start[i * ny + j0], start[i * ny + j1 + 1] if j1 >= j0 else start[i * ny + j0]):
-            jj = items[k]
-            dx, dy = xyz[jj, 0] - cx, xyz[jj, 1] - cy
-            rho = math.sqrt(dx * dx + dy * dy)
-            if rho <= rq:
-                idx[m] = jj
-                rr[m] = rho
-                m += 1
+        for c in range(i * ny + j0, i * ny + j1 + 1):
+            m0 = m
+            for k in range(start[c], start[c + 1]):
+                if top[k] < low:  # (so are the rest of the cell's)
+                    break
+                jj = items[k]
+                dx, dy = xyz[jj, 0] - cx, xyz[jj, 1] - cy
+                rho = math.sqrt(dx * dx + dy * dy)
+                if rho <= rq:
+                    idx[m] = jj
+                    rr[m] = rho
+                    m += 1
+                    z = xyz[jj, 2] - h_R
+                    if rising and rho < inner and z > lowz:  # (a NaN sample raises nothing)
+                        lowz = z
+                        low = lowz + (h_min - 1e-9)
+            for a in range(m0 + 1, m):  # the cell's samples by pool index (insertion sort: a few)
+                ja, ra = idx[a], rr[a]
+                b = a - 1
+                while b >= m0 and idx[b] > ja:
+                    idx[b + 1], rr[b + 1] = idx[b], rr[b]
+                    b -= 1
+                idx[b + 1], rr[b + 1] = ja, ra
     return idx[:m], rr[:m]
 
 
@@ -298,7 +320,7 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp, W):
     xyz, pf = SM[0], SM[1]
     R, h_R = K[0], K[3]
     best[4] = 0.0
-    got = _gather(cx, cy, K[8], xyz, G)
+    got = _gather(cx, cy, K[8], xyz, G, h_R if PR[1][3] != 0.0 else math.nan, PR[1][2], R * (1 - ON_CIRCLE))
     idx, rr = borrowed(got)
     idx, rr = _prune(idx, rr, SM, K, PR)
     m = idx.shape[0]

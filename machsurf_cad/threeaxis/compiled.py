@@ -268,8 +268,12 @@ def _pool(fs: FaceSet):
             fs.edge_rise.astype(float))  # fmt: skip
 
 
-def _grid(xyz: np.ndarray, reach: float):
-    """A plan grid of the pool samples with cells of about half ``reach`` (at most 2048 a side)."""
+def _grid(xyz: np.ndarray, reach: float, top: np.ndarray):
+    """A plan grid of the pool samples with cells of about half ``reach`` (at most 2048 a side): meta (x0, y0,
+    cell size), dims, each cell's start in ``items``, the items (pool indices) and their ``top`` (the highest a
+    sample can raise or bound: its z plus its rise, or its z; NaN last). A cell's items run from the highest
+    ``top`` down, so that a query stops reading a cell where the rest are below the height it already knows
+    (:func:`._jit_drop._gather`)."""
     xy = xyz[:, :2]
     lo = xy.min(axis=0) if xy.size else np.zeros(2)
     hi = xy.max(axis=0) if xy.size else np.zeros(2)
@@ -278,10 +282,11 @@ def _grid(xyz: np.ndarray, reach: float):
     ix = np.clip(((xy[:, 0] - lo[0]) // cs).astype(np.int64), 0, nx - 1)
     iy = np.clip(((xy[:, 1] - lo[1]) // cs).astype(np.int64), 0, ny - 1)
     cell = ix * ny + iy
-    items = np.argsort(cell, kind="stable").astype(np.int64)
+    key = np.where(np.isnan(top), np.inf, -top)  # (descending top, NaN last; ties by pool index)
+    items = np.lexsort((np.arange(cell.size), key, cell)).astype(np.int64)
     start = np.zeros(nx * ny + 1, np.int64)
     np.cumsum(np.bincount(cell, minlength=nx * ny), out=start[1:])
-    return np.array([lo[0], lo[1], cs]), np.array([nx, ny], np.int64), start, items
+    return np.array([lo[0], lo[1], cs]), np.array([nx, ny], np.int64), start, items, np.ascontiguousarray(top[items])
 
 
 PARALLEL_CHUNK = 32
@@ -322,7 +327,10 @@ def drop(fs: FaceSet, prof, C: np.ndarray):
     reach = prof.R + max(fs.spacing, float(cells.radius.max(initial=0.0)) if cells.contained else 0.0)
     key = ("grid", round(reach, 12))
     if key not in cache:
-        cache[key] = _grid(SM[0], reach)
+        n_int, rise, erise = SM[3], SM[8], SM[17]
+        r = rise.copy()
+        r[n_int:] = np.fmax(rise[n_int:], erise)  # (as _prune's: an edge sample's face or edge rise)
+        cache[key] = _grid(SM[0], reach, SM[0][:, 2] + np.maximum(r, 0.0))
     G = cache[key]
     PR = _profile(prof)
     h0 = float(prof(np.zeros(1))[0][0])
