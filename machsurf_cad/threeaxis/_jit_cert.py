@@ -60,16 +60,21 @@ def _pascal(n):
     return out
 
 
+CERT_SCRATCH = 609
+"""Floats of :func:`rim_certificate`'s scratch: the Taylor coefficients and their scratch (2 x 3 x 8 x 8) and
+the Lagrangian's coefficients (15 x 15)."""
+
 _BINOM = _pascal(8)
 """Binomial coefficients ``binom(n, k)`` for n < 8 (the power basis's degrees: at most 7)."""
 
 
 @njit(cache=True)
-def rim_certificate(S, f, u, v, cx, cy, R, z, out):
+def rim_certificate(S, f, u, v, cx, cy, R, z, out, ws=None):
     """The parameter box of face ``f`` about its flat-end rim contact ``(u, v)`` (height ``z``, tool axis at
     ``(cx, cy)``, radius ``R``) in which no point in the disc is above ``z + CERT_SLACK``: ``out[0:4]`` = u
     from, u to, v from, v to. Returns whether one was found (a non-rational, non-periodic face whose rim
-    function is concave enough there: tried on boxes of ``2 R``, ``R``, ``R / 2`` and ``R / 4`` mm in plan)."""
+    function is concave enough there: tried on boxes of ``2 R``, ``R``, ``R / 2`` and ``R / 4`` mm in plan).
+    ``ws``: scratch of at least ``CERT_SCRATCH`` floats (else made here)."""
     fi, ff, ust, hu, vst, hv, coef = S
     if fi[f, 7] or fi[f, 8]:
         return False
@@ -83,10 +88,12 @@ def rim_certificate(S, f, u, v, cx, cy, R, z, out):
         for b in range(q + 1):
             if coef[base + (a * (q + 1) + b) * 4 + 3] != (1.0 if a == 0 and b == 0 else 0.0):
                 return False
-    T = np.zeros((2, 3, 8, 8))  # the Taylor coefficients and _taylor's scratch
+    if ws is None:
+        ws = np.empty(CERT_SCRATCH)
+    # the Taylor coefficients and _taylor's scratch (only their [:p + 1, :q + 1] are written and read)
+    T = ws[:384].reshape((2, 3, 8, 8))
     _taylor(coef, base, p, q, (u - ust[uo + i]) / h1, (v - vst[vo + j]) / h2, T[0], T[1])
-    T = T[0]
-    X, Y, Z = T[0], T[1], T[2]
+    X, Y, Z = T[0, 0], T[0, 1], T[0, 2]
     X[0, 0] -= cx
     Y[0, 0] -= cy
     # the multiplier: the least-squares fit of grad z = mu grad (rho^2 / 2) at the contact
@@ -98,7 +105,8 @@ def rim_certificate(S, f, u, v, cx, cy, R, z, out):
     mu = (Z[1, 0] * gx + Z[0, 1] * gy) / gg
     if not (mu > 0):
         return False
-    L = np.zeros((15, 15))
+    L = ws[384:609].reshape((15, 15))
+    L[: 2 * p + 1, : 2 * q + 1] = 0.0  # (the part read below)
     for a in range(p + 1):
         for b in range(q + 1):
             L[a, b] += Z[a, b]

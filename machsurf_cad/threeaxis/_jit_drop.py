@@ -22,7 +22,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ._jit_cert import boxed, rim_certificate
+from ._jit_cert import CERT_SCRATCH, boxed, rim_certificate
 from ._jit_geom import borrowed, hyp, inside, isfin, keep, norm3, prof, prof_floor, surf
 from ._jit_solve import ON_CIRCLE, edge_search, enters_face, face_newton, into_disc, rim_ascent, tip_solve
 
@@ -33,7 +33,7 @@ BOUND_TIE = 1e-10
 that only ties the best (a flat end on a horizontal floor: the floor's edges and rim at the floor's height)
 cannot raise it by more (the numpy path's ``_BOUND_TIE_MM``)."""
 
-KERNEL_SOURCES = "f23b5c6f20554365"
+KERNEL_SOURCES = "d5988515c2f7badb"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 
@@ -360,7 +360,7 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp, W):
     CB[2][:] = -1.0
     cert = CB[2]
     if K[10] > 0 and K[9] > 0 and best[4] > 0 and best[2] == RIM:
-        if rim_certificate(S, int(best[3]), best[6], best[7], cx, cy, R, best[1] + h_R, cert[1:]):
+        if rim_certificate(S, int(best[3]), best[6], best[7], cx, cy, R, best[1] + h_R, cert[1:], W[6]):
             cert[0] = best[3]
             free_ = np.empty(m, np.bool_)
             free = borrowed(free_)
@@ -622,7 +622,8 @@ def drop_batch(C, S, E, T, PR, SM, G, K, kinks, height, kind, face, point, chunk
     for ci in prange((n + chunk - 1) // chunk):
         best = np.zeros(8)
         bp = np.zeros(3)
-        W = (np.empty((6, 3)), np.empty((6, 3)), np.empty((6, 3)), np.empty((9, 3)), np.empty((3, 3)), np.empty(480))
+        W = (np.empty((6, 3)), np.empty((6, 3)), np.empty((6, 3)), np.empty((9, 3)), np.empty((3, 3)), np.empty(480),
+             np.empty(CERT_SCRATCH))  # fmt: skip
         for q in range(ci * chunk, min(n, (ci + 1) * chunk)):
             best[:] = 0.0
             _query(C[q, 0], C[q, 1], S, E, T, PR, SM, G, K, kinks, best, bp, W)

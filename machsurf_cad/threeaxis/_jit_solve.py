@@ -3,8 +3,8 @@ ascent along a circle (the rim, or a circle where the profile's slope jumps), th
 edge and the point below a pointed tip. Each is the scalar form of its numpy namesake in :mod:`.solves`
 (same steps, safeguards and stopping rules), so the two paths agree to rounding.
 
-``W = (D, Dn, Dm, Ed, cu, wk)`` is per-query scratch: three (6, 3) derivative tables, a (9, 3) edge table,
-a (3, 3) curve table and 480 floats.
+``W = (D, Dn, Dm, Ed, cu, wk, ...)`` is per-query scratch: three (6, 3) derivative tables, a (9, 3) edge
+table, a (3, 3) curve table and 480 floats (the kernel's ``W`` has the certificate's scratch after them).
 """
 
 from __future__ import annotations
