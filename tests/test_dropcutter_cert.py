@@ -39,10 +39,18 @@ def _certify(fs, f, xyz, cx, cy):
 
 
 def _brute_top(fs, f, box, cx, cy, n=401):
-    """The highest point of face ``f`` in ``box`` (clipped to its bounds) inside the disc, on an n x n grid."""
+    """The highest point of face ``f`` in ``box`` (clipped to its bounds) inside the disc, on an n x n grid over
+    the part of the box that holds the disc's points (found on a 201 x 201 grid of the whole box first: a box
+    that runs on across knot lines can be several times the disc)."""
     u0, u1, v0, v1 = fs.faces[f].uv_bounds
-    us = np.linspace(max(box[0], u0), min(box[1], u1), n)
-    vs = np.linspace(max(box[2], v0), min(box[3], v1), n)
+    lo_u, hi_u, lo_v, hi_v = max(box[0], u0), min(box[1], u1), max(box[2], v0), min(box[3], v1)
+    us, vs = np.linspace(lo_u, hi_u, 201), np.linspace(lo_v, hi_v, 201)
+    P = fs.faces[f].surface.evaluate_grid(us, vs).reshape(201, 201, 3)
+    iu, iv = np.nonzero(np.hypot(P[..., 0] - cx, P[..., 1] - cy) <= R)
+    if iu.size == 0:
+        return -np.inf
+    us = np.linspace(us[max(iu.min() - 1, 0)], us[min(iu.max() + 1, 200)], n)
+    vs = np.linspace(vs[max(iv.min() - 1, 0)], vs[min(iv.max() + 1, 200)], n)
     P = fs.faces[f].surface.evaluate_grid(us, vs).reshape(-1, 3)
     inside = np.hypot(P[:, 0] - cx, P[:, 1] - cy) <= R
     return P[inside, 2].max() if inside.any() else -np.inf
@@ -64,7 +72,9 @@ def test_certificate_on_a_tilted_plane_holds_and_refuses_where_it_must():
     ok, box, u, v = _certify(fs, 0, fs.to_frame(r.contact)[0], 1.0, 2.0)
     assert ok and box[0] < u < box[1] and box[2] < v < box[3]
     top = _brute_top(fs, 0, box, 1.0, 2.0)
-    assert top <= r.height[0] + 5e-11 and top >= r.height[0] - 1e-3  # the box reaches the contact
+    # the box holds the contact (above); its grid's highest point in the disc lies within a sample spacing of
+    # it (0.03 mm: 0.006 mm lower on this slope)
+    assert top <= r.height[0] + 5e-11 and top >= r.height[0] - 1e-2
     # the downhill point of the same circle is no rim maximum: no certificate
     ok, _, _, _ = _certify(fs, 0, np.array([-4.0, 2.0, -0.8]), 1.0, 2.0)
     assert not ok
@@ -111,3 +121,59 @@ def test_certificates_on_the_example_block_hold_by_brute_force():
             found += 1
             assert _brute_top(fs, 0, box, *xy[k]) <= r.height[k] + 5e-11
     assert found >= 0.8 * rim.size
+
+
+@needs_numba
+def test_certificates_across_knot_lines_hold_by_brute_force():
+    """On a bumpy bicubic patch of 4 x 4 pieces (random poles), boxes of rim contacts near a knot line go on
+    across it where the neighbouring piece's polynomial bounds the face there (:func:`._jit_cert._neighbour`);
+    in every box, extended or not, the face inside the disc is at most 5e-11 mm above the contact."""
+    rng = np.random.default_rng(11)
+    bumps = rng.normal(0.0, 1.2, (7, 7))
+    s = _patch(lambda x, y: 0.15 * x + 0.1 * y + bumps)
+    fs = ms.threeaxis.faceset.face_set([s], spacing=10 / 6)
+    xy = rng.uniform(-28.0, 28.0, (80, 2))
+    r = ms.drop_cutter(None, ms.FlatEndMill(10), xy, face_set=fs)
+    rim = np.nonzero(r.kind == Contact.RIM)[0]
+    assert rim.size >= 40
+    ku, kv = (np.unique(k)[1:-1] for k in (s.knots_u, s.knots_v))  # the interior knot lines
+    certified = crossing = 0
+    for k in rim:
+        ok, box, _, _ = _certify(fs, 0, fs.to_frame(r.contact[k : k + 1])[0], *xy[k])
+        if ok:
+            certified += 1
+            crossing += bool(np.any((ku > box[0]) & (ku < box[1])) or np.any((kv > box[2]) & (kv < box[3])))
+            assert _brute_top(fs, 0, box, *xy[k]) <= r.height[k] + 5e-11
+    assert certified >= 0.6 * rim.size and crossing >= 5
+
+
+def _creased(rise):
+    """A bicubic patch over [-20, 20]^2 with a C0 knot line at x = 0 (a triple knot) between two pieces:
+    ``z = 0.2 y`` on the left piece, ``z = 0.2 y + rise x`` on the right one (its poles on that plane)."""
+    from machsurf_cad.geometry.bspline import BSplineSurface
+
+    x, y = np.linspace(-20, 20, 7), np.linspace(-20, 20, 4)
+    X, Y = np.meshgrid(x, y, indexing="ij")
+    P = np.stack([X, Y, 0.2 * Y + rise * np.maximum(X, 0.0)], axis=2)
+    return BSplineSurface(3, 3, [0.0, 1.0, 2.0], [4, 3, 4], [0.0, 1.0], [4, 4], P)
+
+
+@needs_numba
+@pytest.mark.parametrize("rise", [0.0, -0.05, 0.2])
+def test_a_box_crosses_a_knot_line_only_where_the_next_piece_stays_below(rise):
+    """A flat D10 at (-0.5, 0) on :func:`_creased`: its rim contact (-0.5, 5) is the highest point of the left
+    piece in the disc, 0.5 mm from the crease. Where the right piece is the same plane, or falls away from the
+    crease, the certified box goes on across the knot line into it; where it rises (0.2 mm/mm: inside the
+    disc it gets 0.3 mm above the contact) the box stops at the knot line. Either way no point of the disc
+    in the box is above the contact (brute force)."""
+    s = _creased(rise)
+    fs = ms.threeaxis.faceset.face_set([s], spacing=10 / 6)
+    cx, cy = -0.5, 0.0
+    xyz = np.array([cx, cy + R, 0.2 * (cy + R)])
+    ok, box, u, v = _certify(fs, 0, xyz, cx, cy)
+    assert ok and np.linalg.norm(s.evaluate(np.array([u]), np.array([v]))[0] - xyz) < 1e-9
+    G = s.evaluate_grid(np.linspace(1.0, 2.0, 201), np.linspace(0.0, 1.0, 201)).reshape(-1, 3)
+    right_top = G[np.hypot(G[:, 0] - cx, G[:, 1] - cy) <= R, 2].max()  # the right piece's highest in the disc
+    assert (right_top > xyz[2] + 0.05) == (rise > 0)
+    assert (box[1] > 1.0) == (rise <= 0)  # across the knot line (u = 1) where the right piece stays below
+    assert _brute_top(fs, 0, box, cx, cy) <= xyz[2] + 5e-11

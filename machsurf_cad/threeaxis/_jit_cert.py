@@ -11,7 +11,7 @@ contact and scaled to a box ``|ds| <= rs, |dt| <= rt`` (``x = ds / rs``, ``y = d
 
 where ``g`` is the sum of the linear coefficients' magnitudes (zero at the contact but for rounding), ``lam``
 the least eigenvalue of minus the quadratic part and ``K`` the sum of the magnitudes of every coefficient of
-degree three and more. When ``K < lam`` (asked with a margin: ``K < lam / 2``) every point of the face in the
+degree three and more. When ``K < lam`` (asked with a margin: ``K < 7 lam / 8``) every point of the face in the
 box and in the disc is at most ``L* + g^2 / (4 (lam - K))`` high: exact arithmetic on the piece's
 coefficients, no sampling. The drop-cutter then leaves out the seed samples whose whole grid neighbourhood
 lies in the box (they bound nothing above the contact), which ends the local solves that would climb back to
@@ -60,12 +60,96 @@ def _pascal(n):
     return out
 
 
-CERT_SCRATCH = 609
+CERT_SCRATCH = 834
 """Floats of :func:`rim_certificate`'s scratch: the Taylor coefficients and their scratch (2 x 3 x 8 x 8) and
-the Lagrangian's coefficients (15 x 15)."""
+the Lagrangian's coefficients of the contact's piece and of a neighbouring one (15 x 15 each)."""
 
 _BINOM = _pascal(8)
 """Binomial coefficients ``binom(n, k)`` for n < 8 (the power basis's degrees: at most 7)."""
+
+
+@njit(cache=True)
+def _piece_base(fi, f, i, j, coef):
+    """The coefficient block of face ``f``'s piece ``(i, j)``, or -1 when the piece is rational."""
+    p, q = fi[f, 0], fi[f, 1]
+    base = fi[f, 6] + (i * fi[f, 3] + j) * (p + 1) * (q + 1) * 4
+    for a in range(p + 1):
+        for b in range(q + 1):
+            if coef[base + (a * (q + 1) + b) * 4 + 3] != (1.0 if a == 0 and b == 0 else 0.0):
+                return -1
+    return base
+
+
+@njit(cache=True)
+def _lagrangian(p, q, T, mu, R, L):
+    """The Lagrangian's coefficients ``L`` (15 x 15; ``[:2p + 1, :2q + 1]`` written) from the Taylor coefficients
+    ``T`` (x, y less the axis, z) and the multiplier ``mu``."""
+    X, Y, Z = T[0], T[1], T[2]
+    L[: 2 * p + 1, : 2 * q + 1] = 0.0
+    for a in range(p + 1):
+        for b in range(q + 1):
+            L[a, b] += Z[a, b]
+            for a2 in range(p + 1):
+                for b2 in range(q + 1):
+                    L[a + a2, b + b2] -= 0.5 * mu * (X[a, b] * X[a2, b2] + Y[a, b] * Y[a2, b2])
+    L[0, 0] += 0.5 * mu * R * R
+
+
+@njit(cache=True)
+def _terms(L, p, q, rs, rt):
+    """On the box ``|ds| <= rs, |dt| <= rt``: the linear terms' sum ``g``, ``lam``, ``K`` and the coefficients'
+    magnitude sum (see the module docstring)."""
+    g = abs(L[1, 0]) * rs + abs(L[0, 1]) * rt
+    A, B, C = L[2, 0] * rs * rs, L[1, 1] * rs * rt, L[0, 2] * rt * rt
+    lam = -(0.5 * (A + C) + math.sqrt(0.25 * (A - C) ** 2 + 0.25 * B * B))
+    K = size = 0.0
+    ra = 1.0
+    for a in range(2 * p + 1):
+        c_ = ra  # rs^a rt^b by running products
+        for b in range(2 * q + 1):
+            c = abs(L[a, b]) * c_
+            c_ *= rt
+            size += c
+            if a + b >= 3:
+                K += c
+        ra *= rs
+    return g, lam, K, size
+
+
+@njit(cache=True)
+def _neighbour(S, f, i, j, u, v, cx, cy, mu, R, z, du, dv, side, r_min, T, L):
+    """Whether piece ``(i, j)`` of face ``f``, next to the contact's across a knot line on ``side`` (0: -u,
+    1: +u, 2: -v, 3: +v), has no point in the box ``u +- du, v +- dv`` and in the disc above ``z + CERT_SLACK``.
+    Its polynomial, expanded about the contact (outside the piece) with the contact's multiplier, scaled to
+    the box (``x = ds / rs``, ``y = dt / rt``) and ``w`` the coordinate across the knot line, outwards:
+
+        L - L0 <= a w + b |y'| - (lam - K) (w^2 + y'^2),   w >= r_min on the piece,
+
+    (``a`` the signed linear coefficient outwards, ``b`` the other's magnitude; the quadratic part is at most
+    ``-lam (x^2 + y^2)`` and the rest at most ``K r^3 <= K (x^2 + y^2)``), whose top over ``r_min <= w <= 1``,
+    ``|y'| <= 1`` is the sum of two concave parabolas' tops. A piece that falls away from the knot line (``a``
+    below ``2 (lam - K) r_min``) is bounded by its value at the knot line, where it meets the contact's."""
+    fi, ff, ust, hu, vst, hv, coef = S
+    p, q = fi[f, 0], fi[f, 1]
+    base = _piece_base(fi, f, i, j, coef)
+    if base < 0:
+        return False
+    h1, h2 = hu[fi[f, 4] + i], hv[fi[f, 5] + j]
+    _taylor(coef, base, p, q, (u - ust[fi[f, 4] + i]) / h1, (v - vst[fi[f, 5] + j]) / h2, T[0], T[1])
+    T[0, 0, 0, 0] -= cx
+    T[0, 1, 0, 0] -= cy
+    _lagrangian(p, q, T[0], mu, R, L)
+    rs, rt = du / h1, dv / h2
+    g, lam, K, size = _terms(L, p, q, rs, rt)
+    if not (lam > 0 and K < 0.875 * lam):
+        return False
+    c = lam - K
+    out_ = -1.0 if side == 0 or side == 2 else 1.0
+    a = out_ * (L[1, 0] * rs if side < 2 else L[0, 1] * rt)
+    b = abs(L[0, 1] * rt if side < 2 else L[1, 0] * rs)
+    w = min(max(a / (2 * c), r_min), 1.0)
+    y = min(b / (2 * c), 1.0)
+    return L[0, 0] - z + (a * w - c * w * w) + (b * y - c * y * y) + 1e-14 * size <= CERT_SLACK
 
 
 @njit(cache=True)
@@ -73,8 +157,11 @@ def rim_certificate(S, f, u, v, cx, cy, R, z, out, ws=None):
     """The parameter box of face ``f`` about its flat-end rim contact ``(u, v)`` (height ``z``, tool axis at
     ``(cx, cy)``, radius ``R``) in which no point in the disc is above ``z + CERT_SLACK``: ``out[0:4]`` = u
     from, u to, v from, v to. Returns whether one was found (a non-rational, non-periodic face whose rim
-    function is concave enough there: tried on boxes of ``2 R``, ``R``, ``R / 2`` and ``R / 4`` mm in plan).
-    ``ws``: scratch of at least ``CERT_SCRATCH`` floats (else made here)."""
+    function is concave enough there: tried on boxes reaching ``2 R`` mm in plan from the contact (the disc's
+    far side), then each 0.7 of the one before, down to about ``R / 4``). The box found on the contact's
+    piece stops at its knot lines; it goes on across those of one direction (u first) into the neighbouring
+    pieces they certify (:func:`_neighbour`). ``ws``: scratch of at least ``CERT_SCRATCH`` floats (else made
+    here)."""
     fi, ff, ust, hu, vst, hv, coef = S
     if fi[f, 7] or fi[f, 8]:
         return False
@@ -83,11 +170,9 @@ def rim_certificate(S, f, u, v, cx, cy, R, z, out, ws=None):
     i = _span(ust, uo, nsu, u)
     j = _span(vst, vo, nsv, v)
     h1, h2 = hu[uo + i], hv[vo + j]
-    base = fi[f, 6] + (i * nsv + j) * (p + 1) * (q + 1) * 4
-    for a in range(p + 1):  # a rational piece: no certificate
-        for b in range(q + 1):
-            if coef[base + (a * (q + 1) + b) * 4 + 3] != (1.0 if a == 0 and b == 0 else 0.0):
-                return False
+    base = _piece_base(fi, f, i, j, coef)
+    if base < 0:  # a rational piece: no certificate
+        return False
     if ws is None:
         ws = np.empty(CERT_SCRATCH)
     # the Taylor coefficients and _taylor's scratch (only their [:p + 1, :q + 1] are written and read)
@@ -105,47 +190,50 @@ def rim_certificate(S, f, u, v, cx, cy, R, z, out, ws=None):
     mu = (Z[1, 0] * gx + Z[0, 1] * gy) / gg
     if not (mu > 0):
         return False
-    L = ws[384:609].reshape((15, 15))
-    L[: 2 * p + 1, : 2 * q + 1] = 0.0  # (the part read below)
-    for a in range(p + 1):
-        for b in range(q + 1):
-            L[a, b] += Z[a, b]
-            for a2 in range(p + 1):
-                for b2 in range(q + 1):
-                    L[a + a2, b + b2] -= 0.5 * mu * (X[a, b] * X[a2, b2] + Y[a, b] * Y[a2, b2])
-    L[0, 0] += 0.5 * mu * R * R
     su, sv = hyp(X[1, 0], Y[1, 0]), hyp(X[0, 1], Y[0, 1])  # plan speeds per unit of the span's coordinates
     if not (su > 0 and sv > 0):
         return False
-    for attempt in range(4):
-        r_mm = 2 * R / (1 << attempt)
+    L = ws[384:609].reshape((15, 15))
+    _lagrangian(p, q, T[0], mu, R, L)
+    r_mm = 2 * R / 0.7
+    for _attempt in range(7):
+        r_mm *= 0.7
         rs, rt = r_mm / su, r_mm / sv
-        g = abs(L[1, 0]) * rs + abs(L[0, 1]) * rt
-        A, B, C = L[2, 0] * rs * rs, L[1, 1] * rs * rt, L[0, 2] * rt * rt
-        lam = -(0.5 * (A + C) + math.sqrt(0.25 * (A - C) ** 2 + 0.25 * B * B))
-        K = size = 0.0
-        ra = 1.0
-        for a in range(2 * p + 1):
-            c_ = ra  # rs^a rt^b by running products
-            for b in range(2 * q + 1):
-                c = abs(L[a, b]) * c_
-                c_ *= rt
-                size += c
-                if a + b >= 3:
-                    K += c
-            ra *= rs
-        if not (lam > 0 and K < 0.5 * lam):
+        g, lam, K, size = _terms(L, p, q, rs, rt)
+        if not (lam > 0 and K < 0.875 * lam):
             continue
         # L* above z, the linear terms' rise and the coefficients' rounding (1e-14 of their sum)
         e = max(L[0, 0] - z, 0.0) + g * g / (4 * (lam - K)) + 1e-14 * size
         if not (e <= CERT_SLACK):
             continue
+        du, dv = rs * h1, rt * h2
         lo_u = -math.inf if i == 0 else ust[uo + i]  # the end pieces run on beyond the knots (extrapolated)
         hi_u = math.inf if i == nsu - 1 else ust[uo + i] + h1
         lo_v = -math.inf if j == 0 else vst[vo + j]
         hi_v = math.inf if j == nsv - 1 else vst[vo + j] + h2
-        out[0], out[1] = max(u - rs * h1, lo_u), min(u + rs * h1, hi_u)
-        out[2], out[3] = max(v - rt * h2, lo_v), min(v + rt * h2, hi_v)
+        out[0], out[1] = max(u - du, lo_u), min(u + du, hi_u)
+        out[2], out[3] = max(v - dv, lo_v), min(v + dv, hi_v)
+        Ln = ws[609:834].reshape((15, 15))
+        grown = False
+        for side in range(4):  # -u, +u, then -v, +v (those only if no u side grew: the box stays on pieces)
+            if side >= 2 and grown:
+                break
+            k = (i - 1 if side == 0 else i + 1) if side < 2 else (j - 1 if side == 2 else j + 1)
+            n_k = nsu if side < 2 else nsv
+            at = u if side < 2 else v
+            half = du if side < 2 else dv
+            edge = out[side]
+            if not (0 <= k < n_k) or abs(edge - at) >= half:  # (the box does not reach the knot)
+                continue
+            ni, nj = (k, j) if side < 2 else (i, k)
+            if _neighbour(S, f, ni, nj, u, v, cx, cy, mu, R, z, du, dv, side, abs(edge - at) / half, T, Ln):
+                lo_k = ust[uo + k] if side < 2 else vst[vo + k]  # the neighbour's knots (the end ones: none)
+                hi_k = lo_k + (hu[uo + k] if side < 2 else hv[vo + k])
+                if side == 0 or side == 2:
+                    out[side] = max(at - half, -math.inf if k == 0 else lo_k)
+                else:
+                    out[side] = min(at + half, math.inf if k == n_k - 1 else hi_k)
+                grown = grown or side < 2
         return True
     return False
 
