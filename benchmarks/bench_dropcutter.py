@@ -33,7 +33,7 @@ def _timed(fn, *args, **kwargs):
 
 
 def dropcutter_rows(quick=False, deflection=0.001, sizes=None, ocl_max_points=4000, parts=None, cutters=None,
-                    repeat=3, repeat_budget_s=30.0):  # fmt: skip
+                    repeat=5, repeat_budget_s=30.0):  # fmt: skip
     """Per part x cutter x grid: machsurf's compiled engine (CPU, wall), its numpy engine on the smaller grid,
     OpenCAMLib's BatchDropCutter on an OCCT mesh of the same STEP (CPU with its threads, wall; the mesh's
     time apart), the CPU ratio and the largest height difference. OpenCAMLib runs on grids of at most

@@ -438,8 +438,6 @@ def _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk,
     p1x, p1y, p1z = bp[0], bp[1], bp[2]
     tk = np.empty(3 * m, np.int64)
     tb = np.empty(3 * m)
-    GI_ = _group_index(fb.shape[0], gk)  # borrowed: see _query
-    GI = borrowed(GI_)
     nt = 0
     for k in range(m):
         if is_seed[k] and k != f1 and fb[gk[k]] > low:
@@ -455,7 +453,16 @@ def _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk,
         if eseed[k] and eb[ek[k]] > low:
             tk[nt], tb[nt] = 2 * m + k, eb[ek[k]]
             nt += 1
-    for i in np.argsort(-tb[:nt], kind="mergesort"):
+    for a in range(1, nt):  # highest bound first, ties in their order (a stable insertion sort: a few)
+        ka, ba = tk[a], tb[a]
+        b = a - 1
+        while b >= 0 and tb[b] < ba:
+            tk[b + 1], tb[b + 1] = tk[b], tb[b]
+            b -= 1
+        tk[b + 1], tb[b + 1] = ka, ba
+    GI_ = _group_index(fb.shape[0] if nt > 0 else 0, gk[: m if nt > 0 else 0])  # (none without seeds)
+    GI = borrowed(GI_)  # borrowed: see _query
+    for i in range(nt):
         if best[4] > 0 and tb[i] <= best[1] + BOUND_TIE:
             break
         kind, k = FACE + tk[i] // m, tk[i] % m
