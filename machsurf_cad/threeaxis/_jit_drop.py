@@ -33,7 +33,7 @@ BOUND_TIE = 1e-10
 that only ties the best (a flat end on a horizontal floor: the floor's edges and rim at the floor's height)
 cannot raise it by more (the numpy path's ``_BOUND_TIE_MM``)."""
 
-KERNEL_SOURCES = "5f2f865072c80d5d"
+KERNEL_SOURCES = "c4211264f81d54a4"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 

@@ -17,7 +17,6 @@ from numba import njit, prange
 from ._jit_geom import clamp_uv, edge_derivs, hyp, inside, isfin, nmax, nmin, norm3, nsign, prof, surf
 
 ON_CIRCLE, PROBE_MM, PROBE_DIRECTIONS, PROBE_DROP, ON_CIRCLE_MM = 1e-9, 1e-3, 16, 1e-12, 1e-12  # as in solves
-RIM_LOOSE = 1e-3  # as solves._RIM_LOOSE
 
 
 @njit(cache=True)
@@ -251,18 +250,15 @@ def _circle_step(D, sp, R, cx, cy, rho):
 
 
 @njit(cache=True)
-def project_circle(S, sp, R, cx, cy, f, u, v, n, W, stop=-1.0):
-    """``_project_circle``: minimum-norm Newton steps onto ``rho = R``, until within ``stop`` mm of it (default
-    ``ON_CIRCLE_MM`` times ``max(R, 1)``); returns ``u, v`` and whether it stopped there (then ``W[0]`` holds the
-    point and its first derivatives)."""
+def project_circle(S, sp, R, cx, cy, f, u, v, n, W):
+    """``_project_circle``: minimum-norm Newton steps onto ``rho = R``; returns ``u, v`` and whether it stopped
+    on the circle (then ``W[0]`` holds the point and its first derivatives there)."""
     D, wk = W[0], W[5]
-    if stop < 0:
-        stop = ON_CIRCLE_MM * nmax(R, 1.0)
     for _ in range(n):
         surf(S, f, u, v, 1, D, wk)
         dx, dy = D[0, 0] - cx, D[0, 1] - cy
         rho = hyp(dx, dy)
-        if abs(R - rho) <= stop:  # on the circle: the further steps would not move (or near enough)
+        if abs(R - rho) <= ON_CIRCLE_MM * nmax(R, 1.0):  # on the circle: the further steps would not move
             return u, v, True
         du, dv = _circle_step(D, sp, R, cx, cy, rho)
         u, v = clamp_uv(S, f, u + du, v + dv)
@@ -328,20 +324,18 @@ def rim_ascent(S, sp, R, h_R, cx, cy, f, u, v, W, iters=40):
     (``-inf`` when it is not on the circle), the point in ``W[0][0]``.
 
     Each step is Newton's along the circle (within a trust radius) with its second-order correction across
-    it and Newton's step onto it (a step of sequential quadratic programming), so that the point stays on the
-    circle to third order; Newton steps onto the circle follow only while it is off by more than
-    ``RIM_LOOSE R`` (1e-3 R). A step is kept when it does not lower the height the point would have on the
-    circle (its z less ``lam`` times its offset: a first-order estimate, off by at most the surface's
-    curvature times the square of the offset), and the ascent stops on the circle (to ``ON_CIRCLE_MM``)
-    where the next step would not move the point: one second-order evaluation a step."""
+    it, so that the point stays on the circle to third order; Newton steps onto the circle follow only while
+    it is off by more than ``1e-9 R``. A step is kept when it does not lower the height the point would have
+    on the circle (its z less ``lam`` times its offset), and the ascent stops on the circle (to
+    ``ON_CIRCLE_MM``) where the next step would not move the point: one second-order evaluation a step near
+    the top."""
     D, wk = W[0], W[5]
     tol = 1e-9 * max(R, 1.0)
     snap = ON_CIRCLE_MM * max(R, 1.0)
-    loose = RIM_LOOSE * max(R, 1.0)
-    u, v, _ = project_circle(S, sp, R, cx, cy, f, u, v, 6, W, loose)
+    u, v, _ = project_circle(S, sp, R, cx, cy, f, u, v, 6, W)
     surf(S, f, u, v, 2, D, wk)
     off, pu, pv, n2, lam = _rim_terms(D, cx, cy, R)
-    z = D[0, 2] - lam * off if abs(off) <= loose else -math.inf
+    z = D[0, 2] - lam * off if abs(off) <= tol else -math.inf
     radius = 2.0 * sp  # (the trust radius's start: 2 sample spacings, 10 % fewer evaluations than half of one)
     current = True
     for _ in range(iters):  # D holds the second derivatives at (u, v)
@@ -372,13 +366,13 @@ def rim_ascent(S, sp, R, h_R, cx, cy, f, u, v, W, iters=40):
         surf(S, f, nu, nv, 2, D, wk)
         for _p in range(3):  # Newton steps onto the circle (``project_circle``'s, from this evaluation)
             rho = hyp(D[0, 0] - cx, D[0, 1] - cy)
-            if abs(R - rho) <= loose:
+            if abs(R - rho) <= tol:
                 break
             du, dv = _circle_step(D, sp, R, cx, cy, rho)
             nu, nv = clamp_uv(S, f, nu + du, nv + dv)
             surf(S, f, nu, nv, 2, D, wk)
         off_n, pu_n, pv_n, n2_n, lam_n = _rim_terms(D, cx, cy, R)
-        zn = D[0, 2] - lam_n * off_n if abs(off_n) <= loose else -math.inf
+        zn = D[0, 2] - lam_n * off_n if abs(off_n) <= tol else -math.inf
         acc = isfin(zn) and zn >= z - 1e-13 * (1 + abs(z))
         moved = norm3(D[0, 0] - pax, D[0, 1] - pay, D[0, 2] - paz)
         if acc:
@@ -393,15 +387,6 @@ def rim_ascent(S, sp, R, h_R, cx, cy, f, u, v, W, iters=40):
         if not acc:
             surf(S, f, u, v, 2, D, wk)
             current = True
-            if abs(off) > tol:  # its height was read to first order: onto the circle, so that the next test is exact
-                for _p in range(3):
-                    du, dv = _circle_step(D, sp, R, cx, cy, hyp(D[0, 0] - cx, D[0, 1] - cy))
-                    u, v = clamp_uv(S, f, u + du, v + dv)
-                    surf(S, f, u, v, 2, D, wk)
-                    off, pu, pv, n2, lam = _rim_terms(D, cx, cy, R)
-                    if abs(off) <= tol:
-                        break
-                z = D[0, 2] - lam * off if abs(off) <= loose else -math.inf
     if current and abs(off) <= snap:
         z = D[0, 2]
     else:  # (stopped off the circle by more than ON_CIRCLE_MM, or on a rejected step: onto it from the point)

@@ -372,30 +372,27 @@ def _rim_newton(fs, prof, c, fid, u, v, iters: int = 40, radius: float | None = 
         return _rim_ascent(fs, R, h_R, c, fid, u, v, iters)
 
 
-def _circle_step(fs, P, Su, Sv, c, R, stop=None):
+def _circle_step(fs, P, Su, Sv, c, R):
     """The minimum-norm Newton step onto ``rho = R`` from each point ``P`` (first derivatives ``Su, Sv``),
-    shortened to the sample spacing on the face (none within ``stop`` mm of the circle: default
-    ``_ON_CIRCLE_MM`` times ``max(R, 1)``): ``du, dv`` and the points' distances ``rho`` from the axis."""
+    shortened to the sample spacing on the face: ``du, dv`` and the points' distances ``rho`` from the axis."""
     d = P[:, :2] - c
     rho = np.hypot(d[:, 0], d[:, 1])
     ru = np.einsum("ij,ij->i", d, Su[:, :2]) / np.maximum(rho, 1e-300)
     rv = np.einsum("ij,ij->i", d, Sv[:, :2]) / np.maximum(rho, 1e-300)
     n2 = ru * ru + rv * rv
     t = np.where(n2 > 1e-300, (R - rho) / np.where(n2 > 1e-300, n2, 1.0), 0.0)
-    stop = _ON_CIRCLE_MM * max(R, 1.0) if stop is None else stop
-    t = np.where(np.abs(R - rho) <= stop, 0.0, t)  # on the circle (or near enough): stays there
+    t = np.where(np.abs(R - rho) <= _ON_CIRCLE_MM * max(R, 1.0), 0.0, t)  # on the circle: stays there
     step = np.linalg.norm(Su * (t * ru)[:, None] + Sv * (t * rv)[:, None], axis=1)
     shrink = np.minimum(1.0, fs.spacing / np.maximum(step, 1e-300))
     shrink = np.where(np.isfinite(shrink), shrink, 0.0)
     return t * ru * shrink, t * rv * shrink, rho
 
 
-def _project_circle(fs, R, c, fid, u, v, n: int = 4, stop=None):
-    """Minimum-norm Newton steps onto ``rho = R`` (until within ``stop`` mm: see :func:`_circle_step`); returns
-    (u, v)."""
+def _project_circle(fs, R, c, fid, u, v, n: int = 4):
+    """Minimum-norm Newton steps onto ``rho = R``; returns (u, v)."""
     for _ in range(n):
         P, Su, Sv = _surface_eval(fs, fid, u, v, 1)[:3]
-        du, dv, _ = _circle_step(fs, P, Su, Sv, c, R, stop)
+        du, dv, _ = _circle_step(fs, P, Su, Sv, c, R)
         u, v = _clamp_uv(fs, fid, u + du, v + dv)
     return u, v
 
@@ -462,15 +459,14 @@ def _rim_terms(D, c, R):
 def _rim_ascent(fs, R, h_R, c, fid, u, v, iters):
     """The highest point of each row's face on ``rho = R`` near its start (see :func:`._jit_solve.rim_ascent`:
     Newton along the circle with its second-order correction across it, Newton steps onto it while the point
-    is off by more than ``_RIM_LOOSE R``, steps kept when the height the point would have on the circle does not
+    is off by more than ``1e-9 R``, steps kept when the height the point would have on the circle does not
     fall, a row stopping on the circle where its next step would not move it)."""
     tol = 1e-9 * max(R, 1.0)
     snap = _ON_CIRCLE_MM * max(R, 1.0)
-    loose = _RIM_LOOSE * max(R, 1.0)
-    u, v = _project_circle(fs, R, c, fid, u.copy(), v.copy(), 6, loose)
+    u, v = _project_circle(fs, R, c, fid, u.copy(), v.copy(), 6)
     D = list(_surface_eval(fs, fid, u, v, 2))  # the kept points' second derivatives, per row
     off, pu, pv, n2, lam = _rim_terms(D, c, R)
-    z = np.where(np.abs(off) <= loose, D[0][:, 2] - lam * off, -np.inf)
+    z = np.where(np.abs(off) <= tol, D[0][:, 2] - lam * off, -np.inf)
     radius = np.full(u.shape, 2.0 * fs.spacing)  # (as the kernel's: 2 sample spacings)
     active = np.ones(u.shape, bool)
     for _ in range(iters):
@@ -503,17 +499,17 @@ def _rim_ascent(fs, R, h_R, c, fid, u, v, iters):
         cc = np.where(np.isfinite(cc), cc, 0.0)
         nu, nv = _clamp_uv(fs, fid[b_], u[b_] + s * tu + cc * pu[b_], v[b_] + s * tv + cc * pv[b_])
         Dn = list(_surface_eval(fs, fid[b_], nu, nv, 2))
-        for _p in range(3):  # Newton steps onto the circle while off it by more than loose
+        for _p in range(3):  # Newton steps onto the circle while off it by more than tol
             rho = np.hypot(Dn[0][:, 0] - c[b_, 0], Dn[0][:, 1] - c[b_, 1])
-            far = np.nonzero(np.abs(R - rho) > loose)[0]
+            far = np.nonzero(np.abs(R - rho) > tol)[0]
             if far.size == 0:
                 break
-            du, dv, _ = _circle_step(fs, Dn[0][far], Dn[1][far], Dn[2][far], c[b_[far]], R, loose)
+            du, dv, _ = _circle_step(fs, Dn[0][far], Dn[1][far], Dn[2][far], c[b_[far]], R)
             nu[far], nv[far] = _clamp_uv(fs, fid[b_[far]], nu[far] + du, nv[far] + dv)
             for X, Y in zip(Dn, _surface_eval(fs, fid[b_[far]], nu[far], nv[far], 2)):
                 X[far] = Y
         off_n, pu_n, pv_n, n2_n, lam_n = _rim_terms(Dn, c[b_], R)
-        zn = np.where(np.abs(off_n) <= loose, Dn[0][:, 2] - lam_n * off_n, -np.inf)
+        zn = np.where(np.abs(off_n) <= tol, Dn[0][:, 2] - lam_n * off_n, -np.inf)
         acc = np.isfinite(zn) & (zn >= z[b_] - 1e-13 * (1 + np.abs(z[b_])))
         moved = np.linalg.norm(Dn[0] - Pa, axis=1)
         ia = b_[acc]
@@ -524,17 +520,6 @@ def _rim_ascent(fs, R, h_R, c, fid, u, v, iters):
         radius[b_] = np.where(acc, np.maximum(radius[b_], 2 * moved), 0.25 * radius[b_])
         done = (acc & (moved < 1e-11)) | (~acc & (radius[b_] < 1e-12))
         active[b_[done]] = False
-        far = b_[~acc & ~done & (np.abs(off[b_]) > tol)]  # heights read to first order: onto the circle
-        for _p in range(3):
-            if far.size == 0:
-                break
-            du, dv, _ = _circle_step(fs, D[0][far], D[1][far], D[2][far], c[far], R)
-            u[far], v[far] = _clamp_uv(fs, fid[far], u[far] + du, v[far] + dv)
-            for X, Y in zip(D, _surface_eval(fs, fid[far], u[far], v[far], 2)):
-                X[far] = Y
-            off[far], pu[far], pv[far], n2[far], lam[far] = _rim_terms([X[far] for X in D], c[far], R)
-            z[far] = np.where(np.abs(off[far]) <= loose, D[0][far, 2] - lam[far] * off[far], -np.inf)
-            far = far[np.abs(off[far]) > tol]
     P = D[0].copy()
     z = P[:, 2].copy()
     away = np.nonzero(np.abs(off) > snap)[0]  # stopped off the circle by more than ON_CIRCLE_MM: onto it
@@ -708,10 +693,6 @@ open disc next to it (:func:`_enters_face`, :func:`_enters_edge`)."""
 _ON_CIRCLE_MM = 1e-12
 """A projection onto a circle of radius R stops within this times max(R, 1 mm) of it (its further Newton steps
 would move the point by less than rounding in the coordinates)."""
-_RIM_LOOSE = 1e-3
-"""The rim ascent keeps a point within this (relative to max(R, 1 mm)) of the tool's circle and reads its
-height on the circle to first order (its z less the multiplier times its offset); its next step moves it
-onto the circle with the step along it. Further off, Newton steps onto the circle come first."""
 _PROBE_MM = 1e-3
 _PROBE_DIRECTIONS = 16
 _PROBE_DROP = 1e-12
