@@ -526,6 +526,23 @@ def test_flat_and_bull_heights_equal_an_independent_reference_to_1e6_mm_near_the
 
 
 @pytest.mark.parametrize("engine", ["numpy", pytest.param("compiled", marks=needs_numba)])
+def test_a_flat_end_on_the_tops_of_the_moulds_steep_fillets_equals_the_reference(parts, engine):
+    """A flat D8 at four points of the mould's raster where its rim rests on the top of a steep fillet (faces
+    29 and 30, x = +-26): the rim contact equals ``tests/profile_reference.py`` within 1e-6 mm. A rim ascent
+    that kept points up to 1e-3 R off the circle and read their heights to first order lost this contact
+    (the rise of z across the circle is steep there) and put the tool up to 1 mm low: a flat D8 raster gouged
+    0.15 mm, while 40,000-point grids of the mould showed nothing."""
+    from profile_reference import ProfileReference
+
+    faces = parts["mould_insert.step"]
+    xy = np.array([[-25.997983, 0.666667], [-25.996518, 0.666667], [-25.999447, 0.666667], [25.998172, 0.666667]])
+    bf = ProfileReference(faces, spacing=0.3).heights(xy, 4.0, 0.0)
+    r = ms.drop_cutter(faces, ms.FlatEndMill(8), xy, engine=engine)
+    assert np.all(r.kind == Contact.RIM) and set(r.face) == {29, 30}
+    assert np.abs(r.height - bf).max() <= 1e-6
+
+
+@pytest.mark.parametrize("engine", ["numpy", pytest.param("compiled", marks=needs_numba)])
 @pytest.mark.parametrize("a, cy", [(0.05, 3.0), (0.1, 4.0), (0.1, 5.5), (0.1, 3.0), (0.2, 3.0)])
 def test_the_face_ascent_climbs_along_the_side_of_the_box_where_g_leaves_it(engine, a, cy):
     """``z = 0.3 x + a (y - 5)^2`` on [0, 10]^2 under a ball D10 at (9, cy): g rises out of the face across
