@@ -101,9 +101,11 @@ def test_certificate_refuses_a_point_that_is_a_minimum_along_the_circle():
 @needs_numba
 def test_certificates_on_the_example_block_hold_by_brute_force():
     """Rim contacts of a flat D10 on the block's curved top: most are certified, and in every certified box
-    the face inside the disc is at most 5e-11 mm above the contact (401 x 401 samples of the box)."""
+    the face inside the disc is at most 5e-11 mm above the contact (401 x 401 samples of the box); and asked
+    for a height 1e-3 mm below a contact (which the contact itself exceeds), the certificate refuses."""
     pytest.importorskip("OCP")
     from machsurf_cad.occ import read_step_faces
+    from machsurf_cad.threeaxis._jit_cert import rim_certificate
 
     faces = read_step_faces(ROOT / "example_parts" / "freeform_block.step")
     cutter = ms.FlatEndMill(10)
@@ -115,8 +117,11 @@ def test_certificates_on_the_example_block_hold_by_brute_force():
     rim = np.nonzero((r.kind == Contact.RIM) & (r.face == 0))[0][:24]
     assert rim.size >= 20
     found = 0
+    S = compiled._packed(fs)[0]
     for k in rim:
-        ok, box, _, _ = _certify(fs, 0, fs.to_frame(r.contact[k : k + 1])[0], *xy[k])
+        ok, box, u, v = _certify(fs, 0, fs.to_frame(r.contact[k : k + 1])[0], *xy[k])
+        low = float(r.height[k]) - 1e-3
+        assert not rim_certificate(S, 0, float(u), float(v), float(xy[k, 0]), float(xy[k, 1]), R, low, box.copy())
         if ok:
             found += 1
             assert _brute_top(fs, 0, box, *xy[k]) <= r.height[k] + 5e-11
@@ -126,8 +131,14 @@ def test_certificates_on_the_example_block_hold_by_brute_force():
 @needs_numba
 def test_certificates_across_knot_lines_hold_by_brute_force():
     """On a bumpy bicubic patch of 4 x 4 pieces (random poles), boxes of rim contacts near a knot line go on
-    across it where the neighbouring piece's polynomial bounds the face there (:func:`._jit_cert._neighbour`);
-    in every box, extended or not, the face inside the disc is at most 5e-11 mm above the contact."""
+    across it where the neighbouring piece's polynomial bounds the face there (:func:`._jit_cert._neighbour`):
+    at least 5 of them cross a knot line, and in every box the face inside the disc is at most 5e-11 mm above
+    the contact. These contacts are the disc's highest points, so that brute force holds for any box; what
+    can fail is the certificate's own test, asked here for a height 1e-3 mm below each contact, which the
+    contact itself (on the disc's rim, in its box) exceeds: it must refuse. Whether a box leaves out a higher
+    neighbouring piece: :func:`test_a_box_crosses_a_knot_line_only_where_the_next_piece_stays_below`."""
+    from machsurf_cad.threeaxis._jit_cert import rim_certificate
+
     rng = np.random.default_rng(11)
     bumps = rng.normal(0.0, 1.2, (7, 7))
     s = _patch(lambda x, y: 0.15 * x + 0.1 * y + bumps)
@@ -138,8 +149,11 @@ def test_certificates_across_knot_lines_hold_by_brute_force():
     assert rim.size >= 40
     ku, kv = (np.unique(k)[1:-1] for k in (s.knots_u, s.knots_v))  # the interior knot lines
     certified = crossing = 0
+    S = compiled._packed(fs)[0]
     for k in rim:
-        ok, box, _, _ = _certify(fs, 0, fs.to_frame(r.contact[k : k + 1])[0], *xy[k])
+        ok, box, u, v = _certify(fs, 0, fs.to_frame(r.contact[k : k + 1])[0], *xy[k])
+        low = float(r.height[k]) - 1e-3
+        assert not rim_certificate(S, 0, float(u), float(v), float(xy[k, 0]), float(xy[k, 1]), R, low, box.copy())
         if ok:
             certified += 1
             crossing += bool(np.any((ku > box[0]) & (ku < box[1])) or np.any((kv > box[2]) & (kv < box[3])))
