@@ -191,3 +191,39 @@ def test_a_box_crosses_a_knot_line_only_where_the_next_piece_stays_below(rise):
     assert (right_top > xyz[2] + 0.05) == (rise > 0)
     assert (box[1] > 1.0) == (rise <= 0)  # across the knot line (u = 1) where the right piece stays below
     assert _brute_top(fs, 0, box, cx, cy) <= xyz[2] + 5e-11
+
+
+def _cornered(rise, corner=2.15):
+    """A bicubic patch over ``s, t`` in [-20, 20] with C0 knot lines at ``s = t = corner`` (triple knots), in plan
+    ``x = s - t, y = s + t`` (its knot lines run at 45 degrees): ``z = 0.2 y`` on three pieces and ``0.2 y + rise
+    (corner - s)(corner - t)`` on the fourth (``s, t < corner``; bilinear there, so its poles lie on it)."""
+    from machsurf_cad.geometry.bspline import BSplineSurface
+
+    g = np.concatenate([np.linspace(-20, corner, 4), np.linspace(corner, 20, 4)[1:]])
+    Sg, Tg = np.meshgrid(g, g, indexing="ij")
+    P = np.stack([Sg - Tg, Sg + Tg, 0.2 * (Sg + Tg) + rise * np.maximum(corner - Sg, 0) * np.maximum(corner - Tg, 0)],
+                 axis=2)  # fmt: skip
+    return BSplineSurface(3, 3, [-20.0, corner, 20.0], [4, 3, 4], [-20.0, corner, 20.0], [4, 3, 4], P)
+
+
+@needs_numba
+@pytest.mark.parametrize("rise", [0.0, -0.005, 0.2])
+def test_a_box_takes_in_the_diagonal_piece_only_where_it_stays_below(rise):
+    """A flat D10 at the origin on :func:`_cornered`: its rim contact (0, 5) lies 0.35 from both knot lines, on
+    the piece past both, so the disc reaches the two side pieces and the diagonal one. The side pieces are the
+    same plane; the diagonal one is too (rise 0), falls away (-0.005) or rises (0.2: 3.3 mm above the contact
+    inside the disc). The box crosses both knot lines where the diagonal piece stays below and only the u one
+    where it rises; either way no point of the disc in the box is above the contact (brute force). (A diagonal
+    piece that falls away steeply is refused too: the bound takes its cross term ``st`` into ``lam`` and its
+    linear terms one at a time, which leaves the falling piece's rise along each knot line; refusing is safe.)"""
+    s = _cornered(rise)
+    fs = ms.threeaxis.faceset.face_set([s], spacing=10 / 6)
+    xyz = np.array([0.0, R, 0.2 * R])
+    ok, box, u, v = _certify(fs, 0, xyz, 0.0, 0.0)
+    assert ok and abs(u - 2.5) < 1e-9 and abs(v - 2.5) < 1e-9
+    G = s.evaluate_grid(np.linspace(-20, 2.15, 201), np.linspace(-20, 2.15, 201)).reshape(-1, 3)
+    diagonal_top = G[np.hypot(G[:, 0], G[:, 1]) <= R, 2].max()  # the diagonal piece's highest in the disc
+    assert (diagonal_top > xyz[2] + 1.0) == (rise > 0)
+    assert box[0] < 2.15  # across the u knot line: the side piece is the same plane
+    assert (box[2] < 2.15) == (rise <= 0)  # across the v one too where the diagonal piece stays below
+    assert _brute_top(fs, 0, box, 0.0, 0.0) <= xyz[2] + 5e-11

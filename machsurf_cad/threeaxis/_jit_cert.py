@@ -32,8 +32,8 @@ CERT_SLACK = 5e-11
 drop-cutter's tie margin, so a seed left out can raise the height by no more than a tie does."""
 
 
-@njit(cache=True)
-def _taylor(coef, base, p, q, s0, t0, out, tmp):
+@njit(cache=True, inline="always")
+def _taylor_pq(coef, base, p, q, s0, t0, out, tmp):
     """The piece's Taylor coefficients about ``(s0, t0)`` (x, y, z of the power-basis block at ``base``) into
     ``out[3, 8, 8]`` (``tmp``: scratch of the same shape)."""
     for d in range(3):  # along u: sum_i C[i, b] binom(i, a) s0^(i - a)
@@ -51,6 +51,15 @@ def _taylor(coef, base, p, q, s0, t0, out, tmp):
                 out[d, a, b] = acc
 
 
+@njit(cache=True)
+def _taylor(coef, base, p, q, s0, t0, out, tmp):
+    """:func:`_taylor_pq`, a bicubic piece's with its degrees as constants (the loops unrolled)."""
+    if p == 3 and q == 3:
+        _taylor_pq(coef, base, 3, 3, s0, t0, out, tmp)
+    else:
+        _taylor_pq(coef, base, p, q, s0, t0, out, tmp)
+
+
 def _pascal(n):
     out = np.zeros((n, n))
     for i in range(n):
@@ -60,9 +69,10 @@ def _pascal(n):
     return out
 
 
-CERT_SCRATCH = 834
+CERT_SCRATCH = 842
 """Floats of :func:`rim_certificate`'s scratch: the Taylor coefficients and their scratch (2 x 3 x 8 x 8) and
-the Lagrangian's coefficients of the contact's piece and of a neighbouring one (15 x 15 each)."""
+the Lagrangian's coefficients of the contact's piece and of a neighbouring one (15 x 15 each), and per side of
+the box its knot line's distance and whether the box grows across it."""
 
 _BINOM = _pascal(8)
 """Binomial coefficients ``binom(n, k)`` for n < 8 (the power basis's degrees: at most 7)."""
@@ -82,6 +92,15 @@ def _piece_base(fi, f, i, j, coef):
 
 @njit(cache=True)
 def _lagrangian(p, q, T, mu, R, L):
+    """:func:`_lagrangian_pq`, a bicubic piece's with its degrees as constants (the loops unrolled)."""
+    if p == 3 and q == 3:
+        _lagrangian_pq(3, 3, T, mu, R, L)
+    else:
+        _lagrangian_pq(p, q, T, mu, R, L)
+
+
+@njit(cache=True, inline="always")
+def _lagrangian_pq(p, q, T, mu, R, L):
     """The Lagrangian's coefficients ``L`` (15 x 15; ``[:2p + 1, :2q + 1]`` written) from the Taylor coefficients
     ``T`` (x, y less the axis, z) and the multiplier ``mu``."""
     X, Y, Z = T[0], T[1], T[2]
@@ -116,19 +135,27 @@ def _terms(L, p, q, rs, rt):
     return g, lam, K, size
 
 
+@njit(cache=True, inline="always")
+def _top(a, c, lo):
+    """The top of ``a w - c w^2`` over ``lo <= w <= 1`` (``c > 0``)."""
+    w = min(max(a / (2 * c), lo), 1.0)
+    return a * w - c * w * w
+
+
 @njit(cache=True)
-def _neighbour(S, f, i, j, u, v, cx, cy, mu, R, z, du, dv, side, r_min, T, L):
-    """Whether piece ``(i, j)`` of face ``f``, next to the contact's across a knot line on ``side`` (0: -u,
-    1: +u, 2: -v, 3: +v), has no point in the box ``u +- du, v +- dv`` and in the disc above ``z + CERT_SLACK``.
-    Its polynomial, expanded about the contact (outside the piece) with the contact's multiplier, scaled to
-    the box (``x = ds / rs``, ``y = dt / rt``) and ``w`` the coordinate across the knot line, outwards:
+def _neighbour(S, f, i, j, u, v, cx, cy, mu, R, z, du, dv, eu, ev, ru, rv, T, L):
+    """Whether piece ``(i, j)`` of face ``f``, next to the contact's across the knot line of u (``eu``: -1 or
+    +1, the side; 0: the same u span), of v (``ev``) or of both (a diagonal piece), has no point in the box
+    ``u +- du, v +- dv`` and in the disc above ``z + CERT_SLACK``. Its polynomial, expanded about the contact
+    (outside the piece) with the contact's multiplier and scaled to the box (``x = ds / rs``, ``y = dt /
+    rt``), satisfies
 
-        L - L0 <= a w + b |y'| - (lam - K) (w^2 + y'^2),   w >= r_min on the piece,
+        L - L0 <= a_x x + a_y y - (lam - K) (x^2 + y^2)
 
-    (``a`` the signed linear coefficient outwards, ``b`` the other's magnitude; the quadratic part is at most
-    ``-lam (x^2 + y^2)`` and the rest at most ``K r^3 <= K (x^2 + y^2)``), whose top over ``r_min <= w <= 1``,
-    ``|y'| <= 1`` is the sum of two concave parabolas' tops. A piece that falls away from the knot line (``a``
-    below ``2 (lam - K) r_min``) is bounded by its value at the knot line, where it meets the contact's."""
+    (the quadratic part is at most ``-lam (x^2 + y^2)`` and the rest at most ``K r^3 <= K (x^2 + y^2)``),
+    whose top is the sum of two concave parabolas' tops: over ``|x| <= 1`` along a span the contact's piece
+    shares, over ``ru <= w <= 1`` (``w = eu x``, the knot line ``ru`` box units from the contact) across one.
+    A piece that falls away from its knot line is bounded by its value there, where it meets the contact's."""
     fi, ff, ust, hu, vst, hv, coef = S
     p, q = fi[f, 0], fi[f, 1]
     base = _piece_base(fi, f, i, j, coef)
@@ -144,12 +171,10 @@ def _neighbour(S, f, i, j, u, v, cx, cy, mu, R, z, du, dv, side, r_min, T, L):
     if not (lam > 0 and K < 0.875 * lam):
         return False
     c = lam - K
-    out_ = -1.0 if side == 0 or side == 2 else 1.0
-    a = out_ * (L[1, 0] * rs if side < 2 else L[0, 1] * rt)
-    b = abs(L[0, 1] * rt if side < 2 else L[1, 0] * rs)
-    w = min(max(a / (2 * c), r_min), 1.0)
-    y = min(b / (2 * c), 1.0)
-    return L[0, 0] - z + (a * w - c * w * w) + (b * y - c * y * y) + 1e-14 * size <= CERT_SLACK
+    ax, ay = L[1, 0] * rs, L[0, 1] * rt
+    tx = _top(eu * ax, c, ru) if eu != 0 else _top(abs(ax), c, 0.0)
+    ty = _top(ev * ay, c, rv) if ev != 0 else _top(abs(ay), c, 0.0)
+    return L[0, 0] - z + tx + ty + 1e-14 * size <= CERT_SLACK
 
 
 @njit(cache=True)
@@ -159,8 +184,9 @@ def rim_certificate(S, f, u, v, cx, cy, R, z, out, ws=None):
     from, u to, v from, v to. Returns whether one was found (a non-rational, non-periodic face whose rim
     function is concave enough there: tried on boxes reaching ``2 R`` mm in plan from the contact (the disc's
     far side), then each 0.7 of the one before, down to about ``R / 4``). The box found on the contact's
-    piece stops at its knot lines; it goes on across those of one direction (u first) into the neighbouring
-    pieces they certify (:func:`_neighbour`). ``ws``: scratch of at least ``CERT_SCRATCH`` floats (else made
+    piece stops at its knot lines; it goes on across each into the neighbouring piece when that piece
+    certifies (:func:`_neighbour`), and across a u and a v knot line both only when the diagonal piece between
+    them does too (else across the u one only). ``ws``: scratch of at least ``CERT_SCRATCH`` floats (else made
     here)."""
     fi, ff, ust, hu, vst, hv, coef = S
     if fi[f, 7] or fi[f, 8]:
@@ -214,26 +240,40 @@ def rim_certificate(S, f, u, v, cx, cy, R, z, out, ws=None):
         out[0], out[1] = max(u - du, lo_u), min(u + du, hi_u)
         out[2], out[3] = max(v - dv, lo_v), min(v + dv, hi_v)
         Ln = ws[609:834].reshape((15, 15))
-        grown = False
-        for side in range(4):  # -u, +u, then -v, +v (those only if no u side grew: the box stays on pieces)
-            if side >= 2 and grown:
-                break
+        # the pieces across the knot lines the box reaches: each side's, then the diagonal ones between two
+        # sides that certify (a diagonal that does not takes back its v side: the box stays on pieces)
+        near, grow = ws[834:838], ws[838:842]  # the knot line's distance from the contact in box units; 1.0: grown
+        grow[:] = 0.0
+        for side in range(4):
             k = (i - 1 if side == 0 else i + 1) if side < 2 else (j - 1 if side == 2 else j + 1)
-            n_k = nsu if side < 2 else nsv
-            at = u if side < 2 else v
             half = du if side < 2 else dv
-            edge = out[side]
-            if not (0 <= k < n_k) or abs(edge - at) >= half:  # (the box does not reach the knot)
+            near[side] = abs(out[side] - (u if side < 2 else v)) / half
+            if not (0 <= k < (nsu if side < 2 else nsv)) or near[side] >= 1.0:  # (the box does not reach it)
                 continue
-            ni, nj = (k, j) if side < 2 else (i, k)
-            if _neighbour(S, f, ni, nj, u, v, cx, cy, mu, R, z, du, dv, side, abs(edge - at) / half, T, Ln):
+            e = -1 if side == 0 or side == 2 else 1
+            if side < 2:
+                grow[side] = _neighbour(S, f, k, j, u, v, cx, cy, mu, R, z, du, dv, e, 0, near[side], 0.0, T, Ln)
+            else:
+                grow[side] = _neighbour(S, f, i, k, u, v, cx, cy, mu, R, z, du, dv, 0, e, 0.0, near[side], T, Ln)
+        for su_ in range(2):
+            for sv_ in range(2, 4):
+                if grow[su_] > 0 and grow[sv_] > 0:
+                    eu, ev = (-1 if su_ == 0 else 1), (-1 if sv_ == 2 else 1)
+                    ru, rv = near[su_], near[sv_]
+                    if not _neighbour(S, f, i + eu, j + ev, u, v, cx, cy, mu, R, z, du, dv, eu, ev, ru, rv, T, Ln):
+                        grow[sv_] = 0.0
+        for side in range(4):
+            if grow[side] > 0:
+                k = (i - 1 if side == 0 else i + 1) if side < 2 else (j - 1 if side == 2 else j + 1)
+                n_k = nsu if side < 2 else nsv
+                at = u if side < 2 else v
+                half = du if side < 2 else dv
                 lo_k = ust[uo + k] if side < 2 else vst[vo + k]  # the neighbour's knots (the end ones: none)
                 hi_k = lo_k + (hu[uo + k] if side < 2 else hv[vo + k])
                 if side == 0 or side == 2:
                     out[side] = max(at - half, -math.inf if k == 0 else lo_k)
                 else:
                     out[side] = min(at + half, math.inf if k == n_k - 1 else hi_k)
-                grown = grown or side < 2
         return True
     return False
 

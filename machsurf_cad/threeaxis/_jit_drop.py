@@ -33,7 +33,7 @@ BOUND_TIE = 1e-10
 that only ties the best (a flat end on a horizontal floor: the floor's edges and rim at the floor's height)
 cannot raise it by more (the numpy path's ``_BOUND_TIE_MM``)."""
 
-KERNEL_SOURCES = "c4211264f81d54a4"
+KERNEL_SOURCES = "c2dafe0521533c53"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 
@@ -366,8 +366,11 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp, W):
             free = borrowed(free_)
             for k in range(m):
                 free[k] = not _covered(k, idx, SM, cert)
+                if is_e[k] and e_ub[k] > -math.inf and _edge_covered(k, idx, SM, cert):
+                    e_ub[k] = -math.inf  # (its edge's points in the box: no higher than the contact)
             _group_max(bounds[0], gk, ub, free)
             _group_max(bounds[1], gk, rim_ub, free)
+            _group_max(bounds[2], ek, e_ub, is_e)
             keep(free_)
     _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk, ek, f1, r1, CB)
     low = _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, is_seed, feas, is_e, ub, gk, ng, CB)
@@ -379,13 +382,35 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp, W):
 
 @njit(cache=True, inline="always")
 def _covered(k, idx, SM, cert):
-    """Whether seed sample ``idx[k]`` (inside a face) has its grid neighbourhood in the certified box."""
+    """Whether pool sample ``idx[k]`` has its grid neighbourhood in the certified box (a sample on an edge of the
+    face: the parameter box of its edge step, :attr:`.cells.FineCells.steps`)."""
     j = idx[k]
-    if j >= SM[3] or cert[0] < 0:
-        return False
     f = SM[1][j]
+    if f != cert[0]:
+        return False
+    a = 0 if j < SM[3] else 4
     steps = SM[20]
-    return boxed(cert, f, SM[2][j, 0], SM[2][j, 1], steps[f, 0] * (1 + 1e-9), steps[f, 1] * (1 + 1e-9))
+    return boxed(cert, f, SM[2][j, 0], SM[2][j, 1], steps[f, a] * (1 + 1e-9), steps[f, a + 1] * (1 + 1e-9))
+
+
+@njit(cache=True)
+def _edge_covered(k, idx, SM, cert):
+    """Whether the edge points that edge sample ``idx[k]`` bounds (those between its neighbours on its edge) lie
+    in the certified box: the neighbours' and its own parameters a seed step inside it (the edge's ends: two)."""
+    j = idx[k]
+    f = SM[1][j]
+    if f != cert[0]:
+        return False
+    n_int, puv, eid, steps = SM[3], SM[2], SM[4], SM[20]
+    du, dv = steps[f, 0] * (1 + 1e-9), steps[f, 1] * (1 + 1e-9)
+    e = eid[j - n_int]
+    for nb in (j - 1, j + 1):
+        if nb < n_int or nb >= puv.shape[0] or eid[nb - n_int] != e:
+            if not boxed(cert, f, puv[j, 0], puv[j, 1], 2 * du, 2 * dv):
+                return False
+        elif not boxed(cert, f, puv[nb, 0], puv[nb, 1], du, dv):
+            return False
+    return boxed(cert, f, puv[j, 0], puv[j, 1], du, dv)
 
 
 @njit(cache=True)
@@ -577,10 +602,10 @@ def _cells(order, i0, i1, which, low, cx, cy, idx, rr, PR, SM, K, CB):
             continue
         f = pf[j]
         certified = cert[0] == f
-        du, dv = steps[f, 2] * (1 + 1e-9), steps[f, 3] * (1 + 1e-9)
+        du, dv = steps[f, 6] * (1 + 1e-9), steps[f, 7] * (1 + 1e-9)  # (a fine sample may lie on an edge)
         fb = rb = -math.inf
         for c in range(start[j], start[j + 1]):
-            if certified and boxed(cert, f, cuv[c, 0], cuv[c, 1], du, dv):  # (NaN on an edge: never)
+            if certified and boxed(cert, f, cuv[c, 0], cuv[c, 1], du, dv):
                 continue
             ex, ey = cxyz[c, 0] - cx, cxyz[c, 1] - cy
             r = math.sqrt(ex * ex + ey * ey)  # (a bound with a cover's margin: not libm's hypot, 3 % of the time)

@@ -43,12 +43,15 @@ class FineCells:
     top : ndarray (n_pool,)
         The highest ``z + rise`` of the cell's fine samples (mm).
     uv : ndarray (n_fine, 2)
-        The parameters of the fine samples inside a face (NaN for those on its edges).
-    steps : ndarray (n_faces, 4)
-        Per face the parameter steps of its seed grid and of its fine grid: ``du, dv, du / factor, dv /
-        factor`` (0 for a vertical face). A face point in a grid cell lies within the cover radius of each of
-        the cell's corners, so a sample's bound covers no point outside the parameter box of one step about
-        it (the rim certificate of the compiled drop-cutter relies on this).
+        The face parameters of the fine samples (inside the face and on its edges).
+    steps : ndarray (n_faces, 8)
+        Per face the parameter steps of its seed grid and of its fine grid, ``du, dv, du / factor, dv /
+        factor`` (0 for a vertical face), then the same for the samples on its edges: a step and one and a
+        half times the largest parameter gap between neighbouring edge samples (seed, then fine). A face
+        point in a grid cell lies within the cover radius of each of the cell's corners, so a sample's bound
+        covers no point outside the parameter box of one step about it; where the trimming cuts the cell, the
+        edge samples that bound it lie within the edge step of it (the rim certificate of the compiled
+        drop-cutter relies on this).
     factor : int
         How many times finer than the seed samples.
     """
@@ -92,16 +95,25 @@ def _face_fine(fs: FaceSet, i: int, factor: int):
     U, V = np.meshgrid(us, vs, indexing="ij")
     uvs = [np.stack([U.ravel(), V.ravel()], axis=1)[keep]]
     slopes = [slope[keep]]
+    gaps = np.zeros((2, 2))  # the largest parameter gaps between neighbouring edge samples: seed, fine
     for e in np.nonzero(fs.edge_face == i)[0]:
-        t = _refined(np.sort(fs.edge_t[fs.edge_id == e]), factor)
+        t0 = np.sort(fs.edge_t[fs.edge_id == e])
+        t = _refined(t0, factor)
         uv = fs.edges[e].evaluate(t)
         de = s.derivatives(uv[:, 0], uv[:, 1], 1)
         pts.append(de.point)
-        uvs.append(np.full((t.size, 2), np.nan))
+        uvs.append(uv)
         slopes.append(_slope(de.su, de.sv))
+        for g, w in enumerate((fs.edges[e].evaluate(t0), uv)):
+            if w.shape[0] > 1:
+                gaps[g] = np.maximum(gaps[g], np.abs(np.diff(w, axis=0)).max(axis=0))
     p, sl = np.concatenate(pts), np.concatenate(slopes)
     rise = capped_rise(delta * np.minimum(1.0, sl + kappa * delta), p[:, 2], float(fs.face_top[i]))
-    steps = ((u1 - u0) / (nu - 1), (v1 - v0) / (nv - 1))
+    du, dv = (u1 - u0) / (nu - 1), (v1 - v0) / (nv - 1)
+    # a face point in a grid cell the trimming cuts lies within a step of the trimming curve (the cell's
+    # corners on its other side are not samples) and so within a step and a half gap of an edge sample
+    steps = (du, dv, du / factor, dv / factor, du + 1.5 * gaps[0, 0], dv + 1.5 * gaps[0, 1],
+             du / factor + 1.5 * gaps[1, 0], dv / factor + 1.5 * gaps[1, 1])  # fmt: skip
     return p, rise, np.full(p.shape[0], delta), np.concatenate(uvs), steps
 
 
@@ -116,13 +128,12 @@ def fine_cells(fs: FaceSet, factor: int = 4) -> FineCells:
         return cache[factor]
     pool_xyz, pool_face = fs.pool_xyz, fs.pool_face
     XYZ, RISE, COV, OWN, DIST, UV = [], [], [], [], [], []
-    steps = np.zeros((len(fs.faces), 4))
+    steps = np.zeros((len(fs.faces), 8))
     for i in range(len(fs.faces)):
         mine = np.nonzero(pool_face == i)[0]
         if mine.size == 0 or fs.face_vertical[i]:  # (a vertical face's samples bound nothing: no cells)
             continue
-        p, rise, cov, uv, (du, dv) = _face_fine(fs, i, factor)
-        steps[i] = du, dv, du / factor, dv / factor
+        p, rise, cov, uv, steps[i] = _face_fine(fs, i, factor)
         UV.append(uv)
         dist, k = cKDTree(pool_xyz[mine]).query(p, workers=-1)
         XYZ.append(p)
