@@ -102,16 +102,22 @@ def _lagrangian(p, q, T, mu, R, L):
 @njit(cache=True, inline="always")
 def _lagrangian_pq(p, q, T, mu, R, L):
     """The Lagrangian's coefficients ``L`` (15 x 15; ``[:2p + 1, :2q + 1]`` written) from the Taylor coefficients
-    ``T`` (x, y less the axis, z) and the multiplier ``mu``."""
+    ``T`` (x, y less the axis, z) and the multiplier ``mu``. The product ``x^2 + y^2`` sums each pair of
+    coefficients once (twice the product) and each coefficient's square."""
     X, Y, Z = T[0], T[1], T[2]
     L[: 2 * p + 1, : 2 * q + 1] = 0.0
+    h = 0.5 * mu
     for a in range(p + 1):
         for b in range(q + 1):
+            xa, ya = X[a, b], Y[a, b]
             L[a, b] += Z[a, b]
-            for a2 in range(p + 1):
+            L[2 * a, 2 * b] -= h * (xa * xa + ya * ya)
+            for b2 in range(b + 1, q + 1):  # the pairs after (a, b): the rest of its row, then the next rows
+                L[2 * a, b + b2] -= mu * (xa * X[a, b2] + ya * Y[a, b2])
+            for a2 in range(a + 1, p + 1):
                 for b2 in range(q + 1):
-                    L[a + a2, b + b2] -= 0.5 * mu * (X[a, b] * X[a2, b2] + Y[a, b] * Y[a2, b2])
-    L[0, 0] += 0.5 * mu * R * R
+                    L[a + a2, b + b2] -= mu * (xa * X[a2, b2] + ya * Y[a2, b2])
+    L[0, 0] += h * R * R
 
 
 @njit(cache=True)

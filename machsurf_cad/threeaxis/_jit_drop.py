@@ -33,7 +33,7 @@ BOUND_TIE = 1e-10
 that only ties the best (a flat end on a horizontal floor: the floor's edges and rim at the floor's height)
 cannot raise it by more (the numpy path's ``_BOUND_TIE_MM``)."""
 
-KERNEL_SOURCES = "c2dafe0521533c53"
+KERNEL_SOURCES = "6cb2c16c3106aa88"
 """:func:`.compiled.kernel_stamp` of the callees' sources: changing them changes this file, so that numba's
 cache (keyed by this file's stamp) compiles the kernel again (checked by a test)."""
 
