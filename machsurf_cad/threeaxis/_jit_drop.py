@@ -194,6 +194,33 @@ def _group_best_into(out, key, score, sel, idx):
     return out
 
 
+@njit(cache=True, inline="always")
+def _pick(out, g, k, score, idx):
+    """Candidate ``k`` into group ``g`` of ``out`` where it beats the group's (:func:`_group_best_into`'s rule)."""
+    o = out[g]
+    if o < 0 or score[k] > score[o] or (score[k] == score[o] and idx[k] < idx[o]):
+        out[g] = k
+
+
+@njit(cache=True)
+def _bounds(fb, rb, eb, gk, ek, ub, rim_ub, e_ub, is_e, free):
+    """The groups' face and rim bounds over the samples ``free`` (all where ``free`` is empty) and the edge
+    groups' bounds over the edge samples, in one pass (:func:`_group_max` of each)."""
+    fb[:] = -math.inf
+    rb[:] = -math.inf
+    eb[:] = -math.inf
+    every = free.shape[0] == 0
+    for k in range(gk.shape[0]):
+        if every or free[k]:
+            g = gk[k]
+            if ub[k] > fb[g]:
+                fb[g] = ub[k]
+            if rim_ub[k] > rb[g]:
+                rb[g] = rim_ub[k]
+        if is_e[k] and e_ub[k] > eb[ek[k]]:
+            eb[ek[k]] = e_ub[k]
+
+
 @njit(cache=True)
 def _best_of(score, sel, idx):
     """``_group_best`` of one group holding every candidate: the index of the highest ``score`` among ``sel``
@@ -276,37 +303,42 @@ def _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K):
     cov, tilt = SM[7], SM[9]
     R, max_tilt = K[0], K[2]
     m = idx.shape[0]
-    # the masks of the samples each pick runs over, in one pass (borrowed: see _query)
-    masks_ = np.empty((7, m), np.bool_)
-    M = borrowed(masks_)
+    # the seven picks' groups in one allocation and one pass (each group's pick as _group_best_into's: the
+    # samples in their order, the highest score, ties to the smallest pool index)
+    picks_ = np.full(5 * ng + 2 * n_eg, -1, np.int64)
+    P = borrowed(picks_)  # borrowed: see _query
+    e0 = 5 * ng
     for k in range(m):
         c = cov[idx[k]]
-        f_, e_ = feas[k], is_e[k]
-        M[0, k], M[1, k] = f_ and not e_, f_ and e_
-        M[2, k] = (not f_) and (rr[k] - c <= R)  # outside the disc, within the cover
-        M[3, k] = f_ and rr[k] >= R - c  # near the rim inside
-        M[4, k] = (not f_) and rr[k] <= R + c  # near the rim outside
-        M[5, k], M[6, k] = e_ and f_, e_ and not f_
-    picks_ = np.empty(5 * ng + 2 * n_eg, np.int64)  # the seven picks' groups, in one allocation
-    P = borrowed(picks_)
-    seed = _group_best_into(P[:ng], gk, val, M[0], idx)
-    s2 = _group_best_into(P[ng : 2 * ng], gk, val, M[1], idx)
-    s3 = _group_best_into(P[2 * ng : 3 * ng], gk, negr, M[2], idx)
+        f_, e_, g = feas[k], is_e[k], gk[k]
+        if f_:
+            _pick(P, g if not e_ else ng + g, k, val, idx)
+            if rr[k] >= R - c:  # near the rim inside
+                _pick(P, 3 * ng + g, k, zz, idx)
+        else:
+            if rr[k] - c <= R:  # outside the disc, within the cover
+                _pick(P, 2 * ng + g, k, negr, idx)
+            if rr[k] <= R + c:  # near the rim outside
+                _pick(P, 4 * ng + g, k, negr, idx)
+        if e_:
+            if f_:
+                _pick(P, e0 + ek[k], k, val, idx)
+            else:
+                _pick(P, e0 + n_eg + ek[k], k, negr, idx)
+    seed, s2, s3 = P[:ng], P[ng : 2 * ng], P[2 * ng : 3 * ng]
     out_ = np.zeros((3, m), np.bool_)
     is_seed, rseed, eseed = out_[0], out_[1], out_[2]
     for g in range(ng):
         s = seed[g] if seed[g] >= 0 else (s2[g] if s2[g] >= 0 else s3[g])
         if s >= 0 and tilt[idx[s]] <= max_tilt + 1e-9:
             is_seed[s] = True
-    e0 = 5 * ng
-    for mask, groups in ((rseed, _group_best_into(P[3 * ng : 4 * ng], gk, zz, M[3], idx)),
-                         (rseed, _group_best_into(P[4 * ng : e0], gk, negr, M[4], idx)),
-                         (eseed, _group_best_into(P[e0 : e0 + n_eg], ek, val, M[5], idx)),
-                         (eseed, _group_best_into(P[e0 + n_eg :], ek, negr, M[6], idx))):  # fmt: skip
-        for s in groups:
-            if s >= 0:
-                mask[s] = True
-    keep((masks_, picks_))
+    for i in range(3 * ng, e0):
+        if P[i] >= 0:
+            rseed[P[i]] = True
+    for i in range(e0, e0 + 2 * n_eg):
+        if P[i] >= 0:
+            eseed[P[i]] = True
+    keep(picks_)
     return is_seed, rseed, eseed
 
 
@@ -329,23 +361,24 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp, W):
     cand = _candidates(cx, cy, idx, rr, PR, SM, K)
     val, zz, negr, ub, rim_ub, e_ub, feas, is_e, gk, ek, nl, ne = borrowed(cand)
     ng, n_eg = nl * 5, ne * 10
-    # the best sample inside the disc (not on its circle: see enters_face) is a lower bound
-    masks_ = np.ones((2, m), np.bool_)  # inside the disc (not on its circle: see enters_face), and every sample
-    masks = borrowed(masks_)
-    strictly, ones = masks[0], masks[1]
+    # the best sample inside the disc (not on its circle: see enters_face) is a lower bound (_best_of's rule)
+    b0 = -1
     for k in range(m):
-        strictly[k] = rr[k] < R * (1 - ON_CIRCLE)
-    b0 = _best_of(val, strictly, idx)
+        if rr[k] < R * (1 - ON_CIRCLE) and (b0 < 0 or val[k] > val[b0] or (val[k] == val[b0] and idx[k] < idx[b0])):
+            b0 = k
     if b0 >= 0:
         j = idx[b0]
         _add(best, bp, val[b0], SAMPLE, pf[j], xyz[j, 0], xyz[j, 1], xyz[j, 2])
     seeds_ = _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K)
     seeds = borrowed(seeds_)
     is_seed, rseed, eseed = seeds
-    bmax_ = np.empty(2 * ng + n_eg)  # the groups' face, rim and edge bounds, in one allocation
-    bmax = borrowed(bmax_)
-    bounds = (_group_max(bmax[:ng], gk, ub, ones), _group_max(bmax[ng : 2 * ng], gk, rim_ub, ones),
-              _group_max(bmax[2 * ng :], ek, e_ub, is_e))  # fmt: skip
+    # the groups' face, rim and edge bounds, the cells' face and rim bounds (NaN: not computed) and the
+    # certificate, in one allocation
+    nb = 2 * ng + n_eg
+    fl_ = np.empty(nb + 2 * m + 5)
+    fl = borrowed(fl_)
+    bounds = (fl[:ng], fl[ng : 2 * ng], fl[2 * ng : nb])
+    _bounds(bounds[0], bounds[1], bounds[2], gk, ek, ub, rim_ub, e_ub, is_e, is_e[:0])
     # phase 1: the best face seed and the highest rim seed
     f1 = _best_of(val, is_seed, idx)
     r1 = _best_of(zz, rseed, idx)
@@ -354,8 +387,8 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp, W):
     if r1 >= 0 and (best[4] == 0 or bounds[1][gk[r1]] > best[1] + BOUND_TIE):  # (a ball's rim: seldom)
         _solve(RIM, idx[r1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
     # a flat end's rim contact: the seed samples whose neighbourhoods its certificate covers bound nothing more
-    CB_ = np.full(2 * m + 5, math.nan)  # the cells' face and rim bounds (NaN: not computed) and the certificate
-    cb = borrowed(CB_)
+    cb = fl[nb:]
+    cb[: 2 * m] = math.nan
     CB = (cb[:m], cb[m : 2 * m], cb[2 * m :])
     CB[2][:] = -1.0
     cert = CB[2]
@@ -368,16 +401,14 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp, W):
                 free[k] = not _covered(k, idx, SM, cert)
                 if is_e[k] and e_ub[k] > -math.inf and _edge_covered(k, idx, SM, cert):
                     e_ub[k] = -math.inf  # (its edge's points in the box: no higher than the contact)
-            _group_max(bounds[0], gk, ub, free)
-            _group_max(bounds[1], gk, rim_ub, free)
-            _group_max(bounds[2], ek, e_ub, is_e)
+            _bounds(bounds[0], bounds[1], bounds[2], gk, ek, ub, rim_ub, e_ub, is_e, free)
             keep(free_)
     _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk, ek, f1, r1, CB)
     low = _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, is_seed, feas, is_e, ub, gk, ng, CB)
     _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed, is_e, ek, n_eg)
     for kk in range(kinks.shape[0]):
         _kink_rounds(kinks[kk, 0], kinks[kk, 1], low, cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, zz, gk, ng)
-    keep((got, cand, masks_, seeds_, bmax_, CB_))
+    keep((got, cand, seeds_, fl_))
 
 
 @njit(cache=True, inline="always")
