@@ -296,17 +296,17 @@ def _candidates(cx, cy, idx, rr, PR, SM, K):
 
 
 @njit(cache=True)
-def _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K):
+def _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K, P, out):
     """Face seeds (per group the best sample inside the disc, an edge sample where the face has none, else
     the sample nearest the disc within its cover radius outside it; none steeper than the profile), rim
-    seeds (the highest near the rim inside, the nearest outside) and edge seeds, as masks."""
+    seeds (the highest near the rim inside, the nearest outside) and edge seeds, as masks (into ``out``, 3 x m;
+    ``P``: scratch of ``5 ng + 2 n_eg``)."""
     cov, tilt = SM[7], SM[9]
     R, max_tilt = K[0], K[2]
     m = idx.shape[0]
-    # the seven picks' groups in one allocation and one pass (each group's pick as _group_best_into's: the
-    # samples in their order, the highest score, ties to the smallest pool index)
-    picks_ = np.full(5 * ng + 2 * n_eg, -1, np.int64)
-    P = borrowed(picks_)  # borrowed: see _query
+    # the seven picks' groups in one pass (each group's pick as _group_best_into's: the samples in their
+    # order, the highest score, ties to the smallest pool index)
+    P[:] = -1
     e0 = 5 * ng
     for k in range(m):
         c = cov[idx[k]]
@@ -326,8 +326,8 @@ def _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K):
             else:
                 _pick(P, e0 + n_eg + ek[k], k, negr, idx)
     seed, s2, s3 = P[:ng], P[ng : 2 * ng], P[2 * ng : 3 * ng]
-    out_ = np.zeros((3, m), np.bool_)
-    is_seed, rseed, eseed = out_[0], out_[1], out_[2]
+    out[:] = False
+    is_seed, rseed, eseed = out[:m], out[m : 2 * m], out[2 * m :]
     for g in range(ng):
         s = seed[g] if seed[g] >= 0 else (s2[g] if s2[g] >= 0 else s3[g])
         if s >= 0 and tilt[idx[s]] <= max_tilt + 1e-9:
@@ -338,7 +338,6 @@ def _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K):
     for i in range(e0, e0 + 2 * n_eg):
         if P[i] >= 0:
             eseed[P[i]] = True
-    keep(picks_)
     return is_seed, rseed, eseed
 
 
@@ -369,14 +368,17 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp, W):
     if b0 >= 0:
         j = idx[b0]
         _add(best, bp, val[b0], SAMPLE, pf[j], xyz[j, 0], xyz[j, 1], xyz[j, 2])
-    seeds_ = _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K)
-    seeds = borrowed(seeds_)
+    # the query's scratch in one allocation per type: floats (the groups' face, rim and edge bounds, the
+    # cells' face and rim bounds (NaN: not computed), the certificate, phase 2's seed bounds), integers (the
+    # seed picks, phase 2's seeds and group index, a round's sample) and flags (the seed masks, the samples the
+    # certificate leaves, the rounds' tried and selected)
+    nb, n_pk = 2 * ng + n_eg, 5 * ng + 2 * n_eg
+    fl_ = np.empty(nb + 2 * m + 5 + 3 * m)
+    in_ = np.empty(n_pk + 3 * m + 2 * ng + 1 + m + 1, np.int64)
+    bl_ = np.empty(8 * m, np.bool_)
+    fl, ii, bb = borrowed((fl_, in_, bl_))
+    seeds = _seed_sets(idx, rr, val, zz, negr, feas, is_e, gk, ek, ng, n_eg, SM, K, ii[:n_pk], bb[: 3 * m])
     is_seed, rseed, eseed = seeds
-    # the groups' face, rim and edge bounds, the cells' face and rim bounds (NaN: not computed) and the
-    # certificate, in one allocation
-    nb = 2 * ng + n_eg
-    fl_ = np.empty(nb + 2 * m + 5)
-    fl = borrowed(fl_)
     bounds = (fl[:ng], fl[ng : 2 * ng], fl[2 * ng : nb])
     _bounds(bounds[0], bounds[1], bounds[2], gk, ek, ub, rim_ub, e_ub, is_e, is_e[:0])
     # phase 1: the best face seed and the highest rim seed
@@ -386,29 +388,31 @@ def _query(cx, cy, S, E, T, PR, SM, G, K, kinks, best, bp, W):
         _solve(FACE, idx[f1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
     if r1 >= 0 and (best[4] == 0 or bounds[1][gk[r1]] > best[1] + BOUND_TIE):  # (a ball's rim: seldom)
         _solve(RIM, idx[r1], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
-    # a flat end's rim contact: the seed samples whose neighbourhoods its certificate covers bound nothing more
+    # CB: the cells' face and rim bounds, the certificate (a flat end's rim contact: the seed samples whose
+    # neighbourhoods it covers bound nothing more), then phase 2's seeds, their bounds and its group index, and
+    # the rounds' flags and sample
     cb = fl[nb:]
     cb[: 2 * m] = math.nan
-    CB = (cb[:m], cb[m : 2 * m], cb[2 * m :])
+    i2 = n_pk + 3 * m
+    CB = (cb[:m], cb[m : 2 * m], cb[2 * m : 2 * m + 5], ii[n_pk:i2], cb[2 * m + 5 :], ii[i2 : i2 + 2 * ng + 1 + m],
+          bb[4 * m : 6 * m], ii[i2 + 2 * ng + 1 + m :], bb[6 * m : 8 * m])  # fmt: skip
     CB[2][:] = -1.0
     cert = CB[2]
     if K[10] > 0 and K[9] > 0 and best[4] > 0 and best[2] == RIM:
         if rim_certificate(S, int(best[3]), best[6], best[7], cx, cy, R, best[1] + h_R, cert[1:], W[6]):
             cert[0] = best[3]
-            free_ = np.empty(m, np.bool_)
-            free = borrowed(free_)
+            free = bb[3 * m : 4 * m]
             for k in range(m):
                 free[k] = not _covered(k, idx, SM, cert)
                 if is_e[k] and e_ub[k] > -math.inf and _edge_covered(k, idx, SM, cert):
                     e_ub[k] = -math.inf  # (its edge's points in the box: no higher than the contact)
             _bounds(bounds[0], bounds[1], bounds[2], gk, ek, ub, rim_ub, e_ub, is_e, free)
-            keep(free_)
     _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk, ek, f1, r1, CB)
     low = _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, is_seed, feas, is_e, ub, gk, ng, CB)
-    _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed, is_e, ek, n_eg)
+    _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed, is_e, ek, n_eg, CB[8])
     for kk in range(kinks.shape[0]):
         _kink_rounds(kinks[kk, 0], kinks[kk, 1], low, cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, zz, gk, ng)
-    keep((got, cand, seeds_, fl_))
+    keep((got, cand, fl_, in_, bl_))
 
 
 @njit(cache=True, inline="always")
@@ -492,8 +496,7 @@ def _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk,
     solved = best[4] > 0 and best[2] == FACE
     c_face = best[3]
     p1x, p1y, p1z = bp[0], bp[1], bp[2]
-    tk = np.empty(3 * m, np.int64)
-    tb = np.empty(3 * m)
+    tk, tb = CB[3], CB[4]  # (3 m each)
     nt = 0
     for k in range(m):
         if is_seed[k] and k != f1 and fb[gk[k]] > low:
@@ -516,8 +519,9 @@ def _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk,
             tk[b + 1], tb[b + 1] = tk[b], tb[b]
             b -= 1
         tk[b + 1], tb[b + 1] = ka, ba
-    GI_ = _group_index(fb.shape[0] if nt > 0 else 0, gk[: m if nt > 0 else 0])  # (none without seeds)
-    GI = borrowed(GI_)  # borrowed: see _query
+    if nt == 0:
+        return
+    GI = _group_index(fb.shape[0], gk, CB[5])
     for i in range(nt):
         if best[4] > 0 and tb[i] <= best[1] + BOUND_TIE:
             break
@@ -527,7 +531,6 @@ def _phase2(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, seeds, bounds, gk,
             if _group_cells(gk[k], kind - FACE, low, cx, cy, idx, rr, GI, PR, SM, K, CB) <= low:
                 continue
         _solve(kind, idx[k], cx, cy, S, E, T, PR, SM, K, W, best, bp, R, h_R)
-    keep(GI_)
 
 
 @njit(cache=True)
@@ -536,11 +539,9 @@ def _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, tried0, feas,
     while a bound (and its cell's) beats the best height; returns the best height before the last round."""
     xyz, pf, cov, tilt = SM[0], SM[1], SM[7], SM[9]
     m = idx.shape[0]
-    scratch_ = np.empty((2, m), np.bool_)  # borrowed: see _query
-    scratch = borrowed(scratch_)
-    tried, sel = scratch[0], scratch[1]
+    tried, sel = CB[6][:m], CB[6][m:]
     tried[:] = tried0
-    one = np.empty(1, np.int64)
+    one = CB[7]
     low = -math.inf
     for _ in range(4):
         low = best[1] if best[4] > 0 else -math.inf
@@ -563,19 +564,16 @@ def _more_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, rr, tried0, feas,
             if s >= 0:
                 tried[s] = True
                 _solve(FACE, idx[s], cx, cy, S, E, T, PR, SM, K, W, best, bp, K[0], K[3])
-    keep(scratch_)
     return low
 
 
 @njit(cache=True)
-def _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed, is_e, ek, n_eg):
+def _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed, is_e, ek, n_eg, scratch):
     """``_more_edge_rounds``: the untried edge sample of highest bound per group, away from the best contact
-    on its own edge, while a bound beats the best height."""
+    on its own edge, while a bound beats the best height (``scratch``: 2 m flags)."""
     xyz, n_int, ecov = SM[0], SM[3], SM[10]
     m = idx.shape[0]
-    scratch_ = np.empty((2, m), np.bool_)  # borrowed: see _query
-    scratch = borrowed(scratch_)
-    tried, sel = scratch[0], scratch[1]
+    tried, sel = scratch[:m], scratch[m:]
     tried[:] = eseed
     for _ in range(4):
         low = best[1] if best[4] > 0 else -math.inf
@@ -596,7 +594,6 @@ def _more_edge_rounds(cx, cy, S, E, T, PR, SM, K, W, best, bp, idx, e_ub, eseed,
             if s >= 0:
                 tried[s] = True
                 _solve(EDGE, idx[s], cx, cy, S, E, T, PR, SM, K, W, best, bp, K[0], K[3])
-    keep(scratch_)
 
 
 @njit(cache=True)
@@ -653,10 +650,11 @@ def _cells(order, i0, i1, which, low, cx, cy, idx, rr, PR, SM, K, CB):
 
 
 @njit(cache=True)
-def _group_index(ng, gk):
-    """The samples of each group in their order: ``order[start[g]:start[g + 1]]`` (a counting sort)."""
+def _group_index(ng, gk, buf):
+    """The samples of each group in their order: ``order[start[g]:start[g + 1]]`` (a counting sort; ``buf``:
+    scratch of ``2 ng + 1 + m``)."""
     m = gk.shape[0]
-    buf = np.zeros(2 * ng + 1 + m, np.int64)  # start, the fill pointers and order in one allocation
+    buf[:] = 0  # start, the fill pointers and order
     start, fill, order = buf[: ng + 1], buf[ng + 1 : 2 * ng + 1], buf[2 * ng + 1 :]
     for k in range(m):
         start[gk[k] + 1] += 1
