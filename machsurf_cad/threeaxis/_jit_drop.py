@@ -95,10 +95,22 @@ def _solve(kind, j, cx, cy, S, E, T, PR, SM, K, W, best, bp, rk, hk):
         _add(best, bp, g, EDGE, f, Ed[0, 0], Ed[0, 1], Ed[0, 2], SM[4][k])
 
 
+@njit(cache=True, inline="always")
+def _column(i, j0, j1, cx, cy, rq, x0, y0, cs):
+    """The cells ``j0..j1`` of grid column ``i`` that reach within ``rq`` of ``(cx, cy)``: a sample of the column
+    within ``rq`` lies within the disc's half chord at the column's nearest x (widened by 1e-6 ``rq``, far more
+    than a rounding of the sample's column or distance can move it there)."""
+    dx = max(0.0, x0 + i * cs - cx, cx - (x0 + (i + 1) * cs))
+    if dx > rq * (1 + 1e-9):
+        return 1, 0
+    h = math.sqrt(max(rq * rq - dx * dx, 0.0)) + 1e-6 * rq
+    return max(j0, int(math.floor((cy - h - y0) / cs))), min(j1, int(math.floor((cy + h - y0) / cs)))
+
+
 @njit(cache=True)
 def _gather(cx, cy, rq, xyz, G, h_R, h_min, inner):
-    """Pool samples within ``rq`` of ``(cx, cy)`` in plan (the grid's cells around it): indices and distances,
-    in the grid's order (cell by cell, each cell's by pool index). With ``h_R`` (a profile that rises to its
+    """Pool samples within ``rq`` of ``(cx, cy)`` in plan (the grid's cells that reach the disc): indices and
+    distances, in the grid's order (cell by cell, each cell's by pool index). With ``h_R`` (a profile that rises to its
     rim; else NaN), ``h_min`` and ``inner = R (1 - ON_CIRCLE)``, a cell is read from its highest ``top`` down
     only while that reaches :func:`_prune`'s ``low`` of the samples read so far (which only grows). The rest
     would be pruned and raise no ``low`` (``top`` is at least z), so :func:`_prune` keeps the same samples."""
@@ -111,7 +123,8 @@ def _gather(cx, cy, rq, xyz, G, h_R, h_min, inner):
     j1 = min(int(math.floor((cy + rq - y0) / cs)), ny - 1)
     count = 0
     for i in range(i0, i1 + 1):
-        count += start[i * ny + j1 + 1] - start[i * ny + j0] if j1 >= j0 else 0
+        a, b = _column(i, j0, j1, cx, cy, rq, x0, y0, cs)
+        count += start[i * ny + b + 1] - start[i * ny + a] if b >= a else 0
     idx = np.empty(max(count, 0), np.int64)
     rr = np.empty(max(count, 0))
     rising = h_R == h_R
@@ -119,7 +132,8 @@ def _gather(cx, cy, rq, xyz, G, h_R, h_min, inner):
     low = -math.inf  # and its low
     m = 0
     for i in range(i0, i1 + 1):
-        for c in range(i * ny + j0, i * ny + j1 + 1):
+        a, b = _column(i, j0, j1, cx, cy, rq, x0, y0, cs)
+        for c in range(i * ny + a, i * ny + b + 1):
             m0 = m
             for k in range(start[c], start[c + 1]):
                 if top[k] < low:  # (so are the rest of the cell's)
