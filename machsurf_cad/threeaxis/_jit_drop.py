@@ -219,7 +219,7 @@ def _pick(out, g, k, score, idx):
 @njit(cache=True)
 def _bounds(fb, rb, eb, gk, ek, ub, rim_ub, e_ub, is_e, free):
     """The groups' face and rim bounds over the samples ``free`` (all where ``free`` is empty) and the edge
-    groups' bounds over the edge samples, in one pass (:func:`_group_max` of each)."""
+    groups' bounds over the edge samples: per group the largest of each, in one pass."""
     fb[:] = -math.inf
     rb[:] = -math.inf
     eb[:] = -math.inf
@@ -243,16 +243,6 @@ def _best_of(score, sel, idx):
     for k in range(score.shape[0]):
         if sel[k] and (out < 0 or score[k] > score[out] or (score[k] == score[out] and idx[k] < idx[out])):
             out = k
-    return out
-
-
-@njit(cache=True)
-def _group_max(out, key, x, sel):
-    """Per group (``out``'s) the largest ``x`` among ``sel``, into ``out``."""
-    out[:] = -math.inf
-    for k in range(key.shape[0]):
-        if sel[k] and x[k] > out[key[k]]:
-            out[key[k]] = x[k]
     return out
 
 
