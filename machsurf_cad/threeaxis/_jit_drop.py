@@ -201,16 +201,14 @@ def _group_best_into(out, key, score, sel, idx):
     out[:] = -1
     for k in range(key.shape[0]):
         if sel[k]:
-            g = key[k]
-            o = out[g]
-            if o < 0 or score[k] > score[o] or (score[k] == score[o] and idx[k] < idx[o]):
-                out[g] = k
+            _pick(out, key[k], k, score, idx)
     return out
 
 
 @njit(cache=True, inline="always")
 def _pick(out, g, k, score, idx):
-    """Candidate ``k`` into group ``g`` of ``out`` where it beats the group's (:func:`_group_best_into`'s rule)."""
+    """Candidate ``k`` into group ``g`` of ``out`` where it beats the group's: the higher ``score``, on ties the
+    smaller pool index ``idx`` (the numpy path's ``_best_per``)."""
     o = out[g]
     if o < 0 or score[k] > score[o] or (score[k] == score[o] and idx[k] < idx[o]):
         out[g] = k
